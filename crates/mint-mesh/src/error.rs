@@ -1,0 +1,42 @@
+//! Typed errors for bad input to the mesh tools. [`MeshError`] is returned by
+//! the `try_*` entry points ([`crate::try_check`], [`crate::try_distance`],
+//! [`crate::TriangleBvh::new`]); the plain entry points panic with the same
+//! message. Each variant says how to fix the input.
+
+/// Why a mesh could not be analysed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum MeshError {
+    /// A face refers to a vertex that does not exist. Fix the face list (or
+    /// pass the positions that belong with it); faces index positions from 0.
+    #[error("face {face} refers to vertex {index}, but there are only {vertices} vertices")]
+    IndexOutOfRange {
+        /// Index of the offending face in the face list.
+        face: usize,
+        /// The out-of-range vertex index it holds.
+        index: u32,
+        /// Number of positions given.
+        vertices: usize,
+    },
+    /// More vertices than a `u32` index can address (`u32::MAX` is kept as a
+    /// sentinel). Split the mesh or process it out of core.
+    #[error("{vertices} vertices: at most {max} are supported in core", max = u32::MAX)]
+    TooManyVertices {
+        /// Number of positions given.
+        vertices: usize,
+    },
+    /// More faces than the in-core incidence table supports (3 corners per
+    /// face must fit in a `u32`). Split the mesh or process it out of core.
+    #[error("{faces} faces: at most {max} are supported in core", max = u32::MAX / 3)]
+    TooManyFaces {
+        /// Number of faces given.
+        faces: usize,
+    },
+    /// The operation needs a surface and got none. For a distance, mesh A
+    /// must have positive total area (something to sample) and mesh B at
+    /// least one face (something to measure to).
+    #[error("{what}")]
+    Empty {
+        /// What was missing.
+        what: &'static str,
+    },
+}

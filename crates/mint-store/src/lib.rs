@@ -1,0 +1,1 @@
+//! mint-store (in progress).

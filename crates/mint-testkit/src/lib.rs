@@ -1,0 +1,1 @@
+//! mint-testkit (in progress).
