@@ -1,2 +1,42 @@
-//! mint-cli (in progress).
-pub fn main() -> std::process::ExitCode { std::process::ExitCode::SUCCESS }
+//! The `mint` command line. Each subcommand is a thin layer over a library
+//! crate: parse and check arguments, run with progress bars, print a summary
+//! (or `--json`), and turn any error into one line on stderr and a non-zero
+//! exit code. No output file is left behind on error or Ctrl-C: writers go
+//! through temporary files that are renamed only on success.
+
+pub mod alloc;
+mod commands;
+pub mod progress;
+pub mod units;
+
+use clap::Parser;
+use std::process::ExitCode;
+
+#[global_allocator]
+static GLOBAL: alloc::CountingAllocator = alloc::CountingAllocator;
+
+/// Runs the command line and returns the process exit code.
+pub fn main() -> ExitCode {
+    let cli = commands::Cli::parse();
+    progress::install_ctrlc();
+    match commands::run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // One line: the error and its causes.
+            let mut msg = e.to_string();
+            for cause in e.chain().skip(1) {
+                let c = cause.to_string();
+                if !msg.contains(&c) {
+                    msg.push_str(": ");
+                    msg.push_str(&c);
+                }
+            }
+            eprintln!("mint: error: {}", msg.replace('\n', " "));
+            if progress::interrupted() {
+                ExitCode::from(130)
+            } else {
+                ExitCode::FAILURE
+            }
+        }
+    }
+}

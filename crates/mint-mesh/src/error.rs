@@ -24,12 +24,15 @@ pub enum MeshError {
         /// Number of positions given.
         vertices: usize,
     },
-    /// More faces than the in-core incidence table supports (3 corners per
-    /// face must fit in a `u32`). Split the mesh or process it out of core.
-    #[error("{faces} faces: at most {max} are supported in core", max = u32::MAX / 3)]
+    /// More faces than the in-core tables support (for [`crate::check()`] the
+    /// 3 corners of every face must fit in a `u32`). Split the mesh or
+    /// process it out of core.
+    #[error("{faces} faces: at most {max} are supported in core")]
     TooManyFaces {
         /// Number of faces given.
         faces: usize,
+        /// The limit of the operation that refused them.
+        max: usize,
     },
     /// The operation needs a surface and got none. For a distance, mesh A
     /// must have positive total area (something to sample) and mesh B at

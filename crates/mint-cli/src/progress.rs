@@ -1,0 +1,69 @@
+//! Progress bars for the pipelines' phases (indicatif), hidden when stderr
+//! is not a terminal or with `--quiet`, and the Ctrl-C flag the pipelines
+//! poll to stop cleanly.
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use mint_pipeline::{Phase, Progress};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Mutex;
+
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Installs the Ctrl-C handler once. The first Ctrl-C asks the running
+/// pipeline to stop (it removes its temporary files and exits non-zero); a
+/// second one exits at once.
+pub fn install_ctrlc() {
+    let _ = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    });
+}
+
+/// True once the user pressed Ctrl-C.
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::SeqCst)
+}
+
+/// Progress bars on stderr, one per phase.
+pub struct Bars {
+    quiet: bool,
+    bar: Mutex<Option<ProgressBar>>,
+}
+
+impl Bars {
+    pub fn new(quiet: bool) -> Bars {
+        Bars { quiet, bar: Mutex::new(None) }
+    }
+}
+
+impl Progress for Bars {
+    fn start(&self, phase: Phase, total: u64) {
+        if self.quiet {
+            return;
+        }
+        let target = ProgressDrawTarget::stderr(); // hidden when not a terminal
+        let bar = if total > 0 { ProgressBar::with_draw_target(Some(total), target) } else { ProgressBar::with_draw_target(None, target) };
+        let style = if total > 0 {
+            ProgressStyle::with_template("{prefix:>12} [{bar:40}] {human_pos}/{human_len} {per_sec} eta {eta}")
+        } else {
+            ProgressStyle::with_template("{prefix:>12} {spinner} {human_pos} {per_sec}")
+        };
+        bar.set_style(style.unwrap().progress_chars("=> "));
+        bar.set_prefix(phase.name());
+        *self.bar.lock().unwrap() = Some(bar);
+    }
+    fn advance(&self, n: u64) {
+        if let Some(b) = self.bar.lock().unwrap().as_ref() {
+            b.inc(n);
+        }
+    }
+    fn finish(&self) {
+        if let Some(b) = self.bar.lock().unwrap().take() {
+            b.finish_and_clear();
+        }
+    }
+    fn cancelled(&self) -> bool {
+        interrupted()
+    }
+}

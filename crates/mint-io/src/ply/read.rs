@@ -1,0 +1,903 @@
+//! The PLY reader: locates every element in the body, gives vertex positions
+//! an index-addressable home, and streams triangles out of `face` and
+//! `tristrips` elements.
+//!
+//! Data flow. [`open`] parses the header, then walks the elements in file
+//! order up to the last one it needs before streaming (`vertex`,
+//! `range_grid`): the vertex element becomes [`Positions`] (read in place
+//! from the map when the file is binary with a fixed-size vertex record,
+//! otherwise parsed once into a spill file of f64 triples), a range grid is
+//! parsed into a [`RangeGrid`], and face elements met on the way (faces
+//! stored before vertices) are skipped and remembered. [`PlyBody`] then
+//! streams the remembered face elements and continues the walk, skipping
+//! unknown elements, and finally checks that the body ends exactly where
+//! the header says (no trailing bytes or tokens).
+//!
+//! Records are read through the [`Src`] trait, implemented for binary
+//! little/big-endian ([`Bin`]) and ascii ([`Ascii`], a tokenizer over the
+//! map), so one generic record walker serves all three encodings. Binary
+//! little-endian faces declared `list uchar int` (or `uint`) and holding
+//! exactly three indices take [`fast_le_triangles`], a loop that reads 13
+//! bytes per triangle straight from the map.
+//!
+//! Polygons are fan-triangulated (v0, vi, vi+1); records with fewer than
+//! three indices are skipped and counted. Strips are unrolled with
+//! alternating winding, `-1` restarts a strip, and triangles with a repeated
+//! index (the usual degenerate joins) are dropped and counted.
+
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use super::header::{parse, Element, Encoding, PlyHeader, PropType, Property};
+use crate::error::{show_token, Error, ErrorKind};
+use crate::mapped::{Mapped, SpillFile};
+use crate::positions::{check_finite, Emit, Layout, PosKind, Positions, Reject, Scalar};
+use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, RangeGrid, ReadStats};
+use crate::text::{line_of, parse_f64, parse_int, Tokens};
+use crate::Format;
+
+/// What an element is to the reader.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Role {
+    Vertex { xyz: [usize; 3] },
+    Faces { list: usize, strip: bool },
+    RangeGrid { list: usize },
+    Other,
+}
+
+/// The header summary of a PLY file.
+pub(crate) fn info_from_header(h: &PlyHeader) -> MeshInfo {
+    let vertex_count = h.elements.iter().find(|e| e.name == "vertex").map_or(0, |e| e.count);
+    let faces: Vec<u64> = h
+        .elements
+        .iter()
+        .filter(|e| e.name == "face" || e.name == "tristrips")
+        .map(|e| e.count)
+        .collect();
+    MeshInfo {
+        format: Format::Ply,
+        encoding: h.encoding.name().to_string(),
+        vertex_count,
+        face_count: if faces.is_empty() { None } else { Some(faces.iter().sum()) },
+        elements: h
+            .elements
+            .iter()
+            .map(|e| ElementInfo {
+                name: e.name.clone(),
+                count: e.count,
+                properties: e.props.iter().map(|p| p.decl.clone()).collect(),
+            })
+            .collect(),
+        comments: h.comments.clone(),
+        obj_info: h.obj_info.clone(),
+    }
+}
+
+/// Reads the header of the mapped file `map` and prepares streaming.
+pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Opened, Error> {
+    let header = parse(map.bytes(), path)?;
+    let roles = roles(&header, path)?;
+    let info = info_from_header(&header);
+    let mut body = PlyBody {
+        path: path.to_path_buf(),
+        map: map.clone(),
+        header,
+        roles,
+        pending: VecDeque::new(),
+        next_elem: 0,
+        next_offset: 0,
+        cur: None,
+        finished: false,
+        bytes_done: 0,
+    };
+    body.next_offset = body.header.body;
+    let mut positions = Positions::empty();
+    let mut spilled = 0;
+    let mut grid = None;
+    // Walk up to the last element needed before streaming.
+    let last_needed = body.roles.iter().rposition(|r| matches!(r, Role::Vertex { .. } | Role::RangeGrid { .. }));
+    if let Some(last) = last_needed {
+        for e in 0..=last {
+            let start = body.next_offset;
+            let end = match body.roles[e] {
+                Role::Vertex { xyz } => {
+                    let (p, end, s) = body.read_vertices(e, xyz, start, spill_dir)?;
+                    positions = p;
+                    spilled = s;
+                    end
+                }
+                Role::RangeGrid { list } => {
+                    let (g, end) = body.read_range_grid(e, list, start, positions.count())?;
+                    grid = Some(g);
+                    end
+                }
+                Role::Faces { .. } => {
+                    body.pending.push_back((e, start));
+                    body.skip_element(e, start)?
+                }
+                Role::Other => body.skip_element(e, start)?,
+            };
+            body.next_offset = end;
+        }
+        body.next_elem = last + 1;
+    }
+    // Madvise: positions are fetched at random, faces read front to back.
+    let (pstart, plen) = positions.byte_range();
+    if !std::ptr::eq(positions.mapped(), &*map) {
+        // Positions live in a spill file; the input is read sequentially.
+        map.advise_sequential(body.header.body, map.bytes().len());
+    } else if plen > 0 {
+        map.advise_willneed(pstart, plen.min(1 << 30));
+        map.advise_sequential(pstart + plen, map.bytes().len());
+    }
+    body.bytes_done = body.next_offset as u64;
+    // A file without faces is checked to the end right away.
+    if body.pending.is_empty() && !body.roles[body.next_elem..].iter().any(|r| matches!(r, Role::Faces { .. })) {
+        body.walk_to_end()?;
+    }
+    Ok(Opened { info, positions, body: Box::new(body), range_grid: grid, spilled_vertices: spilled })
+}
+
+/// Classifies the elements and checks that the ones mint reads have the
+/// properties it needs.
+fn roles(h: &PlyHeader, path: &Path) -> Result<Vec<Role>, Error> {
+    let mut roles = Vec::with_capacity(h.elements.len());
+    let mut have_vertex = false;
+    for el in &h.elements {
+        let err = |kind, msg: String| Error::new(kind, path, msg).at_element(&el.name);
+        let role = match el.name.as_str() {
+            "vertex" if !have_vertex => {
+                have_vertex = true;
+                if el.count > u32::MAX as u64 {
+                    return Err(err(
+                        ErrorKind::Unsupported,
+                        format!("{} vertices; mint reads at most {} (32-bit indices)", el.count, u32::MAX),
+                    ));
+                }
+                let mut xyz = [0; 3];
+                for (k, name) in ["x", "y", "z"].iter().enumerate() {
+                    match el.prop(name) {
+                        Some(i) if matches!(el.props[i].ty, PropType::Scalar(_)) => xyz[k] = i,
+                        Some(_) => return Err(err(ErrorKind::Format, format!("property '{name}' is a list, expected a number"))),
+                        None if el.count == 0 => {}
+                        None => return Err(err(ErrorKind::Format, format!("the vertex element has no property '{name}'"))),
+                    }
+                }
+                Role::Vertex { xyz }
+            }
+            "vertex" => return Err(err(ErrorKind::Unsupported, "more than one 'vertex' element".into())),
+            "face" | "tristrips" | "range_grid" => {
+                let list = index_list(el).ok_or_else(|| {
+                    err(ErrorKind::Unsupported, "no 'vertex_indices' list property (or more than one unnamed list)".into())
+                })?;
+                let PropType::List { item, .. } = el.props[list].ty else { unreachable!() };
+                if item.is_float() {
+                    return Err(err(ErrorKind::Unsupported, "vertex indices of a floating-point type".into()));
+                }
+                match el.name.as_str() {
+                    "range_grid" => Role::RangeGrid { list },
+                    name => Role::Faces { list, strip: name == "tristrips" },
+                }
+            }
+            _ => Role::Other,
+        };
+        roles.push(role);
+    }
+    Ok(roles)
+}
+
+/// The list property holding vertex indices: `vertex_indices`,
+/// `vertex_index`, or the only list of the element.
+fn index_list(el: &Element) -> Option<usize> {
+    let is_list = |p: &Property| matches!(p.ty, PropType::List { .. });
+    for name in ["vertex_indices", "vertex_index"] {
+        if let Some(i) = el.props.iter().position(|p| p.name == name && is_list(p)) {
+            return Some(i);
+        }
+    }
+    let mut lists = el.props.iter().enumerate().filter(|(_, p)| is_list(p));
+    match (lists.next(), lists.next()) {
+        (Some((i, _)), None) => Some(i),
+        _ => None,
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Record sources
+
+/// Why a value could not be read.
+#[derive(Debug, Clone, Copy)]
+enum SrcErr {
+    /// The data ended.
+    Eof,
+    /// The token at this offset is not a number.
+    NotNumber(usize),
+    /// A list length that is negative, at this offset.
+    BadLen(i64, usize),
+}
+
+/// A cursor over the values of a PLY body.
+trait Src {
+    /// Current offset (for binary: of the next value; for ascii: just past
+    /// the last token).
+    fn pos(&self) -> usize;
+    /// Offset where the next record starts (ascii: skips whitespace).
+    fn mark(&mut self) -> usize;
+    fn int(&mut self, ty: Scalar) -> Result<i64, SrcErr>;
+    fn float(&mut self, ty: Scalar) -> Result<f64, SrcErr>;
+    fn skip_n(&mut self, ty: Scalar, n: u64) -> Result<(), SrcErr>;
+
+    /// Reads a list length.
+    #[inline]
+    fn list_len(&mut self, ty: Scalar) -> Result<u64, SrcErr> {
+        let at = self.mark();
+        let n = self.int(ty)?;
+        if n < 0 {
+            return Err(SrcErr::BadLen(n, at));
+        }
+        Ok(n as u64)
+    }
+
+    /// Skips the given properties of one record.
+    #[inline]
+    fn skip_props(&mut self, props: &[Property]) -> Result<(), SrcErr> {
+        for p in props {
+            match p.ty {
+                PropType::Scalar(t) => self.skip_n(t, 1)?,
+                PropType::List { count, item } => {
+                    let n = self.list_len(count)?;
+                    self.skip_n(item, n)?;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Binary values; `BE` selects big-endian.
+struct Bin<'a, const BE: bool> {
+    d: &'a [u8],
+    pos: usize,
+}
+
+impl<const BE: bool> Src for Bin<'_, BE> {
+    #[inline]
+    fn pos(&self) -> usize {
+        self.pos
+    }
+    #[inline]
+    fn mark(&mut self) -> usize {
+        self.pos
+    }
+    #[inline]
+    fn int(&mut self, ty: Scalar) -> Result<i64, SrcErr> {
+        let s = ty.size();
+        if self.d.len() - self.pos < s {
+            return Err(SrcErr::Eof);
+        }
+        let v = ty.read_i64(&self.d[self.pos..], BE);
+        self.pos += s;
+        Ok(v)
+    }
+    #[inline]
+    fn float(&mut self, ty: Scalar) -> Result<f64, SrcErr> {
+        let s = ty.size();
+        if self.d.len() - self.pos < s {
+            return Err(SrcErr::Eof);
+        }
+        let v = ty.read_f64(&self.d[self.pos..], BE);
+        self.pos += s;
+        Ok(v)
+    }
+    #[inline]
+    fn skip_n(&mut self, ty: Scalar, n: u64) -> Result<(), SrcErr> {
+        let left = (self.d.len() - self.pos) as u64;
+        match (ty.size() as u64).checked_mul(n) {
+            Some(b) if b <= left => {
+                self.pos += b as usize;
+                Ok(())
+            }
+            _ => Err(SrcErr::Eof),
+        }
+    }
+}
+
+/// Ascii values: whitespace-separated tokens.
+struct Ascii<'a> {
+    t: Tokens<'a>,
+}
+
+impl Src for Ascii<'_> {
+    #[inline]
+    fn pos(&self) -> usize {
+        self.t.pos
+    }
+    #[inline]
+    fn mark(&mut self) -> usize {
+        self.t.skip_space()
+    }
+    #[inline]
+    fn int(&mut self, _ty: Scalar) -> Result<i64, SrcErr> {
+        let (at, tok) = self.t.next_tok().ok_or(SrcErr::Eof)?;
+        parse_int(tok).ok_or(SrcErr::NotNumber(at))
+    }
+    #[inline]
+    fn float(&mut self, _ty: Scalar) -> Result<f64, SrcErr> {
+        let (at, tok) = self.t.next_tok().ok_or(SrcErr::Eof)?;
+        parse_f64(tok).ok_or(SrcErr::NotNumber(at))
+    }
+    #[inline]
+    fn skip_n(&mut self, _ty: Scalar, n: u64) -> Result<(), SrcErr> {
+        for _ in 0..n {
+            self.t.next_tok().ok_or(SrcErr::Eof)?;
+        }
+        Ok(())
+    }
+}
+
+/// Runs `$body` with `$s` bound to a [`Src`] of the right encoding over
+/// `$data` starting at `$pos`.
+macro_rules! with_src {
+    ($enc:expr, $data:expr, $pos:expr, |$s:ident| $body:expr) => {
+        match $enc {
+            Encoding::Ascii => {
+                let mut $s = Ascii { t: Tokens::new($data, $pos) };
+                $body
+            }
+            Encoding::BinaryLe => {
+                let mut $s = Bin::<false> { d: $data, pos: $pos };
+                $body
+            }
+            Encoding::BinaryBe => {
+                let mut $s = Bin::<true> { d: $data, pos: $pos };
+                $body
+            }
+        }
+    };
+}
+
+/// Error context: the file, its bytes and the element being read.
+struct Ctx<'a> {
+    path: &'a Path,
+    data: &'a [u8],
+    ascii: bool,
+    elem: &'a str,
+    count: u64,
+}
+
+impl Ctx<'_> {
+    fn at(&self, e: Error, record: u64, byte: usize) -> Error {
+        let e = e.at_element(self.elem).at_record(record);
+        let e = if self.ascii { e.at_line(line_of(self.data, byte)) } else { e };
+        e.at_byte(byte as u64)
+    }
+
+    #[cold]
+    fn src(&self, e: SrcErr, record: u64, rec_start: usize) -> Error {
+        match e {
+            SrcErr::Eof => self.at(
+                Error::format(
+                    self.path,
+                    format!(
+                        "unexpected end of file inside this record ({} records declared; truncated file, or the header counts are too large)",
+                        self.count
+                    ),
+                ),
+                record,
+                rec_start,
+            ),
+            SrcErr::NotNumber(at) => {
+                let tok = Tokens::new(self.data, at).next_tok().map(|t| t.1).unwrap_or(b"");
+                self.at(Error::format(self.path, format!("expected a number, found {}", show_token(tok))), record, at)
+            }
+            SrcErr::BadLen(n, at) => self.at(Error::format(self.path, format!("negative list length {n}")), record, at),
+        }
+    }
+
+    #[cold]
+    fn reject(&self, r: Reject, pos: &Positions, record: u64, rec_start: usize) -> Error {
+        let e = match r {
+            Reject::Index(v) => Error::new(
+                ErrorKind::Index,
+                self.path,
+                format!("vertex index {v} is out of range (the file has {} vertices)", pos.count()),
+            ),
+            Reject::NotFinite(v) => not_finite(self.path, v, pos),
+        };
+        self.at(e, record, rec_start)
+    }
+}
+
+/// The error for a referenced vertex with a NaN or infinite coordinate.
+pub(crate) fn not_finite(path: &Path, v: u32, pos: &Positions) -> Error {
+    let p = pos.get(v);
+    Error::new(
+        ErrorKind::Value,
+        path,
+        format!("vertex {v} used by this face has a non-finite coordinate ({}, {}, {})", p[0], p[1], p[2]),
+    )
+}
+
+// ---------------------------------------------------------------------------
+// Streaming
+
+/// Where streaming of one face element stands.
+#[derive(Debug, Clone)]
+struct Cursor {
+    elem: usize,
+    list: usize,
+    strip: bool,
+    count: u64,
+    record: u64,
+    pos: usize,
+    rec_start: usize,
+    /// Set while paused inside the index list of `record`.
+    ls: Option<ListState>,
+    /// True if the element was reached by the walk (its end continues it).
+    walked: bool,
+}
+
+/// Progress through one index list.
+#[derive(Debug, Clone, Copy)]
+struct ListState {
+    left: u64,
+    len: u64,
+    seen: u64,
+    a: i64,
+    b: i64,
+    odd: bool,
+}
+
+/// Streams the triangles of a PLY body (see the module docs).
+pub(crate) struct PlyBody {
+    path: PathBuf,
+    map: Arc<Mapped>,
+    header: PlyHeader,
+    roles: Vec<Role>,
+    /// Face elements located before streaming: (element, start offset).
+    pending: VecDeque<(usize, usize)>,
+    /// The walk: next element and its start offset.
+    next_elem: usize,
+    next_offset: usize,
+    cur: Option<Cursor>,
+    finished: bool,
+    bytes_done: u64,
+}
+
+impl PlyBody {
+    fn ctx<'a>(&'a self, data: &'a [u8], e: usize) -> Ctx<'a> {
+        let el = &self.header.elements[e];
+        Ctx { path: &self.path, data, ascii: self.header.encoding == Encoding::Ascii, elem: &el.name, count: el.count }
+    }
+
+    /// Skips element `e` starting at `start`; returns its end offset.
+    fn skip_element(&self, e: usize, start: usize) -> Result<usize, Error> {
+        let data = self.map.bytes();
+        let el = &self.header.elements[e];
+        let ctx = self.ctx(data, e);
+        if self.header.encoding != Encoding::Ascii {
+            if let Some(size) = el.fixed_size() {
+                return fixed_end(&ctx, start, size, el.count);
+            }
+        }
+        with_src!(self.header.encoding, data, start, |s| {
+            for r in 0..el.count {
+                let at = s.mark();
+                s.skip_props(&el.props).map_err(|err| ctx.src(err, r, at))?;
+            }
+            Ok(s.pos())
+        })
+    }
+
+    /// Makes the vertex element `e` index-addressable: in place for binary
+    /// fixed-size records, else spilled. Returns (positions, end offset,
+    /// spilled vertex count).
+    fn read_vertices(&self, e: usize, xyz: [usize; 3], start: usize, spill_dir: &Path) -> Result<(Positions, usize, u64), Error> {
+        let data = self.map.bytes();
+        let el = &self.header.elements[e];
+        let ctx = self.ctx(data, e);
+        let count = el.count as u32;
+        if count == 0 {
+            return Ok((Positions::empty(), start, 0));
+        }
+        if self.header.encoding != Encoding::Ascii {
+            if let Some(size) = el.fixed_size() {
+                let end = fixed_end(&ctx, start, size, el.count)?;
+                let mut off = [0; 3];
+                let mut ty = [Scalar::F32; 3];
+                for k in 0..3 {
+                    off[k] = el.props[..xyz[k]].iter().map(|p| match p.ty {
+                        PropType::Scalar(s) => s.size(),
+                        PropType::List { .. } => unreachable!(),
+                    }).sum();
+                    let PropType::Scalar(t) = el.props[xyz[k]].ty else { unreachable!() };
+                    ty[k] = t;
+                }
+                let layout = Layout { base: start, stride: size, group: 1, inner: 0, off, ty, be: self.header.encoding == Encoding::BinaryBe };
+                return Ok((Positions::new(self.map.clone(), count, layout), end, 0));
+            }
+        }
+        // Spill: parse every record once into f64 triples.
+        let mut spill = SpillFile::new(spill_dir, &self.path)?;
+        let role: Vec<u8> = (0..el.props.len())
+            .map(|i| xyz.iter().position(|&k| k == i).map_or(0, |k| k as u8 + 1))
+            .collect();
+        let end = with_src!(self.header.encoding, data, start, |s| {
+            for r in 0..el.count {
+                let at = s.mark();
+                let mut p = [0.0f64; 3];
+                for (prop, &role) in el.props.iter().zip(&role) {
+                    let res = match prop.ty {
+                        PropType::Scalar(t) if role > 0 => s.float(t).map(|v| p[role as usize - 1] = v),
+                        PropType::Scalar(t) => s.skip_n(t, 1),
+                        PropType::List { count, item } => s.list_len(count).and_then(|n| s.skip_n(item, n)),
+                    };
+                    res.map_err(|err| ctx.src(err, r, at))?;
+                }
+                spill.write_point(p)?;
+            }
+            s.pos()
+        });
+        let map = Arc::new(spill.into_mapped()?);
+        Ok((Positions::spilled(map, count), end, el.count))
+    }
+
+    /// Parses a `range_grid` element; `nv` is the vertex count.
+    fn read_range_grid(&self, e: usize, list: usize, start: usize, nv: u32) -> Result<(RangeGrid, usize), Error> {
+        let data = self.map.bytes();
+        let el = &self.header.elements[e];
+        let ctx = self.ctx(data, e);
+        let (cols, rows) = (self.header.obj_info_u64("num_cols"), self.header.obj_info_u64("num_rows"));
+        let (cols, rows) = match (cols, rows) {
+            (Some(c), Some(r)) if c.checked_mul(r) == Some(el.count) && c <= u32::MAX as u64 && r <= u32::MAX as u64 => {
+                (c as u32, r as u32)
+            }
+            _ => {
+                return Err(Error::format(
+                    &self.path,
+                    format!(
+                        "a range_grid of {} cells needs 'obj_info num_cols N' and 'obj_info num_rows M' with N*M = {} (found {:?} x {:?})",
+                        el.count, el.count, cols, rows
+                    ),
+                )
+                .at_element(&el.name))
+            }
+        };
+        let PropType::List { count: cty, item: ity } = el.props[list].ty else { unreachable!() };
+        let mut cells = Vec::with_capacity((el.count as usize).min(data.len()));
+        let end = with_src!(self.header.encoding, data, start, |s| {
+            for r in 0..el.count {
+                let at = s.mark();
+                s.skip_props(&el.props[..list]).map_err(|err| ctx.src(err, r, at))?;
+                let n = s.list_len(cty).map_err(|err| ctx.src(err, r, at))?;
+                let cell = match n {
+                    0 => None,
+                    1 => {
+                        let v = s.int(ity).map_err(|err| ctx.src(err, r, at))?;
+                        if v < 0 || v >= nv as i64 {
+                            return Err(ctx.at(
+                                Error::new(ErrorKind::Index, &self.path, format!("vertex index {v} is out of range (the file has {nv} vertices)")),
+                                r,
+                                at,
+                            ));
+                        }
+                        Some(v as u32)
+                    }
+                    n => {
+                        return Err(ctx.at(
+                            Error::format(&self.path, format!("a range_grid cell lists {n} vertices (expected 0 or 1)")),
+                            r,
+                            at,
+                        ))
+                    }
+                };
+                cells.push(cell);
+                s.skip_props(&el.props[list + 1..]).map_err(|err| ctx.src(err, r, at))?;
+            }
+            s.pos()
+        });
+        Ok((RangeGrid { cols, rows, cells }, end))
+    }
+
+    /// Continues the walk past non-face elements to the end of the body and
+    /// checks that nothing follows the last element.
+    fn walk_to_end(&mut self) -> Result<(), Error> {
+        while self.next_elem < self.header.elements.len() {
+            self.next_offset = self.skip_element(self.next_elem, self.next_offset)?;
+            self.next_elem += 1;
+        }
+        self.finished = true;
+        self.bytes_done = self.map.bytes().len() as u64;
+        self.check_trailing(self.next_offset)
+    }
+
+    /// Errors if anything but (for ascii) whitespace follows `end`.
+    fn check_trailing(&self, end: usize) -> Result<(), Error> {
+        let data = self.map.bytes();
+        let last = self.header.elements.last();
+        let (name, count) = last.map_or(("header", 0), |e| (e.name.as_str(), e.count));
+        let err = |msg: String, at: usize| {
+            let e = Error::format(&self.path, msg).at_element(name);
+            let e = if last.is_some() { e.at_record(count) } else { e };
+            if self.header.encoding == Encoding::Ascii {
+                e.at_line(line_of(data, at)).at_byte(at as u64)
+            } else {
+                e.at_byte(at as u64)
+            }
+        };
+        if self.header.encoding == Encoding::Ascii {
+            let mut t = Tokens::new(data, end);
+            if let Some((at, tok)) = t.next_tok() {
+                return Err(err(
+                    format!("unexpected data after the last element: {} (the header counts do not match the body)", show_token(tok)),
+                    at,
+                ));
+            }
+        } else if end < data.len() {
+            return Err(err(
+                format!("{} bytes of trailing data after the last element (the header counts do not match the body)", data.len() - end),
+                end,
+            ));
+        }
+        Ok(())
+    }
+
+    /// Picks the next face element to stream, or finishes the walk.
+    fn start_next(&mut self) -> Result<(), Error> {
+        let (elem, start, walked) = if let Some((e, start)) = self.pending.pop_front() {
+            (e, start, false)
+        } else {
+            loop {
+                if self.next_elem >= self.header.elements.len() {
+                    return self.walk_to_end();
+                }
+                let e = self.next_elem;
+                if let Role::Faces { .. } = self.roles[e] {
+                    break (e, self.next_offset, true);
+                }
+                self.next_offset = self.skip_element(e, self.next_offset)?;
+                self.next_elem += 1;
+            }
+        };
+        let Role::Faces { list, strip } = self.roles[elem] else { unreachable!() };
+        let count = self.header.elements[elem].count;
+        self.cur = Some(Cursor { elem, list, strip, count, record: 0, pos: start, rec_start: start, ls: None, walked });
+        Ok(())
+    }
+
+    /// Streams from the current face element until `out` is full or the
+    /// element ends; returns true when it ended.
+    fn stream(&mut self, out: &mut Emit, stats: &mut ReadStats) -> Result<bool, Error> {
+        let map = self.map.clone();
+        let data = map.bytes();
+        let mut cur = self.cur.take().expect("a current face element");
+        let el = &self.header.elements[cur.elem];
+        let ctx = self.ctx(data, cur.elem);
+        let PropType::List { count: cty, item: ity } = el.props[cur.list].ty else { unreachable!() };
+        let fast = self.header.encoding == Encoding::BinaryLe
+            && !cur.strip
+            && el.props.len() == 1
+            && cty == Scalar::U8
+            && (ity == Scalar::U32 || (ity == Scalar::I32 && out.pos.count() <= i32::MAX as u32));
+        let done = if fast {
+            loop {
+                if cur.ls.is_none() {
+                    fast_le_triangles(data, &mut cur, out).map_err(|(r, rec, at)| ctx.reject(r, out.pos, rec, at))?;
+                }
+                if cur.record >= cur.count || !out.room() {
+                    break cur.record >= cur.count && cur.ls.is_none();
+                }
+                // A record the fast loop declined: handle it generically.
+                let mut s = Bin::<false> { d: data, pos: cur.pos };
+                let ended = stream_records(&mut s, &mut cur, el, cty, ity, &ctx, out, stats, 1)?;
+                if ended {
+                    break true;
+                }
+            }
+        } else {
+            with_src!(self.header.encoding, data, cur.pos, |s| stream_records(&mut s, &mut cur, el, cty, ity, &ctx, out, stats, u64::MAX)?)
+        };
+        self.bytes_done = cur.pos as u64;
+        if done {
+            if cur.walked {
+                self.next_offset = cur.pos;
+                self.next_elem = cur.elem + 1;
+            }
+        } else {
+            self.cur = Some(cur);
+        }
+        Ok(done)
+    }
+}
+
+/// The end of `count` fixed-size records from `start`, or a truncation
+/// error naming the first incomplete record.
+fn fixed_end(ctx: &Ctx, start: usize, size: usize, count: u64) -> Result<usize, Error> {
+    let left = (ctx.data.len() - start) as u64;
+    match (size as u64).checked_mul(count) {
+        Some(n) if n <= left => Ok(start + n as usize),
+        _ => {
+            let complete = if size == 0 { 0 } else { left / size as u64 };
+            Err(ctx.at(
+                Error::format(
+                    ctx.path,
+                    format!(
+                        "unexpected end of file: {count} records of {size} bytes declared, the file holds only {complete} (truncated file, or the header counts are too large)"
+                    ),
+                ),
+                complete,
+                start + (complete * size as u64) as usize,
+            ))
+        }
+    }
+}
+
+/// The triangle fast path: binary little-endian records that are exactly
+/// `uchar 3` followed by three 32-bit indices below the vertex count. Stops
+/// at the first record that is anything else (the generic walker handles
+/// it, including any error), when the chunk is full, or at the end.
+#[inline]
+fn fast_le_triangles(data: &[u8], cur: &mut Cursor, out: &mut Emit) -> Result<(), (Reject, u64, usize)> {
+    let n = (cur.count - cur.record).min((out.max - out.len()) as u64) as usize;
+    let nv = out.pos.count();
+    let resolve = out.resolve;
+    let pos = out.pos;
+    match (resolve, pos.kind()) {
+        (false, _) => fast_loop(data, cur, n, nv, out, |_| [0.0; 3], false),
+        (true, PosKind::F32Le) => fast_loop(data, cur, n, nv, out, |i| pos.get_f32le(i), true),
+        (true, PosKind::F64Le) => fast_loop(data, cur, n, nv, out, |i| pos.get_f64le(i), true),
+        (true, PosKind::Other) => fast_loop(data, cur, n, nv, out, |i| pos.get_other(i), true),
+    }
+}
+
+#[inline(always)]
+fn fast_loop<F: Fn(u32) -> [f64; 3]>(
+    data: &[u8],
+    cur: &mut Cursor,
+    n: usize,
+    nv: u32,
+    out: &mut Emit,
+    fetch: F,
+    resolve: bool,
+) -> Result<(), (Reject, u64, usize)> {
+    let mut pos = cur.pos;
+    let mut k = 0;
+    // Records that fit entirely: no per-record length check needed below.
+    let fit = (data.len().saturating_sub(pos) / 13).min(n);
+    while k < fit {
+        let r: &[u8; 13] = data[pos..pos + 13].try_into().unwrap();
+        if r[0] != 3 {
+            break;
+        }
+        let a = u32::from_le_bytes([r[1], r[2], r[3], r[4]]);
+        let b = u32::from_le_bytes([r[5], r[6], r[7], r[8]]);
+        let c = u32::from_le_bytes([r[9], r[10], r[11], r[12]]);
+        if a >= nv || b >= nv || c >= nv {
+            break;
+        }
+        out.indices.push([a, b, c]);
+        if resolve {
+            let p = [fetch(a), fetch(b), fetch(c)];
+            if let Err(rej) = check_finite(&p, &[a, b, c]) {
+                out.indices.pop();
+                let rec = cur.record + k as u64;
+                cur.pos = pos;
+                cur.record = rec;
+                return Err((rej, rec, pos));
+            }
+            out.positions.push(p);
+        }
+        pos += 13;
+        k += 1;
+    }
+    cur.pos = pos;
+    cur.record += k as u64;
+    cur.rec_start = pos;
+    Ok(())
+}
+
+/// The generic record walker for face elements: streams until `out` is
+/// full, the element ends, or `budget` records have been completed.
+/// Returns true when the element ended.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn stream_records<S: Src>(
+    s: &mut S,
+    cur: &mut Cursor,
+    el: &Element,
+    cty: Scalar,
+    ity: Scalar,
+    ctx: &Ctx,
+    out: &mut Emit,
+    stats: &mut ReadStats,
+    budget: u64,
+) -> Result<bool, Error> {
+    let nv = out.pos.count() as i64;
+    let mut completed = 0u64;
+    loop {
+        if let Some(mut ls) = cur.ls.take() {
+            while ls.left > 0 {
+                if !out.room() {
+                    cur.ls = Some(ls);
+                    cur.pos = s.pos();
+                    return Ok(false);
+                }
+                let v = s.int(ity).map_err(|e| ctx.src(e, cur.record, cur.rec_start))?;
+                ls.left -= 1;
+                if cur.strip && v == -1 {
+                    ls.seen = 0;
+                    ls.odd = false;
+                    continue;
+                }
+                if v < 0 || v >= nv {
+                    return Err(ctx.reject(Reject::Index(v), out.pos, cur.record, cur.rec_start));
+                }
+                match ls.seen {
+                    0 => ls.a = v,
+                    1 => ls.b = v,
+                    _ if cur.strip => {
+                        let (p, q) = if ls.odd { (ls.b, ls.a) } else { (ls.a, ls.b) };
+                        if p == q || p == v || q == v {
+                            stats.degenerate_strip_triangles += 1;
+                        } else {
+                            out.tri_checked([p as u32, q as u32, v as u32])
+                                .map_err(|r| ctx.reject(r, out.pos, cur.record, cur.rec_start))?;
+                        }
+                        ls.a = ls.b;
+                        ls.b = v;
+                        ls.odd = !ls.odd;
+                    }
+                    _ => {
+                        out.tri_checked([ls.a as u32, ls.b as u32, v as u32])
+                            .map_err(|r| ctx.reject(r, out.pos, cur.record, cur.rec_start))?;
+                        ls.b = v;
+                    }
+                }
+                ls.seen += 1;
+            }
+            if !cur.strip && ls.len < 3 {
+                stats.short_faces += 1;
+            }
+            s.skip_props(&el.props[cur.list + 1..]).map_err(|e| ctx.src(e, cur.record, cur.rec_start))?;
+            cur.record += 1;
+            completed += 1;
+            if completed >= budget {
+                cur.pos = s.pos();
+                return Ok(cur.record >= cur.count);
+            }
+        }
+        if cur.record >= cur.count {
+            cur.pos = s.pos();
+            return Ok(true);
+        }
+        if !out.room() {
+            cur.pos = s.pos();
+            return Ok(false);
+        }
+        cur.rec_start = s.mark();
+        s.skip_props(&el.props[..cur.list]).map_err(|e| ctx.src(e, cur.record, cur.rec_start))?;
+        let n = s.list_len(cty).map_err(|e| ctx.src(e, cur.record, cur.rec_start))?;
+        cur.ls = Some(ListState { left: n, len: n, seen: 0, a: 0, b: 0, odd: false });
+    }
+}
+
+impl FaceStream for PlyBody {
+    fn fill(&mut self, out: &mut Emit, stats: &mut ReadStats) -> Result<bool, Error> {
+        while !self.finished {
+            if self.cur.is_none() {
+                self.start_next()?;
+                continue;
+            }
+            let ended = self.stream(out, stats)?;
+            if !ended && !out.room() {
+                return Ok(true);
+            }
+        }
+        Ok(false)
+    }
+
+    fn bytes_done(&self) -> u64 {
+        self.bytes_done
+    }
+}

@@ -1,0 +1,316 @@
+//! The streaming reader. [`MeshReader::open`] detects the format, maps the
+//! file, and asks the format module for an [`Opened`]: the [`MeshInfo`], the
+//! vertex [`Positions`] (memory-mapped, either in place or through a spill
+//! file), an optional [`RangeGrid`], and a [`FaceStream`] that knows where
+//! the faces are. [`MeshReader::next_chunk`] then pulls up to
+//! [`ReadOptions::chunk_triangles`] triangles at a time into a
+//! [`TriangleChunk`], through an [`Emit`] that range-checks indices and
+//! resolves positions (rejecting NaN/infinite coordinates of used vertices).
+//!
+//! Memory: a reader holds the header, one chunk (which the caller owns and
+//! reuses), and for range scans the grid; never anything per face, and
+//! vertex positions only through maps. Spill files are anonymous temporary
+//! files in [`ReadOptions::spill_dir`], deleted when the reader is dropped.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use crate::error::Error;
+use crate::format::Format;
+use crate::mapped::Mapped;
+use crate::positions::{Emit, Positions};
+use crate::{obj, off, ply, stl};
+
+/// What a file says about itself, from its header (see [`read_info`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MeshInfo {
+    pub format: Format,
+    /// `"ascii"`, `"binary_little_endian"`, `"binary_big_endian"`, or
+    /// `"binary"` for binary STL.
+    pub encoding: String,
+    /// Vertices as stored (for STL: 3 per facet, a soup).
+    pub vertex_count: u64,
+    /// Face records (polygons, strips or facets) when the file says; `None`
+    /// when the file has no face element at all (a PLY point cloud or range
+    /// scan).
+    pub face_count: Option<u64>,
+    /// The elements in file order.
+    pub elements: Vec<ElementInfo>,
+    /// Header comments (PLY `comment`, leading `#` lines of OBJ/OFF, the
+    /// binary STL header text or the ascii STL solid name).
+    pub comments: Vec<String>,
+    /// PLY `obj_info` lines, without the keyword.
+    pub obj_info: Vec<String>,
+}
+
+/// One element of a file: PLY elements as declared; `v`/`f` for OBJ,
+/// `vertex`/`face` for OFF, `facet` for STL.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ElementInfo {
+    pub name: String,
+    pub count: u64,
+    /// Property declarations as written, e.g. `"float x"`,
+    /// `"list uchar int vertex_indices"`.
+    pub properties: Vec<String>,
+}
+
+/// Reads what the file says about itself without streaming its faces.
+///
+/// PLY, binary STL and OFF: header only. OBJ and ascii STL have no header
+/// with counts, so this scans the whole file (one sequential pass over the
+/// mapped bytes, no spill) to count vertices and faces.
+pub fn read_info(path: &Path) -> Result<MeshInfo, Error> {
+    let format = Format::from_path(path)?;
+    let map = Mapped::open(path, &std::env::temp_dir())?;
+    match format {
+        Format::Ply => Ok(ply::read::info_from_header(&ply::header::parse(map.bytes(), path)?)),
+        Format::Obj => obj::info(path, map.bytes()),
+        Format::Stl => stl::info(path, map.bytes()),
+        Format::Off => off::info(path, map.bytes()),
+    }
+}
+
+/// Options of [`MeshReader::open`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ReadOptions {
+    /// Most triangles per [`MeshReader::next_chunk`]. Default 65536; 0 is
+    /// treated as 1.
+    pub chunk_triangles: usize,
+    /// Where spill files (vertex positions of text files, ascii STL facets,
+    /// inputs that cannot be mapped) go. Default `None`: the system
+    /// temporary directory, [`std::env::temp_dir`]. Spill files are
+    /// anonymous and vanish with the reader.
+    pub spill_dir: Option<PathBuf>,
+    /// Fill [`TriangleChunk::positions`] (and check that used vertices are
+    /// finite). Default true; turn it off when only connectivity is needed.
+    pub resolve_positions: bool,
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        ReadOptions { chunk_triangles: 65536, spill_dir: None, resolve_positions: true }
+    }
+}
+
+impl ReadOptions {
+    pub(crate) fn spill_dir(&self) -> PathBuf {
+        self.spill_dir.clone().unwrap_or_else(std::env::temp_dir)
+    }
+}
+
+/// A batch of triangles. Reuse one chunk across calls: `next_chunk` clears
+/// it and keeps its capacity.
+#[derive(Debug, Default, Clone, PartialEq)]
+pub struct TriangleChunk {
+    /// 0-based vertex indices of each triangle.
+    pub indices: Vec<[u32; 3]>,
+    /// The positions of the three corners (empty unless
+    /// [`ReadOptions::resolve_positions`]).
+    pub positions: Vec<[[f64; 3]; 3]>,
+}
+
+impl TriangleChunk {
+    pub fn new() -> TriangleChunk {
+        TriangleChunk::default()
+    }
+
+    /// Triangles in the chunk.
+    pub fn len(&self) -> usize {
+        self.indices.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.indices.is_empty()
+    }
+
+    pub fn clear(&mut self) {
+        self.indices.clear();
+        self.positions.clear();
+    }
+}
+
+/// The sample grid of a range scan (PLY `range_grid` element): `cols` x
+/// `rows` cells in row-major order, each the index of the vertex sampled
+/// there, or `None`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RangeGrid {
+    pub cols: u32,
+    pub rows: u32,
+    pub cells: Vec<Option<u32>>,
+}
+
+impl RangeGrid {
+    /// The vertex at (`col`, `row`), if any. Panics outside the grid.
+    pub fn cell(&self, col: u32, row: u32) -> Option<u32> {
+        assert!(col < self.cols && row < self.rows, "cell ({col}, {row}) outside a {}x{} grid", self.cols, self.rows);
+        self.cells[row as usize * self.cols as usize + col as usize]
+    }
+
+    /// Number of cells that hold a vertex.
+    pub fn filled(&self) -> usize {
+        self.cells.iter().filter(|c| c.is_some()).count()
+    }
+}
+
+/// Counters of what a reader met so far.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct ReadStats {
+    /// Triangles delivered.
+    pub triangles: u64,
+    /// Face records with fewer than 3 indices, skipped (PLY faces, OBJ `f`
+    /// lines, OFF faces).
+    pub short_faces: u64,
+    /// Strip triangles with a repeated index, dropped (PLY `tristrips`).
+    pub degenerate_strip_triangles: u64,
+    /// Vertex positions written to a spill file (0 when they are read in
+    /// place from a binary file).
+    pub spilled_vertices: u64,
+}
+
+/// The format-specific part of a reader: produces triangles into an
+/// [`Emit`] until it is full or the faces end.
+pub(crate) trait FaceStream: Send {
+    /// Fills `out`; returns false when no triangles remain after this call.
+    fn fill(&mut self, out: &mut Emit, stats: &mut ReadStats) -> Result<bool, Error>;
+    /// Bytes of the input consumed so far.
+    fn bytes_done(&self) -> u64;
+}
+
+/// What a format module hands back from opening a file.
+pub(crate) struct Opened {
+    pub(crate) info: MeshInfo,
+    pub(crate) positions: Positions,
+    pub(crate) body: Box<dyn FaceStream>,
+    pub(crate) range_grid: Option<RangeGrid>,
+    pub(crate) spilled_vertices: u64,
+}
+
+/// A streaming mesh reader; see the module docs.
+pub struct MeshReader {
+    path: PathBuf,
+    info: MeshInfo,
+    positions: Positions,
+    body: Box<dyn FaceStream>,
+    range_grid: Option<RangeGrid>,
+    stats: ReadStats,
+    opts: ReadOptions,
+    bytes_total: u64,
+    finished: bool,
+}
+
+impl std::fmt::Debug for MeshReader {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MeshReader")
+            .field("path", &self.path)
+            .field("info", &self.info)
+            .field("stats", &self.stats)
+            .field("finished", &self.finished)
+            .finish_non_exhaustive()
+    }
+}
+
+impl MeshReader {
+    /// Opens `path` (format by extension, else sniffed), reads its header
+    /// and makes vertex positions index-addressable. Text formats spill
+    /// their positions here (one pass over the vertex data).
+    pub fn open(path: &Path, opts: ReadOptions) -> Result<MeshReader, Error> {
+        let format = Format::from_path(path)?;
+        let spill_dir = opts.spill_dir();
+        let map = Arc::new(Mapped::open(path, &spill_dir)?);
+        let bytes_total = map.bytes().len() as u64;
+        let opened = match format {
+            Format::Ply => ply::read::open(path, map, &spill_dir)?,
+            Format::Obj => obj::open(path, map, &spill_dir)?,
+            Format::Stl => stl::open(path, map, &spill_dir)?,
+            Format::Off => off::open(path, map, &spill_dir)?,
+        };
+        Ok(MeshReader {
+            path: path.to_path_buf(),
+            info: opened.info,
+            positions: opened.positions,
+            body: opened.body,
+            range_grid: opened.range_grid,
+            stats: ReadStats { spilled_vertices: opened.spilled_vertices, ..ReadStats::default() },
+            opts,
+            bytes_total,
+            finished: false,
+        })
+    }
+
+    /// The file this reader reads.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// What the header says.
+    pub fn info(&self) -> &MeshInfo {
+        &self.info
+    }
+
+    /// Number of vertices (for STL: 3 per facet).
+    pub fn vertex_count(&self) -> u32 {
+        self.positions.count()
+    }
+
+    /// Position of vertex `i`, read from the map (no finiteness check).
+    /// Panics if `i >= vertex_count()`.
+    pub fn vertex(&self, i: u32) -> [f64; 3] {
+        self.positions.get(i)
+    }
+
+    /// Clears `chunk` and fills it with up to
+    /// [`ReadOptions::chunk_triangles`] triangles. Returns `Ok(false)` (and
+    /// an empty chunk) when no triangles remain. After an error the reader
+    /// is finished and the chunk's content is unspecified.
+    pub fn next_chunk(&mut self, chunk: &mut TriangleChunk) -> Result<bool, Error> {
+        chunk.clear();
+        if self.finished {
+            return Ok(false);
+        }
+        let max = self.opts.chunk_triangles.max(1);
+        let resolve = self.opts.resolve_positions;
+        chunk.indices.reserve(max.min(1 << 22));
+        if resolve {
+            chunk.positions.reserve(max.min(1 << 22));
+        }
+        let mut out = Emit { indices: &mut chunk.indices, positions: &mut chunk.positions, max, resolve, pos: &self.positions };
+        match self.body.fill(&mut out, &mut self.stats) {
+            Ok(more) => self.finished = !more,
+            Err(e) => {
+                self.finished = true;
+                return Err(e);
+            }
+        }
+        self.stats.triangles += chunk.len() as u64;
+        Ok(!chunk.is_empty())
+    }
+
+    /// Size of the input in bytes, for progress bars.
+    pub fn bytes_total(&self) -> u64 {
+        self.bytes_total
+    }
+
+    /// Bytes of the input consumed so far (equals [`bytes_total`] when all
+    /// faces have been read).
+    ///
+    /// [`bytes_total`]: MeshReader::bytes_total
+    pub fn bytes_done(&self) -> u64 {
+        if self.finished {
+            self.bytes_total
+        } else {
+            self.body.bytes_done().min(self.bytes_total)
+        }
+    }
+
+    /// The range grid of a PLY range scan (`range_grid` element with
+    /// `obj_info num_cols`/`num_rows`), or `None`.
+    pub fn range_grid(&self) -> Option<RangeGrid> {
+        self.range_grid.clone()
+    }
+
+    /// Counters so far: triangles, skipped short faces, dropped degenerate
+    /// strip triangles, spilled vertices.
+    pub fn stats(&self) -> ReadStats {
+        self.stats
+    }
+}

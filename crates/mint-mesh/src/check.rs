@@ -1,0 +1,641 @@
+//! [`check()`] reads an indexed triangle mesh and returns a [`CheckReport`]:
+//! what a mesh is, and everything that keeps it from being a clean closed
+//! surface. Data flows in four passes over flat arrays: (1) per-face geometry
+//! in fixed chunks (volume, area, exact degeneracy); (2) a counting sort of
+//! face corners into a vertex→face incidence table; (3) a union-find over
+//! vertices for components, run beside (4) a per-vertex pass that looks only
+//! at a vertex's own incident faces to classify every edge and fan. No hash
+//! map is built: memory is about 12 bytes per face plus 13 bytes per vertex
+//! on top of the input, so tens of millions of faces fit in a few GB.
+//!
+//! # Definitions
+//!
+//! Let `V` be the positions and `F` the faces. A face is *collapsed* if it
+//! repeats a vertex index (`[a, a, b]`). Collapsed faces count as degenerate
+//! and as references to their vertices, and they join vertices into
+//! components, but they take no part in edge topology: they add no edges and
+//! no fans, and a component holding one is never *closed*. Every other face
+//! is *proper* and contributes its three directed edges `a→b, b→c, c→a`.
+//!
+//! - `vertices`, `faces`: the input lengths.
+//! - `referenced_vertices`: vertices used by at least one face (collapsed or
+//!   not); `unreferenced_vertices` the rest.
+//! - `bbox_min`, `bbox_max`: over all vertices with finite coordinates
+//!   (referenced or not); `None` if there is none. `non_finite_vertices`
+//!   counts the others (NaN or infinite coordinates make the geometric
+//!   fields meaningless but do not change the topological ones).
+//! - `components`: connected components of the referenced vertices, two
+//!   vertices being connected when they share a face (vertex connectivity:
+//!   two cubes touching at one corner are one component). Components are
+//!   numbered by their smallest vertex index.
+//! - `edges`: undirected edges `{a, b}` of proper faces. The *multiplicity*
+//!   of an edge is the number of proper faces using it.
+//! - `boundary_edges`: edges of multiplicity 1.
+//! - `non_manifold_edges`: edges of multiplicity 3 or more.
+//! - `inconsistently_oriented_edges`: edges of multiplicity exactly 2 whose
+//!   two faces traverse them in the same direction (a flipped face inside a
+//!   closed surface gives 3).
+//! - `boundary_loops`: each boundary edge is directed as its one face
+//!   traverses it. A vertex is a *simple boundary vertex* when exactly one
+//!   boundary edge leaves it and exactly one enters it. A boundary loop is a
+//!   closed cycle of boundary edges through simple boundary vertices only;
+//!   `boundary_loops` counts them, and `non_simple_boundary_edges` counts the
+//!   boundary edges on no such loop (e.g. the two free edges of a sliver
+//!   triangle hung on an interior edge, or a boundary that touches itself
+//!   at a vertex).
+//! - `non_manifold_vertices`: vertices whose incident proper faces form two
+//!   or more *fans*, a fan being a class of faces around the vertex
+//!   connected through edges incident to that vertex. Two cubes sharing a
+//!   corner make that corner one. The ends of a non-manifold edge are not
+//!   counted for that reason alone: the faces on the edge join one fan.
+//! - `degenerate_faces`: collapsed faces plus proper faces of exactly zero
+//!   area (three collinear or coincident positions), decided exactly with
+//!   `robust::orient2d` on the xy, yz and zx projections (the three
+//!   components of the cross product), never with a tolerance.
+//!   `collapsed_faces` is the collapsed subset.
+//! - `duplicate_faces`: faces whose sorted index triple equals that of an
+//!   earlier face (same vertex set, any order or orientation); the first
+//!   copy is not counted, so `k` copies of a face add `k - 1`. Duplicates
+//!   still take part in topology, so they usually also show up as
+//!   non-manifold or inconsistently oriented edges.
+//! - `euler_characteristic`: `χ = referenced_vertices - edges + proper faces`
+//!   over the whole mesh.
+//! - A component is *closed* when it holds no collapsed face and none of its
+//!   edges is a boundary, non-manifold or inconsistently oriented edge and
+//!   none of its vertices is non-manifold; it is then a closed, oriented
+//!   2-manifold. `closed_components` counts them and `genera` lists
+//!   `(2 - χ_c) / 2` for each, in component order; `genus_total` is the sum.
+//! - `signed_volume`: `Σ det(p0, p1, p2) / 6` over proper faces, relative to
+//!   the origin (for a closed, outward-oriented surface this is the enclosed
+//!   volume, positive). `surface_area`: `Σ |(p1-p0)×(p2-p0)| / 2`. Both are
+//!   summed in fixed chunks of faces combined in order, so they are
+//!   bit-identical under any thread count.
+//! - `watertight`: no boundary, non-manifold or inconsistently oriented
+//!   edge, no non-manifold vertex, and at least one face. Unreferenced
+//!   vertices, degenerate and collapsed faces do not by themselves spoil it.
+//!
+//! Non-goals: no geometric self-intersection test, no repair.
+
+use crate::error::MeshError;
+use mint_core::TriMesh;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::sync::atomic::{AtomicU32, Ordering};
+
+/// Faces per chunk in the geometry pass; fixes the summation order.
+const FACE_CHUNK: usize = 1 << 14;
+/// Vertices per chunk in the per-vertex topology pass.
+const VERTEX_CHUNK: usize = 1 << 12;
+/// Label of an unreferenced vertex.
+const NONE: u32 = u32::MAX;
+/// High bit of the per-vertex info word: the vertex spoils closedness.
+const BAD: u32 = 1 << 31;
+
+/// Everything [`check()`] finds; see the [module docs](self) for each
+/// definition.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CheckReport {
+    pub vertices: u64,
+    pub faces: u64,
+    pub referenced_vertices: u64,
+    pub unreferenced_vertices: u64,
+    pub non_finite_vertices: u64,
+    pub bbox_min: Option<[f64; 3]>,
+    pub bbox_max: Option<[f64; 3]>,
+    pub components: u64,
+    pub edges: u64,
+    pub boundary_edges: u64,
+    pub boundary_loops: u64,
+    pub non_simple_boundary_edges: u64,
+    pub non_manifold_edges: u64,
+    pub non_manifold_vertices: u64,
+    pub inconsistently_oriented_edges: u64,
+    pub degenerate_faces: u64,
+    pub collapsed_faces: u64,
+    pub duplicate_faces: u64,
+    pub euler_characteristic: i64,
+    pub closed_components: u64,
+    pub genera: Vec<i64>,
+    pub genus_total: i64,
+    pub signed_volume: f64,
+    pub surface_area: f64,
+    pub watertight: bool,
+}
+
+/// Checks a mesh; see the [module docs](self) for what is measured.
+///
+/// # Panics
+/// If a face index is out of range or the mesh is too large for `u32`
+/// indices; use [`try_check`] to get a [`MeshError`] instead.
+pub fn check(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> CheckReport {
+    try_check(positions, faces).unwrap_or_else(|e| panic!("mint_mesh::check: {e}"))
+}
+
+/// [`check()`] on a [`TriMesh`].
+pub fn check_mesh(mesh: &TriMesh) -> CheckReport {
+    check(&mesh.positions, &mesh.faces)
+}
+
+/// Checks a mesh, returning an error for out-of-range indices or sizes
+/// beyond `u32` indexing instead of panicking.
+pub fn try_check(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<CheckReport, MeshError> {
+    validate(positions, faces)?;
+    let nv = positions.len();
+
+    // Geometry: bbox over vertices, volume/area/degeneracy over faces.
+    let bbox = bounding_box(positions);
+    let geom = face_geometry(positions, faces);
+
+    // Topology: incidence table, then components beside the per-vertex pass.
+    let incidence = Incidence::build(nv, faces);
+    let ((labels, referenced, components), local) = rayon::join(
+        || component_labels(nv, faces),
+        || local_topology(nv, faces, &incidence),
+    );
+    drop(incidence);
+
+    // Per-component Euler characteristic and closedness.
+    let mut chi = vec![0i64; components as usize];
+    let mut bad = vec![false; components as usize];
+    for v in 0..nv {
+        let l = labels[v];
+        if l == NONE {
+            continue;
+        }
+        let info = local.vinfo[v];
+        chi[l as usize] += 1 - i64::from(info & !BAD);
+        bad[l as usize] |= info & BAD != 0;
+    }
+    for f in faces {
+        let l = labels[f[0] as usize] as usize;
+        if is_collapsed(f) {
+            bad[l] = true;
+        } else {
+            chi[l] += 1;
+        }
+    }
+    let genera: Vec<i64> = (0..components as usize)
+        .filter(|&c| !bad[c])
+        .map(|c| (2 - chi[c]) / 2)
+        .collect();
+
+    let (boundary_loops, loop_edges) = walk_boundary_loops(&local.simple);
+    let proper_faces = faces.len() as u64 - geom.collapsed;
+    let c = &local.counts;
+    let watertight = c.boundary == 0
+        && c.non_manifold_edges == 0
+        && c.non_manifold_vertices == 0
+        && c.inconsistent == 0
+        && !faces.is_empty();
+
+    Ok(CheckReport {
+        vertices: nv as u64,
+        faces: faces.len() as u64,
+        referenced_vertices: referenced,
+        unreferenced_vertices: nv as u64 - referenced,
+        non_finite_vertices: bbox.non_finite,
+        bbox_min: bbox.min,
+        bbox_max: bbox.max,
+        components,
+        edges: c.edges,
+        boundary_edges: c.boundary,
+        boundary_loops,
+        non_simple_boundary_edges: c.boundary - loop_edges,
+        non_manifold_edges: c.non_manifold_edges,
+        non_manifold_vertices: c.non_manifold_vertices,
+        inconsistently_oriented_edges: c.inconsistent,
+        degenerate_faces: geom.degenerate,
+        collapsed_faces: geom.collapsed,
+        duplicate_faces: c.duplicates + duplicate_collapsed(faces),
+        euler_characteristic: referenced as i64 - c.edges as i64 + proper_faces as i64,
+        closed_components: genera.len() as u64,
+        genus_total: genera.iter().sum(),
+        genera,
+        signed_volume: geom.volume6 / 6.0,
+        surface_area: geom.area2 / 2.0,
+        watertight,
+    })
+}
+
+/// Rejects out-of-range indices and sizes beyond `u32` indexing; reports the
+/// first bad face.
+fn validate(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<(), MeshError> {
+    if positions.len() > u32::MAX as usize {
+        return Err(MeshError::TooManyVertices { vertices: positions.len() });
+    }
+    if faces.len() > (u32::MAX / 3) as usize {
+        return Err(MeshError::TooManyFaces { faces: faces.len(), max: (u32::MAX / 3) as usize });
+    }
+    let nv = positions.len() as u32;
+    if let Some(face) = faces.par_iter().position_first(|f| f.iter().any(|&i| i >= nv)) {
+        let index = *faces[face].iter().find(|&&i| i >= nv).expect("found above");
+        return Err(MeshError::IndexOutOfRange { face, index, vertices: positions.len() });
+    }
+    Ok(())
+}
+
+#[inline]
+pub(crate) fn is_collapsed(f: &[u32; 3]) -> bool {
+    f[0] == f[1] || f[1] == f[2] || f[0] == f[2]
+}
+
+struct Bbox {
+    min: Option<[f64; 3]>,
+    max: Option<[f64; 3]>,
+    non_finite: u64,
+}
+
+fn bounding_box(positions: &[[f64; 3]]) -> Bbox {
+    let (min, max, non_finite) = positions
+        .par_chunks(FACE_CHUNK)
+        .map(|chunk| {
+            let mut lo = [f64::INFINITY; 3];
+            let mut hi = [f64::NEG_INFINITY; 3];
+            let mut bad = 0u64;
+            for p in chunk {
+                if p.iter().all(|x| x.is_finite()) {
+                    for k in 0..3 {
+                        lo[k] = lo[k].min(p[k]);
+                        hi[k] = hi[k].max(p[k]);
+                    }
+                } else {
+                    bad += 1;
+                }
+            }
+            (lo, hi, bad)
+        })
+        .reduce(
+            || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3], 0),
+            |a, b| {
+                (
+                    std::array::from_fn(|k| a.0[k].min(b.0[k])),
+                    std::array::from_fn(|k| a.1[k].max(b.1[k])),
+                    a.2 + b.2,
+                )
+            },
+        );
+    let any = (positions.len() as u64) > non_finite;
+    Bbox { min: any.then_some(min), max: any.then_some(max), non_finite }
+}
+
+#[derive(Default, Clone, Copy)]
+struct FaceGeom {
+    volume6: f64,
+    area2: f64,
+    degenerate: u64,
+    collapsed: u64,
+}
+
+fn face_geometry(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> FaceGeom {
+    let parts: Vec<FaceGeom> = faces
+        .par_chunks(FACE_CHUNK)
+        .map(|chunk| {
+            let mut g = FaceGeom::default();
+            for f in chunk {
+                if is_collapsed(f) {
+                    g.collapsed += 1;
+                    g.degenerate += 1;
+                    continue;
+                }
+                let [a, b, c] = f.map(|i| positions[i as usize]);
+                let n = cross(sub(b, a), sub(c, a));
+                g.area2 += dot(n, n).sqrt();
+                g.volume6 += dot(a, cross(b, c));
+                if collinear_exact(a, b, c) {
+                    g.degenerate += 1;
+                }
+            }
+            g
+        })
+        .collect();
+    // Combine in chunk order: the sum does not depend on the thread count.
+    parts.iter().fold(FaceGeom::default(), |acc, g| FaceGeom {
+        volume6: acc.volume6 + g.volume6,
+        area2: acc.area2 + g.area2,
+        degenerate: acc.degenerate + g.degenerate,
+        collapsed: acc.collapsed + g.collapsed,
+    })
+}
+
+/// True iff the three points are exactly collinear (or coincident): the
+/// three components of `(b-a)×(c-a)` are the orientations of the xy, yz and
+/// zx projections, each evaluated exactly by `robust::orient2d`.
+pub(crate) fn collinear_exact(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> bool {
+    use robust::{orient2d, Coord};
+    let o = |i: usize, j: usize| {
+        orient2d(
+            Coord { x: a[i], y: a[j] },
+            Coord { x: b[i], y: b[j] },
+            Coord { x: c[i], y: c[j] },
+        )
+    };
+    o(0, 1) == 0.0 && o(1, 2) == 0.0 && o(2, 0) == 0.0
+}
+
+/// Vertex→face incidence table of the proper faces (CSR layout): the faces
+/// around vertex `v` are `faces[v_offsets[v]..v_offsets[v+1]]`, in no
+/// particular order (filled in parallel; nothing downstream depends on it).
+struct Incidence {
+    offsets: Vec<u32>,
+    faces: Vec<AtomicU32>,
+}
+
+impl Incidence {
+    fn build(nv: usize, faces: &[[u32; 3]]) -> Self {
+        let cursor: Vec<AtomicU32> = (0..nv).into_par_iter().map(|_| AtomicU32::new(0)).collect();
+        faces.par_iter().filter(|f| !is_collapsed(f)).for_each(|f| {
+            for &i in f {
+                cursor[i as usize].fetch_add(1, Ordering::Relaxed);
+            }
+        });
+        let mut offsets = vec![0u32; nv + 1];
+        for v in 0..nv {
+            offsets[v + 1] = offsets[v] + cursor[v].load(Ordering::Relaxed);
+        }
+        cursor
+            .par_iter()
+            .zip(offsets.par_iter())
+            .for_each(|(c, &o)| c.store(o, Ordering::Relaxed));
+        let total = offsets[nv] as usize;
+        let table: Vec<AtomicU32> = (0..total).into_par_iter().map(|_| AtomicU32::new(0)).collect();
+        faces.par_iter().enumerate().filter(|(_, f)| !is_collapsed(f)).for_each(|(fi, f)| {
+            for &i in f {
+                let slot = cursor[i as usize].fetch_add(1, Ordering::Relaxed);
+                table[slot as usize].store(fi as u32, Ordering::Relaxed);
+            }
+        });
+        Self { offsets, faces: table }
+    }
+}
+
+/// Union-find over vertices through faces. Returns per-vertex component
+/// labels (`NONE` for unreferenced vertices), the number of referenced
+/// vertices and the number of components. Roots are always the smallest
+/// vertex of their class, so labels follow smallest-vertex order.
+fn component_labels(nv: usize, faces: &[[u32; 3]]) -> (Vec<u32>, u64, u64) {
+    let mut parent: Vec<u32> = (0..nv as u32).collect();
+    let mut referenced = vec![false; nv];
+    fn find(p: &mut [u32], mut x: u32) -> u32 {
+        while p[x as usize] != x {
+            let g = p[p[x as usize] as usize];
+            p[x as usize] = g;
+            x = g;
+        }
+        x
+    }
+    fn union(p: &mut [u32], a: u32, b: u32) {
+        let (ra, rb) = (find(p, a), find(p, b));
+        // Link the larger root under the smaller: parent[x] <= x always.
+        if ra < rb {
+            p[rb as usize] = ra;
+        } else if rb < ra {
+            p[ra as usize] = rb;
+        }
+    }
+    for f in faces {
+        for &i in f {
+            referenced[i as usize] = true;
+        }
+        union(&mut parent, f[0], f[1]);
+        union(&mut parent, f[0], f[2]);
+    }
+    // In place: parent[v] <= v, so by the time v is visited its parent holds
+    // a final label (roots get fresh labels in ascending order).
+    let mut next = 0u32;
+    let mut nref = 0u64;
+    for v in 0..nv {
+        if !referenced[v] {
+            parent[v] = NONE;
+            continue;
+        }
+        nref += 1;
+        let p = parent[v] as usize;
+        parent[v] = if p == v {
+            next += 1;
+            next - 1
+        } else {
+            parent[p]
+        };
+    }
+    (parent, nref, u64::from(next))
+}
+
+#[derive(Default, Clone, Copy)]
+struct Counts {
+    edges: u64,
+    boundary: u64,
+    non_manifold_edges: u64,
+    inconsistent: u64,
+    non_manifold_vertices: u64,
+    duplicates: u64,
+}
+
+impl Counts {
+    fn add(&mut self, o: &Counts) {
+        self.edges += o.edges;
+        self.boundary += o.boundary;
+        self.non_manifold_edges += o.non_manifold_edges;
+        self.inconsistent += o.inconsistent;
+        self.non_manifold_vertices += o.non_manifold_vertices;
+        self.duplicates += o.duplicates;
+    }
+}
+
+struct Local {
+    counts: Counts,
+    /// Per vertex: number of edges `{v, w}` with `w > v` (low 31 bits) and
+    /// the `BAD` flag.
+    vinfo: Vec<u32>,
+    /// `(v, w)` for each simple boundary vertex `v` and its outgoing boundary
+    /// edge `v→w`, sorted by `v`.
+    simple: Vec<(u32, u32)>,
+}
+
+/// The per-vertex pass: each vertex looks at its incident faces only, so
+/// every edge `{v, w}` is seen whole from both ends and classified at the
+/// smaller one, and the fans at `v` are found by a small local union-find.
+fn local_topology(nv: usize, faces: &[[u32; 3]], inc: &Incidence) -> Local {
+    let mut vinfo = vec![0u32; nv];
+    let parts: Vec<(Counts, Vec<(u32, u32)>)> = vinfo
+        .par_chunks_mut(VERTEX_CHUNK)
+        .enumerate()
+        .map(|(ci, info)| {
+            let mut counts = Counts::default();
+            let mut simple = Vec::new();
+            let mut keys: Vec<u64> = Vec::new();
+            let mut lp: Vec<u32> = Vec::new();
+            let mut dup: Vec<u64> = Vec::new();
+            let v0 = ci * VERTEX_CHUNK;
+            for (dv, slot) in info.iter_mut().enumerate() {
+                let v = (v0 + dv) as u32;
+                let (s, e) = (inc.offsets[v as usize] as usize, inc.offsets[v as usize + 1] as usize);
+                let d = e - s;
+                if d == 0 {
+                    continue;
+                }
+                keys.clear();
+                dup.clear();
+                for k in 0..d {
+                    let f = faces[inc.faces[s + k].load(Ordering::Relaxed) as usize];
+                    let (a, b) = if f[0] == v {
+                        (f[1], f[2])
+                    } else if f[1] == v {
+                        (f[2], f[0])
+                    } else {
+                        (f[0], f[1])
+                    };
+                    // Key: neighbour, then direction (1 = v→w), then local face.
+                    keys.push(u64::from(a) << 33 | 1 << 32 | k as u64);
+                    keys.push(u64::from(b) << 33 | k as u64);
+                    if v < a && v < b {
+                        dup.push(u64::from(a.min(b)) << 32 | u64::from(a.max(b)));
+                    }
+                }
+                keys.sort_unstable();
+                lp.clear();
+                lp.extend(0..d as u32);
+                let mut unions = 0usize;
+                let (mut bout, mut bin, mut next) = (0u32, 0u32, 0u32);
+                let mut bad = false;
+                let mut edges_here = 0u32;
+                let mut g = 0;
+                while g < keys.len() {
+                    let w = (keys[g] >> 33) as u32;
+                    let first = (keys[g] & 0xFFFF_FFFF) as u32;
+                    let (mut n_out, mut n_in) = (0u32, 0u32);
+                    let mut h = g;
+                    while h < keys.len() && (keys[h] >> 33) as u32 == w {
+                        if keys[h] >> 32 & 1 == 1 {
+                            n_out += 1;
+                        } else {
+                            n_in += 1;
+                        }
+                        let k = (keys[h] & 0xFFFF_FFFF) as u32;
+                        if local_union(&mut lp, first, k) {
+                            unions += 1;
+                        }
+                        h += 1;
+                    }
+                    g = h;
+                    let m = n_out + n_in;
+                    let inconsistent = m == 2 && n_out != 1;
+                    if m == 1 {
+                        if n_out == 1 {
+                            bout += 1;
+                            next = w;
+                        } else {
+                            bin += 1;
+                        }
+                    }
+                    bad |= m != 2 || inconsistent;
+                    if w > v {
+                        edges_here += 1;
+                        counts.edges += 1;
+                        counts.boundary += u64::from(m == 1);
+                        counts.non_manifold_edges += u64::from(m >= 3);
+                        counts.inconsistent += u64::from(inconsistent);
+                    }
+                }
+                let fans = d - unions;
+                if fans >= 2 {
+                    counts.non_manifold_vertices += 1;
+                    bad = true;
+                }
+                if bout == 1 && bin == 1 {
+                    simple.push((v, next));
+                }
+                if dup.len() > 1 {
+                    dup.sort_unstable();
+                    counts.duplicates += dup.windows(2).filter(|p| p[0] == p[1]).count() as u64;
+                }
+                *slot = edges_here | if bad { BAD } else { 0 };
+            }
+            (counts, simple)
+        })
+        .collect();
+    let mut counts = Counts::default();
+    let mut simple = Vec::new();
+    for (c, s) in parts {
+        counts.add(&c);
+        simple.extend(s);
+    }
+    Local { counts, vinfo, simple }
+}
+
+/// Union in a small local forest; true if two classes were merged.
+fn local_union(p: &mut [u32], a: u32, b: u32) -> bool {
+    let find = |p: &mut [u32], mut x: u32| {
+        while p[x as usize] != x {
+            let g = p[p[x as usize] as usize];
+            p[x as usize] = g;
+            x = g;
+        }
+        x
+    };
+    let (ra, rb) = (find(p, a), find(p, b));
+    if ra == rb {
+        return false;
+    }
+    p[ra.max(rb) as usize] = ra.min(rb);
+    true
+}
+
+/// Duplicates among collapsed faces (the per-vertex pass never sees them).
+fn duplicate_collapsed(faces: &[[u32; 3]]) -> u64 {
+    let mut keys: Vec<[u32; 3]> = faces
+        .iter()
+        .filter(|f| is_collapsed(f))
+        .map(|f| {
+            let mut k = *f;
+            k.sort_unstable();
+            k
+        })
+        .collect();
+    keys.sort_unstable();
+    keys.windows(2).filter(|p| p[0] == p[1]).count() as u64
+}
+
+/// Follows boundary edges from simple boundary vertices; returns the number
+/// of closed loops and the number of edges on them.
+fn walk_boundary_loops(simple: &[(u32, u32)]) -> (u64, u64) {
+    let mut visited = vec![false; simple.len()];
+    let (mut loops, mut loop_edges) = (0u64, 0u64);
+    for start in 0..simple.len() {
+        if visited[start] {
+            continue;
+        }
+        visited[start] = true;
+        let (u, mut w) = simple[start];
+        let mut len = 1u64;
+        loop {
+            if w == u {
+                loops += 1;
+                loop_edges += len;
+                break;
+            }
+            match simple.binary_search_by_key(&w, |e| e.0) {
+                Ok(i) if !visited[i] => {
+                    visited[i] = true;
+                    len += 1;
+                    w = simple[i].1;
+                }
+                // A non-simple vertex, or a path already found open.
+                _ => break,
+            }
+        }
+    }
+    (loops, loop_edges)
+}
+
+#[inline]
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+#[inline]
+pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+#[inline]
+pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
