@@ -1,1 +1,46 @@
-//! mint-testkit (in progress).
+//! Generators and checkers shared by mint's tests.
+//!
+//! - [`hull`]: random convex polyhedra (an incremental convex hull with exact
+//!   visibility tests), for property tests of the resampler;
+//! - [`topology`]: a strict, self-contained checker of closed oriented
+//!   2-manifolds (half-edges, vertex fans, zero-area faces, volume), written
+//!   independently of mint-mesh so the two can check each other;
+//! - [`Rng`]: a tiny deterministic PRNG.
+//! - [`shared_data`]: the path of `../shared/data`, or a skip message.
+
+pub mod hull;
+pub mod topology;
+
+/// SplitMix64: small, deterministic, good enough for test inputs.
+#[derive(Debug, Clone)]
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    pub fn f64(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    /// Uniform in [lo, hi).
+    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.f64()
+    }
+}
+
+/// The shared real-data folder (`../shared/data` beside the project root), or
+/// `None` after printing why tests that need it are skipped.
+pub fn shared_data() -> Option<std::path::PathBuf> {
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
+    if p.is_dir() {
+        Some(p.canonicalize().unwrap_or(p))
+    } else {
+        eprintln!("skipping: real-data folder {} is absent", p.display());
+        None
+    }
+}

@@ -233,11 +233,12 @@ pub(crate) fn parse(data: &[u8], path: &Path) -> Result<PlyHeader, Error> {
     }
 }
 
-/// The text of a line after its keyword and one separator.
+/// The text of a line after its keyword and one separator, without
+/// trailing whitespace (the PLY writer pads its comment with spaces).
 fn rest_after(line: &str, keyword: &str) -> String {
     let t = line.trim_start();
     let t = &t[keyword.len()..];
-    t.strip_prefix([' ', '\t']).unwrap_or(t).trim_end_matches(['\r', '\n']).to_string()
+    t.strip_prefix([' ', '\t']).unwrap_or(t).trim_end().to_string()
 }
 
 #[cfg(test)]

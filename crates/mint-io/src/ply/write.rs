@@ -1,0 +1,123 @@
+//! The PLY writer: binary little-endian (default) or ascii, vertices
+//! `float x y z` (or `double`), faces `list uchar int vertex_indices`
+//! (`uint` when there are more than 2^31 - 1 vertices).
+//!
+//! The header is written first with zero counts and padded to a fixed size
+//! by trailing spaces on its `comment written by mint-io` line; `finish` rewrites it with the real counts, padded to
+//! the same size, so the vertex section never moves.
+
+use std::io::Write;
+use std::path::Path;
+
+use crate::error::Error;
+use crate::ply::header::Encoding;
+use crate::writer::{write_coord, FormatWriter, OutFile, WriteOptions};
+
+pub(crate) struct PlyWriter {
+    out: OutFile,
+    encoding: Encoding,
+    double: bool,
+    /// Index type decided at the first face (all vertices are known then).
+    uint: Option<bool>,
+    vertices: u64,
+    reserved: usize,
+}
+
+/// The header text for the given counts, padded to `size` bytes if given.
+fn header(encoding: Encoding, double: bool, uint: bool, v: u64, f: u64, size: Option<usize>) -> String {
+    let coord = if double { "double" } else { "float" };
+    let index = if uint { "uint" } else { "int" };
+    let head = format!("ply\nformat {} 1.0\n", encoding.name());
+    let tail = format!(
+        "element vertex {v}\nproperty {coord} x\nproperty {coord} y\nproperty {coord} z\n\
+         element face {f}\nproperty list uchar {index} vertex_indices\nend_header\n"
+    );
+    // The comment after the format line is padded with spaces.
+    const COMMENT: &str = "comment written by mint-io";
+    let base = head.len() + tail.len() + COMMENT.len() + 1;
+    let pad = size.map_or(0, |s| s.saturating_sub(base));
+    format!("{head}{COMMENT}{}\n{tail}", " ".repeat(pad))
+}
+
+impl PlyWriter {
+    pub(crate) fn create(path: &Path, opts: &WriteOptions) -> Result<PlyWriter, Error> {
+        let encoding = if opts.ascii { Encoding::Ascii } else { Encoding::BinaryLe };
+        let reserved = header(encoding, opts.double, true, u64::MAX, u64::MAX, None).len();
+        let mut out = OutFile::create(path)?;
+        let h = header(encoding, opts.double, false, 0, 0, Some(reserved));
+        debug_assert_eq!(h.len(), reserved);
+        out.put(h.as_bytes())?;
+        Ok(PlyWriter { out, encoding, double: opts.double, uint: None, vertices: 0, reserved })
+    }
+}
+
+impl FormatWriter for PlyWriter {
+    #[inline]
+    fn vertex(&mut self, p: [f64; 3]) -> Result<(), Error> {
+        self.vertices += 1;
+        match (self.encoding, self.double) {
+            (Encoding::Ascii, _) => {
+                let t = self.out.text();
+                write_coord(t, p[0], self.double);
+                t.push(b' ');
+                write_coord(t, p[1], self.double);
+                t.push(b' ');
+                write_coord(t, p[2], self.double);
+                t.push(b'\n');
+                self.out.maybe_flush()
+            }
+            (_, false) => {
+                let mut b = [0u8; 12];
+                for k in 0..3 {
+                    b[4 * k..4 * k + 4].copy_from_slice(&(p[k] as f32).to_le_bytes());
+                }
+                self.out.put(&b)
+            }
+            (_, true) => {
+                let mut b = [0u8; 24];
+                for k in 0..3 {
+                    b[8 * k..8 * k + 8].copy_from_slice(&p[k].to_le_bytes());
+                }
+                self.out.put(&b)
+            }
+        }
+    }
+
+    #[inline]
+    fn face(&mut self, f: [u32; 3]) -> Result<(), Error> {
+        let vertices = self.vertices;
+        self.uint.get_or_insert(vertices > i32::MAX as u64);
+        if self.encoding == Encoding::Ascii {
+            let _ = writeln!(self.out.text(), "3 {} {} {}", f[0], f[1], f[2]);
+            return self.out.maybe_flush();
+        }
+        let mut b = [3u8; 13];
+        b[1..5].copy_from_slice(&f[0].to_le_bytes());
+        b[5..9].copy_from_slice(&f[1].to_le_bytes());
+        b[9..13].copy_from_slice(&f[2].to_le_bytes());
+        self.out.put(&b)
+    }
+
+    fn finish(mut self: Box<Self>, vertices: u64, faces: u64) -> Result<u64, Error> {
+        let uint = self.uint.unwrap_or(vertices > i32::MAX as u64);
+        let h = header(self.encoding, self.double, uint, vertices, faces, Some(self.reserved));
+        debug_assert_eq!(h.len(), self.reserved);
+        self.out.patch(0, h.as_bytes())?;
+        self.out.commit()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_size_is_fixed() {
+        let r = header(Encoding::BinaryLe, false, true, u64::MAX, u64::MAX, None).len();
+        for (v, f, u) in [(0, 0, false), (12345, 7, false), (u64::MAX, u64::MAX, true)] {
+            let h = header(Encoding::BinaryLe, false, u, v, f, Some(r));
+            assert_eq!(h.len(), r);
+            assert!(h.contains(&format!("element vertex {v}\n")));
+        }
+    }
+}

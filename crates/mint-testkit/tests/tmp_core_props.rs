@@ -1,0 +1,1 @@
+#[path = "../../../tests/core_props.rs"] mod core_props;
