@@ -94,15 +94,21 @@ impl fmt::Display for Position {
 }
 
 /// A mint-io error: kind, file, message and position. See the module docs
-/// for the one-line `Display` format.
+/// for the one-line `Display` format. The details live behind one box, so
+/// `Result<(), Error>` stays a pointer wide on hot paths.
 ///
 /// For [`ErrorKind::Io`] the operating system's message is part of the
 /// `Display` text, and the original [`io::Error`] is available through
 /// [`Error::io_error`]; it is deliberately not also reported as `source()`,
 /// so that error chains do not print it twice.
 #[derive(Debug, thiserror::Error)]
-#[error("{path}: {message}{position}", path = self.path.display())]
+#[error("{}: {}{}", .inner.path.display(), .inner.message, .inner.position)]
 pub struct Error {
+    inner: Box<Inner>,
+}
+
+#[derive(Debug)]
+struct Inner {
     kind: ErrorKind,
     path: PathBuf,
     message: String,
@@ -114,18 +120,20 @@ impl Error {
     /// An error of `kind` about `path`. The message is made single-line.
     pub fn new(kind: ErrorKind, path: &Path, message: impl Into<String>) -> Error {
         Error {
-            kind,
-            path: path.to_path_buf(),
-            message: one_line(&message.into()),
-            position: Position::default(),
-            io: None,
+            inner: Box::new(Inner {
+                kind,
+                path: path.to_path_buf(),
+                message: one_line(&message.into()),
+                position: Position::default(),
+                io: None,
+            }),
         }
     }
 
     /// An [`ErrorKind::Io`] error: `what` was being done when `err` happened.
     pub fn io(path: &Path, what: &str, err: io::Error) -> Error {
         let mut e = Error::new(ErrorKind::Io, path, format!("{what}: {err}"));
-        e.io = Some(err);
+        e.inner.io = Some(err);
         e
     }
 
@@ -139,51 +147,51 @@ impl Error {
 
     /// Sets the element name.
     pub fn at_element(mut self, element: &str) -> Error {
-        self.position.element = Some(element.to_string());
+        self.inner.position.element = Some(element.to_string());
         self
     }
 
     /// Sets the 0-based record index.
     pub fn at_record(mut self, record: u64) -> Error {
-        self.position.record = Some(record);
+        self.inner.position.record = Some(record);
         self
     }
 
     /// Sets the 1-based line number.
     pub fn at_line(mut self, line: u64) -> Error {
-        self.position.line = Some(line);
+        self.inner.position.line = Some(line);
         self
     }
 
     /// Sets the byte offset from the start of the file.
     pub fn at_byte(mut self, offset: u64) -> Error {
-        self.position.byte_offset = Some(offset);
+        self.inner.position.byte_offset = Some(offset);
         self
     }
 
     /// What kind of failure this is.
     pub fn kind(&self) -> ErrorKind {
-        self.kind
+        self.inner.kind
     }
 
     /// The file the error is about.
     pub fn path(&self) -> &Path {
-        &self.path
+        &self.inner.path
     }
 
     /// The message without path and position.
     pub fn message(&self) -> &str {
-        &self.message
+        &self.inner.message
     }
 
     /// Where in the file, as far as known.
     pub fn position(&self) -> &Position {
-        &self.position
+        &self.inner.position
     }
 
     /// The underlying operating-system error of an [`ErrorKind::Io`] error.
     pub fn io_error(&self) -> Option<&io::Error> {
-        self.io.as_ref()
+        self.inner.io.as_ref()
     }
 }
 
@@ -233,6 +241,8 @@ mod tests {
             "/d/a.ply: bad\\nthing (element 'face', record 1234, byte offset 5678)"
         );
         assert_eq!(e.kind(), ErrorKind::Format);
+        assert_eq!(e.position().record, Some(1234));
+        assert_eq!(std::mem::size_of::<Result<(), Error>>(), std::mem::size_of::<usize>());
         let e = Error::io(Path::new("x"), "cannot open", io::Error::from(io::ErrorKind::NotFound));
         assert_eq!(e.to_string().lines().count(), 1);
         assert!(e.to_string().starts_with("x: cannot open: "));

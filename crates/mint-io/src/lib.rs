@@ -1,1 +1,48 @@
+//! mint-io: streaming readers and writers for triangle meshes (PLY, OBJ,
+//! STL, OFF) whose memory does not grow with the face count.
+//!
+//! Reading: [`MeshReader::open`] detects the [`Format`], memory-maps the
+//! file, parses the header into a [`MeshInfo`] and makes vertex positions
+//! addressable by index through a map (in place for binary PLY and STL,
+//! through an anonymous spill file of f64 triples for text formats). Faces
+//! are then pulled with [`MeshReader::next_chunk`] into a reusable
+//! [`TriangleChunk`]: 0-based indices and, optionally, resolved corner
+//! positions. PLY range scans expose their sample grid as a [`RangeGrid`].
+//!
+//! Writing: [`MeshWriter`] (a [`mint_core::MeshSink`]) streams vertices then
+//! faces into a temporary file beside the target, patches the counts at
+//! [`MeshWriter::finish`] and renames the file into place with
+//! [`AtomicFile`]; on error or drop nothing is left behind.
+//! [`convert()`] chains the two.
+//!
+//! Errors are one [`Error`] type with an [`ErrorKind`] and a one-line
+//! `Display` naming the file, the element and the record/byte position.
+//!
+//! Modules: [`format`](mod@format) (detection), [`reader`], [`writer`], [`atomic`],
+//! [`convert`](mod@convert), [`error`]; the format modules `ply`, `obj`,
+//! `stl`, `off`; `mapped` (the only place that maps files), `positions`
+//! (index-addressed vertex fetches and the triangle emitter), `text`
+//! (tokenizing).
 
+#![warn(missing_docs)]
+
+pub mod atomic;
+pub mod convert;
+pub mod error;
+pub mod format;
+mod mapped;
+mod obj;
+mod off;
+mod ply;
+mod positions;
+pub mod reader;
+mod stl;
+mod text;
+pub mod writer;
+
+pub use atomic::AtomicFile;
+pub use convert::{convert, ConvertSummary};
+pub use error::{Error, ErrorKind, Position};
+pub use format::Format;
+pub use reader::{read_info, ElementInfo, MeshInfo, MeshReader, RangeGrid, ReadOptions, ReadStats, TriangleChunk};
+pub use writer::{MeshWriter, WriteOptions, WriteSummary};

@@ -87,11 +87,6 @@ impl Mapped {
         self.advise(Advice::Sequential, start, len);
     }
 
-    /// Tells the kernel that `range` will be read at random (no read-ahead).
-    pub(crate) fn advise_random(&self, start: usize, len: usize) {
-        self.advise(Advice::Random, start, len);
-    }
-
     /// Tells the kernel that `range` will be needed soon.
     pub(crate) fn advise_willneed(&self, start: usize, len: usize) {
         self.advise(Advice::WillNeed, start, len);

@@ -223,17 +223,14 @@ impl Positions {
         debug_assert!(i < self.count && self.kind == PosKind::F32Le);
         let rec = self.base + i as usize * self.stride;
         let b = self.map.bytes();
-        let mut p = [0.0; 3];
-        for k in 0..3 {
-            let at = rec + self.off[k];
+        self.off.map(|o| {
             // SAFETY: `new` asserted that the record of the last vertex,
             // plus each coordinate's offset and size, lies inside the map,
             // and records of smaller indices lie before it; callers pass
             // only range-checked indices (`i < count`).
-            let v = unsafe { std::ptr::read_unaligned(b.as_ptr().add(at) as *const [u8; 4]) };
-            p[k] = f32::from_le_bytes(v) as f64;
-        }
-        p
+            let v = unsafe { std::ptr::read_unaligned(b.as_ptr().add(rec + o) as *const [u8; 4]) };
+            f32::from_le_bytes(v) as f64
+        })
     }
 
     /// Vertex `i` of an [`PosKind::F64Le`] layout; `i < count` is the
@@ -243,14 +240,11 @@ impl Positions {
         debug_assert!(i < self.count && self.kind == PosKind::F64Le);
         let rec = self.base + i as usize * self.stride;
         let b = self.map.bytes();
-        let mut p = [0.0; 3];
-        for k in 0..3 {
-            let at = rec + self.off[k];
+        self.off.map(|o| {
             // SAFETY: as in `get_f32le`.
-            let v = unsafe { std::ptr::read_unaligned(b.as_ptr().add(at) as *const [u8; 8]) };
-            p[k] = f64::from_le_bytes(v);
-        }
-        p
+            let v = unsafe { std::ptr::read_unaligned(b.as_ptr().add(rec + o) as *const [u8; 8]) };
+            f64::from_le_bytes(v)
+        })
     }
 
     /// Vertex `i` of any layout (bounds-checked slices).
@@ -296,18 +290,6 @@ impl Emit<'_> {
     #[inline]
     pub(crate) fn len(&self) -> usize {
         self.indices.len()
-    }
-
-    /// Appends triangle (a, b, c) given as raw (possibly negative) indices.
-    #[inline]
-    pub(crate) fn tri_i64(&mut self, a: i64, b: i64, c: i64) -> Result<(), Reject> {
-        let n = self.pos.count as u64;
-        for v in [a, b, c] {
-            if v as u64 >= n {
-                return Err(Reject::Index(v));
-            }
-        }
-        self.tri_checked([a as u32, b as u32, c as u32])
     }
 
     /// Appends a triangle whose indices are known to be `< count`.

@@ -1,16 +1,16 @@
 //! The streaming reader. [`MeshReader::open`] detects the format, maps the
-//! file, and asks the format module for an [`Opened`]: the [`MeshInfo`], the
-//! vertex [`Positions`] (memory-mapped, either in place or through a spill
-//! file), an optional [`RangeGrid`], and a [`FaceStream`] that knows where
+//! file, and asks the format module for an `Opened`: the [`MeshInfo`], the
+//! vertex `Positions` (memory-mapped, either in place or through a spill
+//! file), an optional [`RangeGrid`], and a `FaceStream` that knows where
 //! the faces are. [`MeshReader::next_chunk`] then pulls up to
 //! [`ReadOptions::chunk_triangles`] triangles at a time into a
-//! [`TriangleChunk`], through an [`Emit`] that range-checks indices and
+//! [`TriangleChunk`], through an `Emit` that range-checks indices and
 //! resolves positions (rejecting NaN/infinite coordinates of used vertices).
 //!
 //! Memory: a reader holds the header, one chunk (which the caller owns and
 //! reuses), and for range scans the grid; never anything per face, and
 //! vertex positions only through maps. Spill files are anonymous temporary
-//! files in [`ReadOptions::spill_dir`], deleted when the reader is dropped.
+//! files in `ReadOptions::spill_dir`, deleted when the reader is dropped.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -24,6 +24,7 @@ use crate::{obj, off, ply, stl};
 /// What a file says about itself, from its header (see [`read_info`]).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct MeshInfo {
+    /// The file format.
     pub format: Format,
     /// `"ascii"`, `"binary_little_endian"`, `"binary_big_endian"`, or
     /// `"binary"` for binary STL.
@@ -47,7 +48,9 @@ pub struct MeshInfo {
 /// `vertex`/`face` for OFF, `facet` for STL.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ElementInfo {
+    /// Element name as in the file.
     pub name: String,
+    /// Number of records.
     pub count: u64,
     /// Property declarations as written, e.g. `"float x"`,
     /// `"list uchar int vertex_indices"`.
@@ -110,6 +113,7 @@ pub struct TriangleChunk {
 }
 
 impl TriangleChunk {
+    /// An empty chunk.
     pub fn new() -> TriangleChunk {
         TriangleChunk::default()
     }
@@ -119,10 +123,12 @@ impl TriangleChunk {
         self.indices.len()
     }
 
+    /// True if the chunk holds no triangles.
     pub fn is_empty(&self) -> bool {
         self.indices.is_empty()
     }
 
+    /// Empties the chunk, keeping its capacity.
     pub fn clear(&mut self) {
         self.indices.clear();
         self.positions.clear();
@@ -134,8 +140,11 @@ impl TriangleChunk {
 /// there, or `None`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RangeGrid {
+    /// Cells per row (`obj_info num_cols`).
     pub cols: u32,
+    /// Rows (`obj_info num_rows`).
     pub rows: u32,
+    /// `cols * rows` cells, row-major: the vertex sampled there, if any.
     pub cells: Vec<Option<u32>>,
 }
 
@@ -168,7 +177,7 @@ pub struct ReadStats {
 }
 
 /// The format-specific part of a reader: produces triangles into an
-/// [`Emit`] until it is full or the faces end.
+/// `Emit` until it is full or the faces end.
 pub(crate) trait FaceStream: Send {
     /// Fills `out`; returns false when no triangles remain after this call.
     fn fill(&mut self, out: &mut Emit, stats: &mut ReadStats) -> Result<bool, Error>;
@@ -303,7 +312,8 @@ impl MeshReader {
     }
 
     /// The range grid of a PLY range scan (`range_grid` element with
-    /// `obj_info num_cols`/`num_rows`), or `None`.
+    /// `obj_info num_cols`/`num_rows`), or `None`. Parsed at `open`; this
+    /// returns a copy (8 bytes per cell).
     pub fn range_grid(&self) -> Option<RangeGrid> {
         self.range_grid.clone()
     }

@@ -95,6 +95,9 @@ pub(crate) fn words(line: &[u8]) -> impl Iterator<Item = &[u8]> {
 pub(crate) fn parse_f64(tok: &[u8]) -> Option<f64> {
     // Fast path: plain integers are common in hand-written files.
     if let Some(i) = parse_i64(tok) {
+        if i == 0 && tok[0] == b'-' {
+            return Some(-0.0);
+        }
         if i.unsigned_abs() < (1u64 << 53) {
             return Some(i as f64);
         }
@@ -158,6 +161,7 @@ mod tests {
         assert!(parse_f64(t.next_tok().unwrap().1).unwrap().is_nan());
         assert_eq!(parse_f64(t.next_tok().unwrap().1), None);
         assert_eq!(t.next_tok(), None);
+        assert_eq!(parse_f64(b"-0").map(f64::to_bits), Some((-0.0f64).to_bits()));
         assert_eq!(parse_int(b"-12"), Some(-12));
         assert_eq!(parse_int(b"4.0"), Some(4));
         assert_eq!(parse_int(b"4.5"), None);

@@ -1,7 +1,7 @@
 //! The streaming writer. [`MeshWriter`] checks the sink contract (all
 //! vertices before any face, finite coordinates, indices in range), counts,
 //! and hands each vertex and face to a format writer (PLY, OBJ, STL, OFF)
-//! that appends bytes to an [`OutFile`]: a 1 MiB buffer over an
+//! that appends bytes to an `OutFile`: a 1 MiB buffer over an
 //! [`AtomicFile`]. Counts that a format stores before the data (PLY header,
 //! OFF counts line, binary STL facet count) are written as placeholders of
 //! fixed size and patched in place by `finish`, which then syncs and renames
@@ -28,8 +28,9 @@ pub struct WriteOptions {
     /// Write text: ascii PLY or ascii STL. Default false (binary
     /// little-endian PLY, binary STL). OBJ and OFF are always text.
     pub ascii: bool,
-    /// Store vertex coordinates as f64. Default false: f32 (PLY `float`,
-    /// and the shortest decimal that round-trips an f32 in text formats);
+    /// Store vertex coordinates as f64. Default false: f32 (PLY `float`;
+    /// in OBJ and OFF the shortest decimal that reads back as the same f32
+    /// (as f64 it reads back as that decimal, e.g. `0.1`));
     /// coordinates beyond the f32 range are then refused with a `Value`
     /// error. STL always stores f32.
     pub double: bool,
@@ -41,9 +42,13 @@ pub struct WriteOptions {
 /// What [`MeshWriter::finish`] wrote.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct WriteSummary {
+    /// The target path, now complete.
     pub path: PathBuf,
+    /// The format written.
     pub format: Format,
+    /// Vertices written.
     pub vertices: u64,
+    /// Faces (triangles) written.
     pub faces: u64,
     /// Size of the written file.
     pub bytes: u64,
@@ -102,11 +107,6 @@ impl OutFile {
         self.flushed += self.buf.len() as u64;
         self.buf.clear();
         Ok(())
-    }
-
-    /// Bytes written so far (buffered or not).
-    pub(crate) fn len(&self) -> u64 {
-        self.flushed + self.buf.len() as u64
     }
 
     /// Overwrites bytes at `offset` (which must already be written).

@@ -14,16 +14,19 @@
 //! the median is chosen here because it is fast to build, needs no
 //! parameters and bounds the depth by `log2(n)`).
 //!
-//! Data model: the tree owns a copy of the positions and the triangles'
-//! index triples, reordered so every leaf's triangles are contiguous, plus
-//! each one's original face index; nodes are stored depth-first (the left
-//! child follows its parent). Memory is about 24 bytes per vertex plus 44
-//! bytes per face. Because every subtree's node count follows from its
-//! triangle count alone, the two halves of each split are built in
-//! parallel into disjoint slices; the result is identical under any thread
-//! count. Queries use an explicit stack and visit the nearer child first.
-//! Contract: finite coordinates; NaN query points give an arbitrary
-//! triangle with a NaN distance.
+//! Data model, chosen for memory locality since queries are bound by cache
+//! misses: nodes are stored depth-first (a left child follows its parent)
+//! with `f32` boxes rounded outward (32 bytes a node; a conservative box
+//! only prunes a little less, it never changes an answer, because distances
+//! to triangles are computed in `f64`). Triangles are stored in leaf order,
+//! with their original face index, and the positions are renumbered in
+//! order of first use by that order, so one leaf's corners sit together in
+//! memory. Memory is about 24 bytes per vertex plus 36 bytes per face. Every
+//! subtree's node count follows from its triangle count alone, so the two
+//! halves of each split are built in parallel into disjoint slices; the tree
+//! is identical under any thread count. Queries use an explicit stack and
+//! visit the nearer child first. Contract: finite coordinates; a NaN query
+//! point gives an arbitrary triangle and a NaN distance.
 
 use crate::check::{cross, dot, sub};
 use crate::error::MeshError;
@@ -36,8 +39,8 @@ const PAR_THRESHOLD: usize = 1 << 14;
 
 #[derive(Debug, Clone, Copy)]
 struct Node {
-    min: [f64; 3],
-    max: [f64; 3],
+    min: [f32; 3],
+    max: [f32; 3],
     /// Leaf: first triangle. Inner: index of the right child.
     a: u32,
     /// Leaf: number of triangles (> 0). Inner: 0.
@@ -51,10 +54,24 @@ const EMPTY_NODE: Node = Node { min: [0.0; 3], max: [0.0; 3], a: 0, count: 0 };
 /// [`TriangleBvh::nearest`] from any number of threads.
 #[derive(Debug, Clone)]
 pub struct TriangleBvh {
+    /// Referenced positions, renumbered by first use in leaf order.
     positions: Vec<[f64; 3]>,
+    /// Triangles in leaf order, indexing `positions`.
     tris: Vec<[u32; 3]>,
+    /// Original face index of each triangle in `tris`.
     ids: Vec<u32>,
     nodes: Vec<Node>,
+    /// Exact bounds of all triangles.
+    bounds: ([f64; 3], [f64; 3]),
+}
+
+/// A triangle during the build: its centroid (in `f32`: it only guides the
+/// splits) and original index, 16 bytes kept together so partitioning
+/// streams through memory.
+#[derive(Clone, Copy)]
+struct Item {
+    c: [f32; 3],
+    id: u32,
 }
 
 impl TriangleBvh {
@@ -80,19 +97,45 @@ impl TriangleBvh {
             return Err(MeshError::IndexOutOfRange { face, index, vertices: positions.len() });
         }
 
-        let centroids: Vec<[f64; 3]> = faces
+        let mut items: Vec<Item> = faces
             .par_iter()
-            .map(|f| {
+            .enumerate()
+            .map(|(id, f)| {
                 let [a, b, c] = f.map(|i| positions[i as usize]);
-                std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0)
+                Item { c: std::array::from_fn(|k| ((a[k] + b[k] + c[k]) / 3.0) as f32), id: id as u32 }
             })
             .collect();
-        let mut order: Vec<u32> = (0..faces.len() as u32).collect();
         let mut nodes = vec![EMPTY_NODE; node_count(faces.len())];
-        let ctx = BuildCtx { positions, faces, centroids: &centroids };
-        build(&ctx, &mut order, 0, 0, &mut nodes);
-        let tris = order.par_iter().map(|&i| faces[i as usize]).collect();
-        Ok(Self { positions: positions.to_vec(), tris, ids: order, nodes })
+        let ctx = BuildCtx { positions, faces };
+        build(&ctx, &mut items, 0, 0, &mut nodes);
+        let ids: Vec<u32> = items.iter().map(|it| it.id).collect();
+        drop(items);
+
+        // Renumber vertices by first use in leaf order.
+        let mut remap = vec![u32::MAX; positions.len()];
+        let mut local = Vec::new();
+        let tris: Vec<[u32; 3]> = ids
+            .iter()
+            .map(|&id| {
+                faces[id as usize].map(|v| {
+                    let r = &mut remap[v as usize];
+                    if *r == u32::MAX {
+                        *r = local.len() as u32;
+                        local.push(positions[v as usize]);
+                    }
+                    *r
+                })
+            })
+            .collect();
+        drop(remap);
+        let bounds = local.par_iter().fold(
+            || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+            |(lo, hi), p| (std::array::from_fn(|k| lo[k].min(p[k])), std::array::from_fn(|k| hi[k].max(p[k]))),
+        ).reduce(
+            || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+            |a, b| (std::array::from_fn(|k| a.0[k].min(b.0[k])), std::array::from_fn(|k| a.1[k].max(b.1[k]))),
+        );
+        Ok(Self { positions: local, tris, ids, nodes, bounds })
     }
 
     /// Number of triangles in the tree.
@@ -105,9 +148,9 @@ impl TriangleBvh {
         self.tris.is_empty()
     }
 
-    /// The bounding box of all triangles, `(min, max)`.
+    /// The exact bounding box of all triangles, `(min, max)`.
     pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
-        (self.nodes[0].min, self.nodes[0].max)
+        self.bounds
     }
 
     /// The nearest point of the surface to `p`: `(distance, closest point,
@@ -115,18 +158,39 @@ impl TriangleBvh {
     /// of Ericson's closest-point formulas; among equally near triangles the
     /// first one the traversal meets wins (deterministic for a given tree).
     pub fn nearest(&self, p: [f64; 3]) -> (f64, [f64; 3], u32) {
-        self.search(p, f64::INFINITY).unwrap_or((f64::NAN, [f64::NAN; 3], self.ids[0]))
+        match self.search(p, f64::INFINITY, None) {
+            Some((d2, q, t)) => (d2.sqrt(), q, self.ids[t]),
+            None => (f64::NAN, [f64::NAN; 3], self.ids[0]),
+        }
     }
 
     /// Like [`nearest`](Self::nearest) but only looks for points strictly
     /// closer than `max_dist`; `None` if there is none. A finite radius
     /// prunes the search.
     pub fn nearest_within(&self, p: [f64; 3], max_dist: f64) -> Option<(f64, [f64; 3], u32)> {
-        self.search(p, max_dist * max_dist)
+        self.search(p, max_dist * max_dist, None).map(|(d2, q, t)| (d2.sqrt(), q, self.ids[t]))
     }
 
-    fn search(&self, p: [f64; 3], mut best_d2: f64) -> Option<(f64, [f64; 3], u32)> {
-        let mut best: Option<([f64; 3], u32)> = None;
+    /// The nearest point as `(squared distance, point, internal triangle)`,
+    /// starting from the bound `best_d2` and, if given, the internal
+    /// triangle `hint` (a good guess, e.g. the answer for a nearby point,
+    /// prunes most of the tree at once). The distance is the same whatever
+    /// the hint; only which of several equally near triangles wins may
+    /// differ.
+    pub(crate) fn search(
+        &self,
+        p: [f64; 3],
+        mut best_d2: f64,
+        hint: Option<usize>,
+    ) -> Option<(f64, [f64; 3], usize)> {
+        let mut best: Option<([f64; 3], usize)> = None;
+        if let Some(t) = hint {
+            let (d2, q) = self.tri_dist2(p, t);
+            if d2 < best_d2 {
+                best_d2 = d2;
+                best = Some((q, t));
+            }
+        }
         // Depth is at most log2(faces) + 1 <= 33, and each level leaves at
         // most one deferred sibling on the stack.
         let mut stack = [0u32; 96];
@@ -141,13 +205,10 @@ impl TriangleBvh {
             if node.count > 0 {
                 let first = node.a as usize;
                 for t in first..first + node.count as usize {
-                    let [a, b, c] = self.tris[t].map(|i| self.positions[i as usize]);
-                    let q = closest_point_on_triangle(p, a, b, c);
-                    let d = sub(p, q);
-                    let d2 = dot(d, d);
+                    let (d2, q) = self.tri_dist2(p, t);
                     if d2 < best_d2 {
                         best_d2 = d2;
-                        best = Some((q, self.ids[t]));
+                        best = Some((q, t));
                     }
                 }
             } else {
@@ -163,14 +224,26 @@ impl TriangleBvh {
                 sp += 1;
             }
         }
-        best.map(|(q, id)| (best_d2.sqrt(), q, id))
+        best.map(|(q, t)| (best_d2, q, t))
+    }
+
+    /// Original face index of internal triangle `t`.
+    pub(crate) fn face_id(&self, t: usize) -> u32 {
+        self.ids[t]
+    }
+
+    #[inline]
+    fn tri_dist2(&self, p: [f64; 3], t: usize) -> (f64, [f64; 3]) {
+        let [a, b, c] = self.tris[t].map(|i| self.positions[i as usize]);
+        let q = closest_point_on_triangle(p, a, b, c);
+        let d = sub(p, q);
+        (dot(d, d), q)
     }
 }
 
 struct BuildCtx<'a> {
     positions: &'a [[f64; 3]],
     faces: &'a [[u32; 3]],
-    centroids: &'a [[f64; 3]],
 }
 
 /// Nodes in a subtree over `n` triangles (median splits: `n/2` and `n - n/2`).
@@ -200,48 +273,43 @@ fn leaf_count_pair(m: usize) -> (usize, usize) {
     (lm, lm1)
 }
 
-/// Builds the subtree over `order` into `nodes` (whose first slot is its
-/// root, at absolute index `base`); `order` starts at absolute position
-/// `first` of the whole order array.
-fn build(ctx: &BuildCtx, order: &mut [u32], base: usize, first: usize, nodes: &mut [Node]) {
-    let n = order.len();
+/// Builds the subtree over `items` into `nodes` (whose first slot is its
+/// root, at absolute index `base`); `items` starts at absolute position
+/// `first` of the whole item array.
+fn build(ctx: &BuildCtx, items: &mut [Item], base: usize, first: usize, nodes: &mut [Node]) {
+    let n = items.len();
     debug_assert_eq!(nodes.len(), node_count(n));
     if n <= LEAF_SIZE {
-        let (min, max) = tri_bounds(ctx, order);
+        let (min, max) = tri_bounds(ctx, items);
         nodes[0] = Node { min, max, a: first as u32, count: n as u32 };
         return;
     }
     // Split on the longest axis of the centroid bounds, at the median.
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for &i in order.iter() {
-        let c = ctx.centroids[i as usize];
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for it in items.iter() {
         for k in 0..3 {
-            lo[k] = lo[k].min(c[k]);
-            hi[k] = hi[k].max(c[k]);
+            lo[k] = lo[k].min(it.c[k]);
+            hi[k] = hi[k].max(it.c[k]);
         }
     }
     let axis = (0..3)
         .max_by(|&x, &y| (hi[x] - lo[x]).total_cmp(&(hi[y] - lo[y])).then(y.cmp(&x)))
         .expect("three axes");
     let half = n / 2;
-    order.select_nth_unstable_by(half, |&x, &y| {
-        ctx.centroids[x as usize][axis]
-            .total_cmp(&ctx.centroids[y as usize][axis])
-            .then(x.cmp(&y))
-    });
-    let (lorder, rorder) = order.split_at_mut(half);
+    items.select_nth_unstable_by(half, |x, y| x.c[axis].total_cmp(&y.c[axis]).then(x.id.cmp(&y.id)));
+    let (litems, ritems) = items.split_at_mut(half);
     let nl = node_count(half);
     let (root, rest) = nodes.split_first_mut().expect("non-empty");
     let (lnodes, rnodes) = rest.split_at_mut(nl);
     if n >= PAR_THRESHOLD {
         rayon::join(
-            || build(ctx, lorder, base + 1, first, lnodes),
-            || build(ctx, rorder, base + 1 + nl, first + half, rnodes),
+            || build(ctx, litems, base + 1, first, lnodes),
+            || build(ctx, ritems, base + 1 + nl, first + half, rnodes),
         );
     } else {
-        build(ctx, lorder, base + 1, first, lnodes);
-        build(ctx, rorder, base + 1 + nl, first + half, rnodes);
+        build(ctx, litems, base + 1, first, lnodes);
+        build(ctx, ritems, base + 1 + nl, first + half, rnodes);
     }
     let (l, r) = (&lnodes[0], &rnodes[0]);
     *root = Node {
@@ -252,11 +320,12 @@ fn build(ctx: &BuildCtx, order: &mut [u32], base: usize, first: usize, nodes: &m
     };
 }
 
-fn tri_bounds(ctx: &BuildCtx, order: &[u32]) -> ([f64; 3], [f64; 3]) {
+/// Bounds of a leaf's triangles, rounded outward to `f32`.
+fn tri_bounds(ctx: &BuildCtx, items: &[Item]) -> ([f32; 3], [f32; 3]) {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for &i in order {
-        for &v in &ctx.faces[i as usize] {
+    for it in items {
+        for &v in &ctx.faces[it.id as usize] {
             let p = ctx.positions[v as usize];
             for k in 0..3 {
                 lo[k] = lo[k].min(p[k]);
@@ -264,14 +333,33 @@ fn tri_bounds(ctx: &BuildCtx, order: &[u32]) -> ([f64; 3], [f64; 3]) {
             }
         }
     }
-    (lo, hi)
+    (lo.map(f32_down), hi.map(f32_up))
+}
+
+/// The largest `f32` not above `x` (`x` finite or infinite).
+fn f32_down(x: f64) -> f32 {
+    let f = x as f32;
+    if f64::from(f) <= x {
+        f
+    } else if f > 0.0 {
+        f32::from_bits(f.to_bits() - 1)
+    } else if f == 0.0 {
+        -f32::from_bits(1)
+    } else {
+        f32::from_bits(f.to_bits() + 1)
+    }
+}
+
+/// The smallest `f32` not below `x`.
+fn f32_up(x: f64) -> f32 {
+    -f32_down(-x)
 }
 
 #[inline]
 fn box_dist2(n: &Node, p: [f64; 3]) -> f64 {
     let mut d2 = 0.0;
     for k in 0..3 {
-        let d = (n.min[k] - p[k]).max(0.0).max(p[k] - n.max[k]);
+        let d = (f64::from(n.min[k]) - p[k]).max(0.0).max(p[k] - f64::from(n.max[k]));
         d2 += d * d;
     }
     d2
@@ -441,6 +529,30 @@ mod tests {
             assert!((dist(p, q) - d).abs() <= 1e-12);
             let [a, b, c] = faces[id as usize].map(|i| positions[i as usize]);
             assert_eq!(dist(p, closest_point_on_triangle(p, a, b, c)), d);
+        }
+    }
+
+    #[test]
+    fn f32_rounding_is_outward() {
+        for x in [0.1f64, -0.1, 1e-50, -1e-50, 0.0, 3.0, 1e40, -1e40, 16777217.0] {
+            assert!(f64::from(f32_down(x)) <= x, "{x}");
+            assert!(f64::from(f32_up(x)) >= x, "{x}");
+        }
+        assert_eq!(f32_down(3.0), 3.0);
+        assert_eq!(f32_up(3.0), 3.0);
+    }
+
+    #[test]
+    fn hints_do_not_change_distances() {
+        let mut rng = SplitMix64::new(11);
+        let positions: Vec<[f64; 3]> = (0..300).map(|_| std::array::from_fn(|_| rng.next_f64())).collect();
+        let faces: Vec<[u32; 3]> = (0..100).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
+        let bvh = TriangleBvh::new(&positions, &faces).unwrap();
+        for i in 0..200 {
+            let p: [f64; 3] = std::array::from_fn(|_| rng.next_f64() * 2.0 - 0.5);
+            let plain = bvh.search(p, f64::INFINITY, None).unwrap();
+            let hinted = bvh.search(p, f64::INFINITY, Some(i % 100)).unwrap();
+            assert_eq!(plain.0, hinted.0);
         }
     }
 

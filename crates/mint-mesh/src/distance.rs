@@ -18,7 +18,11 @@
 //! Determinism: sample `i` draws from its own generator,
 //! `SplitMix64::for_stream(seed, i)`, and distances are reduced in fixed
 //! blocks of samples combined in block order, so a report depends on the
-//! inputs, `samples` and `seed` only, never on the thread count.
+//! inputs, `samples` and `seed` only, never on the thread count. Within a
+//! block the queries run in Morton order of the sample points, each one
+//! seeded with the previous answer ([`TriangleBvh`]'s hint), which keeps
+//! the tree's hot paths in cache; that order too is fixed by the block's
+//! contents.
 
 use crate::bvh::TriangleBvh;
 use crate::check::{cross, dot, is_collapsed, sub};
@@ -28,7 +32,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Samples per reduction block; fixes the summation order.
-const SAMPLE_BLOCK: usize = 1024;
+const SAMPLE_BLOCK: usize = 1 << 14;
 
 /// Borrowed mesh: `(positions, faces)`.
 pub type MeshRef<'a> = (&'a [[f64; 3]], &'a [[u32; 3]]);
@@ -116,26 +120,40 @@ pub fn distance_to_bvh(
         return Err(MeshError::Empty { what: "a distance needs at least one sample" });
     }
     let sampler = AreaSampler::new(a.0, a.1)?;
+    let (lo, hi) = bvh.bounds();
     let blocks = samples.div_ceil(SAMPLE_BLOCK);
     let parts: Vec<Block> = (0..blocks)
         .into_par_iter()
         .map(|blk| {
-            let mut acc = Block { sum: 0.0, sum2: 0.0, max: -1.0, max_point: [0.0; 3] };
+            // Draw the block's samples, then query them in Morton order of
+            // position, each starting from the previous answer: nearby
+            // queries share cache lines and prune at once.
             let end = ((blk + 1) * SAMPLE_BLOCK).min(samples);
-            for i in blk * SAMPLE_BLOCK..end {
-                let p = sampler.sample(seed, i as u64);
-                let (d, _, _) = bvh.nearest(p);
+            let mut pts: Vec<(u64, u64, [f64; 3])> = (blk * SAMPLE_BLOCK..end)
+                .map(|i| {
+                    let p = sampler.sample(seed, i as u64);
+                    (morton(p, lo, hi), i as u64, p)
+                })
+                .collect();
+            pts.sort_unstable_by_key(|&(key, i, _)| (key, i));
+            let mut acc = Block::new();
+            let mut hint = None;
+            for &(_, i, p) in &pts {
+                let (d2, _, t) = bvh.search(p, f64::INFINITY, hint).unwrap_or((f64::NAN, p, 0));
+                hint = Some(t);
+                let d = d2.sqrt();
                 acc.sum += d;
-                acc.sum2 += d * d;
-                if d > acc.max {
+                acc.sum2 += d2;
+                if d > acc.max || (d == acc.max && i < acc.max_index) {
                     acc.max = d;
+                    acc.max_index = i;
                     acc.max_point = p;
                 }
             }
             acc
         })
         .collect();
-    let mut total = Block { sum: 0.0, sum2: 0.0, max: -1.0, max_point: [0.0; 3] };
+    let mut total = Block::new();
     for b in &parts {
         total.sum += b.sum;
         total.sum2 += b.sum2;
@@ -145,7 +163,6 @@ pub fn distance_to_bvh(
         }
     }
     let n = samples as f64;
-    let (lo, hi) = bvh.bounds();
     let e = sub(hi, lo);
     let diag = dot(e, e).sqrt();
     let rel = |x: f64| if diag > 0.0 { x / diag } else { 0.0 };
@@ -168,7 +185,30 @@ struct Block {
     sum: f64,
     sum2: f64,
     max: f64,
+    max_index: u64,
     max_point: [f64; 3],
+}
+
+impl Block {
+    fn new() -> Self {
+        Block { sum: 0.0, sum2: 0.0, max: -1.0, max_index: u64::MAX, max_point: [0.0; 3] }
+    }
+}
+
+/// 63-bit Morton code of `p` in the box `[lo, hi]` (clamped), 21 bits a
+/// coordinate.
+fn morton(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> u64 {
+    let spread = |x: f64, l: f64, h: f64| -> u64 {
+        let t = if h > l { ((x - l) / (h - l)).clamp(0.0, 1.0) } else { 0.0 };
+        let mut v = (t * f64::from((1u32 << 21) - 1)) as u64;
+        v = (v | v << 32) & 0x001F_0000_0000_FFFF;
+        v = (v | v << 16) & 0x001F_0000_FF00_00FF;
+        v = (v | v << 8) & 0x100F_00F0_0F00_F00F;
+        v = (v | v << 4) & 0x10C3_0C30_C30C_30C3;
+        v = (v | v << 2) & 0x1249_2492_4924_9249;
+        v
+    };
+    spread(p[0], lo[0], hi[0]) | spread(p[1], lo[1], hi[1]) << 1 | spread(p[2], lo[2], hi[2]) << 2
 }
 
 /// Area-weighted point sampler over a mesh's faces.

@@ -90,6 +90,10 @@ pub struct ResampleSummary {
     pub output: String,
     pub input_vertices: u64,
     pub input_faces: u64,
+    /// Signed volume enclosed by the input (negative: inside-out).
+    pub input_signed_volume: f64,
+    /// True when the input was inside-out and its signs were reversed.
+    pub orientation_inverted: bool,
     pub grid_cells: [u32; 3],
     pub cell_size: f64,
     pub grid_origin: [f64; 3],
@@ -183,7 +187,13 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
     let t = Instant::now();
     let [_, _, ns] = grid.local_dims();
     let mut store = ShardStore::create(&tmp_root, ns + 1)?;
-    summary.input_faces = discretize_all(&mut reader, &grid, &mut store, threads, progress)?;
+    let (faces, volume) = discretize_all(&mut reader, &grid, &mut store, threads, progress)?;
+    summary.input_faces = faces;
+    summary.input_signed_volume = volume * grid.cell.powi(3);
+    // An inside-out input (negative volume) has every sign reversed: read it
+    // as the solid it encloses, so the output faces outward.
+    let invert = volume < 0.0;
+    summary.orientation_inverted = invert;
     if summary.input_faces == 0 {
         return Err(PipelineError::Empty { path: input.to_path_buf() });
     }
@@ -206,7 +216,7 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
 
     // 4. Reconstruct slabs in parallel, write in order.
     let t = Instant::now();
-    let mut writer = MeshWriter::create(output, out_format, opts.write)?;
+    let mut writer = MeshWriter::create(output, out_format, opts.write.clone())?;
     let face_spill_path = tmp_root.join("(face spill)");
     let face_spill = tempfile::tempfile_in(&tmp_root).map_err(|source| PipelineError::Temp {
         path: face_spill_path.clone(),
@@ -244,7 +254,7 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
         progress.advance(layers);
         Ok(())
     };
-    reconstruct_ordered(&store, &grid, &slabs, threads, opts.max_listed, progress, &mut emit)?;
+    reconstruct_ordered(&store, &grid, &slabs, threads, opts.max_listed, invert, progress, &mut emit)?;
     drop(emit);
     progress.finish();
     drop(store); // removes the shard directory before the final copy
@@ -290,44 +300,25 @@ fn check_cancel(progress: &dyn Progress) -> Result<(), PipelineError> {
     }
 }
 
-/// The bounding box of all vertices, computed in parallel from the map.
-fn bounds(reader: &MeshReader, path: &Path, threads: usize, progress: &dyn Progress) -> Result<([f64; 3], [f64; 3]), PipelineError> {
-    let n = reader.vertex_count() as u64;
-    progress.start(Phase::Bounds, n);
-    let per = n.div_ceil(threads as u64).max(1);
-    let parts: Vec<Result<([f64; 3], [f64; 3]), PipelineError>> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads as u64)
-            .map(|t| {
-                s.spawn(move || {
-                    let mut lo = [f64::INFINITY; 3];
-                    let mut hi = [f64::NEG_INFINITY; 3];
-                    let (a, b) = ((t * per).min(n), ((t + 1) * per).min(n));
-                    for i in a..b {
-                        let p = reader.vertex(i as u32);
-                        if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
-                            return Err(PipelineError::NonFinite { path: path.to_path_buf(), index: i, x: p[0], y: p[1], z: p[2] });
-                        }
-                        for d in 0..3 {
-                            lo[d] = lo[d].min(p[d]);
-                            hi[d] = hi[d].max(p[d]);
-                        }
-                        if (i - a) % (1 << 20) == 0 {
-                            progress.advance((1u64 << 20).min(b - i));
-                        }
-                    }
-                    Ok((lo, hi))
-                })
-            })
-            .collect();
-        handles.into_iter().map(|h| h.join().expect("bounds worker panicked")).collect()
-    });
+/// The bounding box of all vertices, read from the map. (Single-threaded:
+/// the reader is not `Sync`; this pass runs at memory speed.)
+fn bounds(reader: &MeshReader, path: &Path, _threads: usize, progress: &dyn Progress) -> Result<([f64; 3], [f64; 3]), PipelineError> {
+    let n = reader.vertex_count();
+    progress.start(Phase::Bounds, n as u64);
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for part in parts {
-        let (l, h) = part?;
+    for i in 0..n {
+        let p = reader.vertex(i);
+        if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
+            return Err(PipelineError::NonFinite { path: path.to_path_buf(), index: i as u64, x: p[0], y: p[1], z: p[2] });
+        }
         for d in 0..3 {
-            lo[d] = lo[d].min(l[d]);
-            hi[d] = hi[d].max(h[d]);
+            lo[d] = lo[d].min(p[d]);
+            hi[d] = hi[d].max(p[d]);
+        }
+        if i % (1 << 20) == 0 {
+            progress.advance((1u64 << 20).min((n - i) as u64));
+            check_cancel(progress)?;
         }
     }
     progress.finish();
@@ -335,46 +326,56 @@ fn bounds(reader: &MeshReader, path: &Path, threads: usize, progress: &dyn Progr
 }
 
 /// Streams every triangle through the workers into the store. Returns the
-/// number of triangles read.
+/// number of triangles read and the input's signed volume (in grid units),
+/// summed per chunk in chunk order so that it does not depend on threads.
 fn discretize_all(
     reader: &mut MeshReader,
     grid: &Grid,
     store: &mut ShardStore,
     threads: usize,
     progress: &dyn Progress,
-) -> Result<u64, PipelineError> {
+) -> Result<(u64, f64), PipelineError> {
     use crossbeam_channel::bounded;
     let [_, nb, _] = grid.local_dims();
-    let (chunk_tx, chunk_rx) = bounded::<TriangleChunk>(threads * 2);
+    let (chunk_tx, chunk_rx) = bounded::<(usize, TriangleChunk)>(threads * 2);
     let (free_tx, free_rx) = bounded::<TriangleChunk>(threads * 3 + 2);
-    let (rec_tx, rec_rx) = bounded::<Vec<Intercept>>(threads * 2);
+    let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
     progress.start(Phase::Discretize, reader.info().face_count.unwrap_or(0));
     let mut faces = 0u64;
+    let mut volumes: Vec<f64> = Vec::new();
     let result: Result<(), PipelineError> = std::thread::scope(|s| {
         for _ in 0..threads {
             let (chunk_rx, free_tx, rec_tx) = (chunk_rx.clone(), free_tx.clone(), rec_tx.clone());
             s.spawn(move || {
-                for chunk in chunk_rx {
+                for (seq, chunk) in chunk_rx {
                     let mut recs = Vec::with_capacity(chunk.positions.len() / 4 + 16);
+                    let mut volume = 0.0;
                     for tri in &chunk.positions {
                         let local = tri.map(|p| grid.to_local(p));
+                        volume += signed_volume6(&local);
                         discretize_triangle(&local, |c| recs.push(crossing_to_intercept(&c, nb)));
                     }
                     let _ = free_tx.try_send(chunk);
-                    if rec_tx.send(recs).is_err() {
+                    if rec_tx.send((seq, recs, volume)).is_err() {
                         return; // the writer stopped on an error
                     }
                 }
             });
         }
         drop((chunk_rx, free_tx, rec_tx));
+        let volumes = &mut volumes;
         let writer = s.spawn(move || -> Result<(), StoreError> {
-            for recs in rec_rx {
+            for (seq, recs, volume) in rec_rx {
+                if volumes.len() <= seq {
+                    volumes.resize(seq + 1, 0.0);
+                }
+                volumes[seq] = volume;
                 store.append(&recs)?;
             }
             Ok(())
         });
         let read: Result<(), PipelineError> = (|| {
+            let mut seq = 0usize;
             loop {
                 check_cancel(progress)?;
                 let mut chunk = free_rx.try_recv().unwrap_or_default();
@@ -383,9 +384,10 @@ fn discretize_all(
                 }
                 let n = chunk.positions.len() as u64;
                 faces += n;
-                if chunk_tx.send(chunk).is_err() {
+                if chunk_tx.send((seq, chunk)).is_err() {
                     return Ok(()); // workers gone: the writer failed; its error follows
                 }
+                seq += 1;
                 progress.advance(n);
             }
         })();
@@ -397,7 +399,14 @@ fn discretize_all(
     });
     result?;
     progress.finish();
-    Ok(faces)
+    Ok((faces, volumes.iter().sum::<f64>() / 6.0))
+}
+
+/// Six times the signed volume of the tetrahedron (origin, a, b, c).
+#[inline]
+fn signed_volume6(t: &[[f64; 3]; 3]) -> f64 {
+    let [a, b, c] = t;
+    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])
 }
 
 /// Splits layers `0 .. ns` into slabs `(k0, k1)`: layers `k0 .. k1`, reading
@@ -433,6 +442,7 @@ fn reconstruct_ordered(
     slabs: &[(u32, u32)],
     threads: usize,
     max_listed: usize,
+    invert: bool,
     progress: &dyn Progress,
     emit: &mut dyn FnMut(SlabResult, FilterStats, u64) -> Result<(), PipelineError>,
 ) -> Result<(), PipelineError> {
@@ -463,6 +473,11 @@ fn reconstruct_ordered(
                     let mut stats = FilterStats::default();
                     let owned = planes.len() - 1;
                     for (n, p) in planes.iter_mut().enumerate() {
+                        if invert {
+                            for r in p.iter_mut() {
+                                r.signed_value = -r.signed_value;
+                            }
+                        }
                         let f = filter_plane(p);
                         if n < owned {
                             stats += f;

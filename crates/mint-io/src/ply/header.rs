@@ -74,19 +74,6 @@ impl Element {
     pub(crate) fn prop(&self, name: &str) -> Option<usize> {
         self.props.iter().position(|p| p.name == name)
     }
-
-    /// The smallest possible record size in bytes for `enc` (at least 1 for
-    /// text: a token and a separator), used to reject absurd counts.
-    pub(crate) fn min_record_bytes(&self, enc: Encoding) -> u64 {
-        self.props
-            .iter()
-            .map(|p| match (enc, p.ty) {
-                (Encoding::Ascii, _) => 2,
-                (_, PropType::Scalar(s)) => s.size() as u64,
-                (_, PropType::List { count, .. }) => count.size() as u64,
-            })
-            .sum()
-    }
 }
 
 /// A parsed PLY header.
@@ -267,7 +254,7 @@ end_header\r\nBODY";
         let e = parse(b"ply\nformat ascii 1.0\nproperty float x\nend_header\n", Path::new("a.ply")).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "a.ply: a 'property' line before any 'element' line (element 'header', line 3, byte offset 20)"
+            "a.ply: a 'property' line before any 'element' line (element 'header', line 3, byte offset 21)"
         );
         let e = parse(b"ply\nformat ascii 1.0\nelement v 1\nproperty int64 x\nend_header\n", Path::new("a.ply")).unwrap_err();
         assert_eq!(e.kind(), ErrorKind::Unsupported);

@@ -322,10 +322,13 @@ impl Src for Ascii<'_> {
         let (at, tok) = self.t.next_tok().ok_or(SrcErr::Eof)?;
         parse_int(tok).ok_or(SrcErr::NotNumber(at))
     }
+    /// The decimal is rounded to the declared type, so that ascii and
+    /// binary encodings of one file give the same values.
     #[inline]
-    fn float(&mut self, _ty: Scalar) -> Result<f64, SrcErr> {
+    fn float(&mut self, ty: Scalar) -> Result<f64, SrcErr> {
         let (at, tok) = self.t.next_tok().ok_or(SrcErr::Eof)?;
-        parse_f64(tok).ok_or(SrcErr::NotNumber(at))
+        let v = parse_f64(tok).ok_or(SrcErr::NotNumber(at))?;
+        Ok(if ty == Scalar::F32 { v as f32 as f64 } else { v })
     }
     #[inline]
     fn skip_n(&mut self, _ty: Scalar, n: u64) -> Result<(), SrcErr> {

@@ -17,7 +17,7 @@ pub fn tetrahedron() -> Mesh {
     )
 }
 
-/// Unit cube, 12 triangles; faces 0 and 1 are the two halves of z = 0.
+/// Unit cube, 12 triangles; faces 0 and 1 are the two halves of x = 1.
 pub fn cube() -> Mesh {
     polycube(&[[0, 0, 0]], |_, _| true)
 }

@@ -1,0 +1,312 @@
+//! The analytic surfaces the generators approximate, as plain data
+//! ([`ExactSurface`] and one struct per shape) with signed distances,
+//! volumes and areas, so a test can measure a mesh against the truth: a
+//! generated vertex lies on its surface up to rounding, a point of a face
+//! within the tessellation's sagitta. Signed distances are negative inside
+//! the solid and exact (the true Euclidean distance to the surface) for
+//! every shape except [`ScanSurface`], whose radial offset is only an upper
+//! bound of the distance's magnitude.
+
+use crate::balls::BallLattice;
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// One of the generators' analytic surfaces.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "shape", rename_all = "snake_case")]
+pub enum ExactSurface {
+    Sphere(SphereSurface),
+    Torus(TorusSurface),
+    Plate(PlateSurface),
+    Balls(BallLattice),
+    Scan(ScanSurface),
+}
+
+impl ExactSurface {
+    /// Signed distance from `p` to the surface (negative inside). Exact for
+    /// all shapes but [`ExactSurface::Scan`], where it is the radial offset
+    /// (see [`ScanSurface::radial_offset`]).
+    pub fn signed_distance(&self, p: [f64; 3]) -> f64 {
+        match self {
+            ExactSurface::Sphere(s) => s.signed_distance(p),
+            ExactSurface::Torus(t) => t.signed_distance(p),
+            ExactSurface::Plate(s) => s.signed_distance(p),
+            ExactSurface::Balls(b) => b.signed_distance(p),
+            ExactSurface::Scan(s) => s.radial_offset(p),
+        }
+    }
+
+    /// Enclosed volume, where a closed form exists (not for the scan).
+    pub fn volume(&self) -> Option<f64> {
+        match self {
+            ExactSurface::Sphere(s) => Some(s.volume()),
+            ExactSurface::Torus(t) => Some(t.volume()),
+            ExactSurface::Plate(s) => Some(s.volume()),
+            ExactSurface::Balls(b) => Some(b.volume()),
+            ExactSurface::Scan(_) => None,
+        }
+    }
+
+    /// Surface area, where a closed form exists (not for the scan).
+    pub fn area(&self) -> Option<f64> {
+        match self {
+            ExactSurface::Sphere(s) => Some(s.area()),
+            ExactSurface::Torus(t) => Some(t.area()),
+            ExactSurface::Plate(s) => Some(s.area()),
+            ExactSurface::Balls(b) => Some(b.area()),
+            ExactSurface::Scan(_) => None,
+        }
+    }
+}
+
+#[inline]
+pub(crate) fn norm(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+#[inline]
+pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+/// The sphere `|p - center| = radius`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SphereSurface {
+    pub center: [f64; 3],
+    pub radius: f64,
+}
+
+impl SphereSurface {
+    /// `|p - center| - radius`.
+    pub fn signed_distance(&self, p: [f64; 3]) -> f64 {
+        norm(sub(p, self.center)) - self.radius
+    }
+    /// `4/3 π r³`.
+    pub fn volume(&self) -> f64 {
+        4.0 / 3.0 * PI * self.radius.powi(3)
+    }
+    /// `4 π r²`.
+    pub fn area(&self) -> f64 {
+        4.0 * PI * self.radius.powi(2)
+    }
+}
+
+/// The torus around the axis through `center` parallel to z: points at
+/// distance `minor` from the circle of radius `major` in the plane
+/// `z = center.z`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TorusSurface {
+    pub center: [f64; 3],
+    pub major: f64,
+    pub minor: f64,
+}
+
+impl TorusSurface {
+    /// `|(ρ - major, z)| - minor` with `ρ` the distance to the axis.
+    pub fn signed_distance(&self, p: [f64; 3]) -> f64 {
+        let q = sub(p, self.center);
+        let rho = (q[0] * q[0] + q[1] * q[1]).sqrt();
+        ((rho - self.major).powi(2) + q[2] * q[2]).sqrt() - self.minor
+    }
+    /// `2 π² R r²`.
+    pub fn volume(&self) -> f64 {
+        2.0 * PI * PI * self.major * self.minor * self.minor
+    }
+    /// `4 π² R r`.
+    pub fn area(&self) -> f64 {
+        4.0 * PI * PI * self.major * self.minor
+    }
+}
+
+/// The genus-`holes` plate: the box `[0, 3·blocks·cell] × [0, 3·cell] ×
+/// [0, thickness]` (`blocks = max(holes, 1)`) minus the square prisms
+/// `(3b+1, 3b+2)·cell × (1, 2)·cell × ℝ` for `b < holes`: a row of square
+/// frames, each a 3×3 block of cells with its middle cell open.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PlateSurface {
+    pub holes: u32,
+    pub cell: f64,
+    pub thickness: f64,
+}
+
+impl PlateSurface {
+    /// Number of 3×3 blocks along x (1 for a plate without holes).
+    pub fn blocks(&self) -> u32 {
+        self.holes.max(1)
+    }
+
+    /// Exact signed distance: the distance to the union of the top and
+    /// bottom faces (a rectangle with square holes), the outer side walls and
+    /// the nearest hole's walls, negative inside the solid.
+    pub fn signed_distance(&self, p: [f64; 3]) -> f64 {
+        let (c, t) = (self.cell, self.thickness);
+        let (w, h) = (3.0 * f64::from(self.blocks()) * c, 3.0 * c);
+        let [x, y, z] = p;
+        // Distance in the plane to the outer rectangle (0 inside) and to its
+        // boundary.
+        let out2 = |x: f64, y: f64, x0: f64, x1: f64, y0: f64, y1: f64| {
+            let dx = (x0 - x).max(0.0).max(x - x1);
+            let dy = (y0 - y).max(0.0).max(y - y1);
+            (dx * dx + dy * dy).sqrt()
+        };
+        let to_boundary = |x: f64, y: f64, x0: f64, x1: f64, y0: f64, y1: f64| {
+            let o = out2(x, y, x0, x1, y0, y1);
+            if o > 0.0 {
+                o
+            } else {
+                (x - x0).min(x1 - x).min(y - y0).min(y1 - y)
+            }
+        };
+        let rect_out = out2(x, y, 0.0, w, 0.0, h);
+        let rect_edge = to_boundary(x, y, 0.0, w, 0.0, h);
+        // The nearest hole (they are identical and in a row along x).
+        let (mut hole_edge, mut in_hole) = (f64::INFINITY, false);
+        if self.holes > 0 {
+            let guess = ((x / c - 1.5) / 3.0).round();
+            for b in [guess - 1.0, guess, guess + 1.0] {
+                if b < 0.0 || b >= f64::from(self.holes) {
+                    continue;
+                }
+                let x0 = (3.0 * b + 1.0) * c;
+                let (x1, y0, y1) = (x0 + c, c, 2.0 * c);
+                hole_edge = hole_edge.min(to_boundary(x, y, x0, x1, y0, y1));
+                in_hole |= x > x0 && x < x1 && y > y0 && y < y1;
+            }
+        }
+        // Planar distance to the region (rectangle minus holes).
+        let region = if rect_out > 0.0 {
+            rect_out
+        } else if in_hole {
+            hole_edge
+        } else {
+            0.0
+        };
+        let dz_wall = (-z).max(0.0).max(z - t);
+        let d = [
+            region.hypot(z - t),
+            region.hypot(z),
+            rect_edge.hypot(dz_wall),
+            hole_edge.hypot(dz_wall),
+        ]
+        .into_iter()
+        .fold(f64::INFINITY, f64::min);
+        let inside = region == 0.0 && (0.0..=t).contains(&z);
+        if inside {
+            -d
+        } else {
+            d
+        }
+    }
+
+    /// `(9·blocks - holes)·cell²·thickness`.
+    pub fn volume(&self) -> f64 {
+        f64::from(9 * self.blocks() - self.holes) * self.cell * self.cell * self.thickness
+    }
+
+    /// Top and bottom faces plus outer and hole walls.
+    pub fn area(&self) -> f64 {
+        let c = self.cell;
+        let faces = 2.0 * f64::from(9 * self.blocks() - self.holes) * c * c;
+        let perimeter = 2.0 * (3.0 * f64::from(self.blocks()) * c + 3.0 * c)
+            + 4.0 * f64::from(self.holes) * c;
+        faces + perimeter * self.thickness
+    }
+}
+
+/// One smooth bump field term: `sin(k·u + phase)` for a unit direction `u`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Wave {
+    pub k: [f64; 3],
+    pub phase: f64,
+}
+
+/// The star-shaped noisy sphere of [`crate::scan_like`]: in unit direction
+/// `u` from `center` the surface is at radius
+/// `radius · (1 + amplitude · n(u))`, with
+/// `n(u) = (1/W) Σ_w sin(k_w·u + phase_w)` over the `W` waves, so
+/// `|n| ≤ 1`. The waves' frequencies `|k_w|` lie in `[2, 5)`: a few gentle
+/// bumps around the sphere.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ScanSurface {
+    pub center: [f64; 3],
+    pub radius: f64,
+    pub amplitude: f64,
+    pub waves: Vec<Wave>,
+}
+
+impl ScanSurface {
+    /// The bump field `n(u)` in `[-1, 1]` for a unit vector `u`.
+    #[inline]
+    pub fn noise(&self, u: [f64; 3]) -> f64 {
+        if self.waves.is_empty() {
+            return 0.0;
+        }
+        let s: f64 = self
+            .waves
+            .iter()
+            .map(|w| (w.k[0] * u[0] + w.k[1] * u[1] + w.k[2] * u[2] + w.phase).sin())
+            .sum();
+        s / self.waves.len() as f64
+    }
+
+    /// Surface radius in unit direction `u`.
+    #[inline]
+    pub fn radius_at(&self, u: [f64; 3]) -> f64 {
+        self.radius * (1.0 + self.amplitude * self.noise(u))
+    }
+
+    /// `|p - center| - radius_at(direction of p)`: the signed offset along
+    /// the ray from the centre. Zero exactly on the surface and negative
+    /// inside; its magnitude bounds the true distance from above (and is
+    /// close to it while the amplitude is small).
+    pub fn radial_offset(&self, p: [f64; 3]) -> f64 {
+        let q = sub(p, self.center);
+        let r = norm(q);
+        if r == 0.0 {
+            return -self.radius_at([0.0, 0.0, 1.0]);
+        }
+        r - self.radius_at(q.map(|x| x / r))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plate_distance_at_known_points() {
+        let s = PlateSurface { holes: 2, cell: 1.0, thickness: 0.5 };
+        // Centre of the solid between the holes: 0.25 below the top.
+        assert_eq!(s.signed_distance([3.0, 1.5, 0.25]), -0.25);
+        // Centre of hole 0 at mid-thickness: half a cell to its walls.
+        assert_eq!(s.signed_distance([1.5, 1.5, 0.25]), 0.5);
+        // Above a hole's centre: to its top rim, diagonally.
+        assert!((s.signed_distance([1.5, 1.5, 1.5]) - 0.5f64.hypot(1.0)).abs() < 1e-15);
+        // Outside the outer wall.
+        assert_eq!(s.signed_distance([-2.0, 1.5, 0.25]), 2.0);
+        // Above the solid.
+        assert_eq!(s.signed_distance([0.5, 0.5, 3.0]), 2.5);
+        // Near a corner of the box, inside.
+        assert_eq!(s.signed_distance([0.1, 0.2, 0.25]), -0.1);
+        // On the surface.
+        assert_eq!(s.signed_distance([4.0, 1.5, 0.1]), 0.0);
+        assert_eq!(s.volume(), 16.0 * 0.5);
+    }
+
+    #[test]
+    fn torus_and_sphere_distances() {
+        let t = TorusSurface { center: [1.0, 0.0, 0.0], major: 2.0, minor: 0.5 };
+        assert_eq!(t.signed_distance([3.0, 0.0, 0.0]), -0.5);
+        assert_eq!(t.signed_distance([1.0, 0.0, 0.0]), 1.5);
+        let s = SphereSurface { center: [0.0; 3], radius: 2.0 };
+        assert_eq!(s.signed_distance([0.0, 3.0, 0.0]), 1.0);
+    }
+
+    #[test]
+    fn serializes_with_a_shape_tag() {
+        let e = ExactSurface::Sphere(SphereSurface { center: [0.0; 3], radius: 1.0 });
+        let j = serde_json::to_value(&e).unwrap();
+        assert_eq!(j["shape"], "sphere");
+        assert_eq!(serde_json::from_value::<ExactSurface>(j).unwrap(), e);
+    }
+}

@@ -1,0 +1,121 @@
+//! [`convert`]: stream a mesh from one file format into another.
+//!
+//! The stages: pick the output format from the output file name, open the
+//! reader (so a bad input fails before any output exists), create the
+//! writer (a temporary file beside the target), copy the vertices, stream
+//! the triangles chunk by chunk, and finish (patch counts, sync, rename).
+//! An error at any stage drops the writer, which deletes its temporary
+//! file: the target is created complete or not at all.
+//!
+//! STL input converted to an indexed format is welded: corners with exactly
+//! equal coordinates (bit for bit, with -0.0 taken as 0.0) become one
+//! vertex. Welding keeps a hash map over the distinct positions, about 40
+//! bytes per output vertex, so its memory grows with the vertex count of
+//! the result (not with the face count); that is accepted for now.
+//! Converting to STL keeps STL's soup layout.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use crate::error::{Error, ErrorKind};
+use crate::format::Format;
+use crate::reader::{MeshReader, ReadOptions, ReadStats, TriangleChunk};
+use crate::writer::{MeshWriter, WriteOptions};
+
+/// What [`convert`] did.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConvertSummary {
+    /// Format of the input (detected).
+    pub input_format: Format,
+    /// Format of the output (from its extension).
+    pub output_format: Format,
+    /// Vertices in the input (for STL: 3 per facet).
+    pub vertices_read: u64,
+    /// Vertices written (fewer than read after STL welding).
+    pub vertices_written: u64,
+    /// Triangles written.
+    pub triangles: u64,
+    /// The reader's counters (skipped short faces, dropped strip triangles,
+    /// spilled vertices).
+    pub read_stats: ReadStats,
+    /// Size of the output file.
+    pub bytes_written: u64,
+}
+
+/// Converts `input` into `output` (format by the output's extension),
+/// streaming. `progress(bytes_done, bytes_total)` is called after each
+/// chunk with input byte counts.
+///
+/// Every input vertex is copied, used or not, and must be finite (a `Value`
+/// error naming the input otherwise). With
+/// [`ReadOptions::resolve_positions`] set (the default), triangles are also
+/// checked as they are read.
+pub fn convert(
+    input: &Path,
+    output: &Path,
+    read: ReadOptions,
+    write: WriteOptions,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<ConvertSummary, Error> {
+    // Output format from the name: refuse before touching anything.
+    let output_format = Format::from_extension(output).ok_or_else(|| {
+        Error::unsupported(output, "unknown output format: the file name must end in .ply, .obj, .stl or .off")
+    })?;
+    // Open the input; a bad input fails here, before any output exists.
+    let mut reader = MeshReader::open(input, read)?;
+    let input_format = reader.info().format;
+    let weld = input_format == Format::Stl && output_format != Format::Stl;
+    let total = reader.bytes_total();
+    // The writer's temporary file lives beside the target until `finish`.
+    let mut writer = MeshWriter::create(output, output_format, write)?;
+    // Vertices: copied, or welded for STL input.
+    let nv = reader.vertex_count();
+    let mut welded: HashMap<[u64; 3], u32> = HashMap::new();
+    for i in 0..nv {
+        let p = reader.vertex(i);
+        if !p.iter().all(|c| c.is_finite()) {
+            return Err(Error::new(
+                ErrorKind::Value,
+                input,
+                format!("vertex {i} has a non-finite coordinate ({}, {}, {}); it cannot be converted", p[0], p[1], p[2]),
+            )
+            .at_element("vertex")
+            .at_record(i as u64));
+        }
+        if weld {
+            let next = welded.len() as u32;
+            if *welded.entry(weld_key(p)).or_insert(next) == next {
+                writer.write_vertex(p)?;
+            }
+        } else {
+            writer.write_vertex(p)?;
+        }
+    }
+    // Triangles, chunk by chunk.
+    let mut chunk = TriangleChunk::new();
+    while reader.next_chunk(&mut chunk)? {
+        for t in &chunk.indices {
+            let t = if weld { t.map(|i| welded[&weld_key(reader.vertex(i))]) } else { *t };
+            writer.write_face(t)?;
+        }
+        progress(reader.bytes_done(), total);
+    }
+    progress(total, total);
+    // Finish: counts, sync, rename.
+    let vertices_written = writer.vertices();
+    let summary = writer.finish()?;
+    Ok(ConvertSummary {
+        input_format,
+        output_format,
+        vertices_read: nv as u64,
+        vertices_written,
+        triangles: summary.faces,
+        read_stats: reader.stats(),
+        bytes_written: summary.bytes,
+    })
+}
+
+/// The exact bits of a position, with -0.0 folded into 0.0.
+fn weld_key(p: [f64; 3]) -> [u64; 3] {
+    p.map(|c| if c == 0.0 { 0u64 } else { c.to_bits() })
+}

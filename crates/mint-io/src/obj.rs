@@ -1,0 +1,296 @@
+//! Wavefront OBJ, geometry only.
+//!
+//! Reading takes two passes over the mapped file. [`open`] makes the first:
+//! every `v x y z [w] [r g b]` line becomes an f64 triple in a spill file
+//! (w and colours are ignored), and `f` lines are counted. [`ObjBody`] makes
+//! the second, streaming `f` lines: each corner is `i`, `i/t`, `i//n` or
+//! `i/t/n`; negative indices count back from the vertices defined so far;
+//! polygons are fan-triangulated (v0, vi, vi+1) from a small reused buffer;
+//! faces with fewer than three corners are skipped and counted. All other
+//! lines (`vt`, `vn`, `g`, `o`, `s`, `usemtl`, `mtllib`, `l`, comments)
+//! are ignored. Errors name element `v` or `f`, the record (0-based among
+//! lines of that kind), the line and byte offset.
+//!
+//! Writing: `v` lines, then `f` lines with 1-based indices.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use crate::error::{show_token, Error, ErrorKind};
+use crate::mapped::{Mapped, SpillFile};
+use crate::ply::read::not_finite;
+use crate::positions::{Emit, Positions, Reject};
+use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
+use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
+use crate::writer::{write_coord, FormatWriter, OutFile, WriteOptions};
+use crate::Format;
+
+/// The kind of an OBJ line we care about.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Vertex,
+    Face,
+    Comment,
+    Other,
+}
+
+/// Classifies a line by its first word; returns the kind and the rest of
+/// the line after the keyword (comments after `#` removed).
+#[inline]
+fn classify(line: &[u8]) -> (Kind, &[u8]) {
+    let mut i = 0;
+    while i < line.len() && (line[i] == b' ' || line[i] == b'\t') {
+        i += 1;
+    }
+    let l = &line[i..];
+    let kind = match l {
+        [b'v'] | [b'v', b' ' | b'\t', ..] => Kind::Vertex,
+        [b'f'] | [b'f', b' ' | b'\t', ..] => Kind::Face,
+        [b'#', ..] => return (Kind::Comment, &l[1..]),
+        _ => return (Kind::Other, l),
+    };
+    let rest = l.get(2..).unwrap_or(&[]);
+    let rest = match rest.iter().position(|&b| b == b'#') {
+        Some(n) => &rest[..n],
+        None => rest,
+    };
+    (kind, rest)
+}
+
+fn err_at(e: Error, data: &[u8], element: &str, record: u64, at: usize) -> Error {
+    e.at_element(element).at_record(record).at_line(line_of(data, at)).at_byte(at as u64)
+}
+
+/// Parses the three coordinates of a `v` line.
+fn parse_vertex(path: &Path, data: &[u8], rest: &[u8], record: u64, at: usize) -> Result<[f64; 3], Error> {
+    let mut p = [0.0; 3];
+    let mut w = words(rest);
+    for (k, c) in p.iter_mut().enumerate() {
+        let tok = w.next().ok_or_else(|| {
+            err_at(Error::format(path, format!("a 'v' line needs 3 coordinates, found {k}")), data, "v", record, at)
+        })?;
+        *c = parse_f64(tok).ok_or_else(|| {
+            err_at(Error::format(path, format!("expected a number, found {}", show_token(tok))), data, "v", record, at)
+        })?;
+    }
+    Ok(p)
+}
+
+/// Counts `v` and `f` lines and collects the leading comment block.
+fn scan(data: &[u8]) -> (u64, u64, Vec<String>) {
+    let (mut nv, mut nf) = (0u64, 0u64);
+    let mut comments = Vec::new();
+    let mut leading = true;
+    let mut lines = Lines::new(data, 0);
+    while let Some((_, line)) = lines.next_line() {
+        match classify(line) {
+            (Kind::Vertex, _) => nv += 1,
+            (Kind::Face, _) => nf += 1,
+            (Kind::Comment, c) if leading => comments.push(String::from_utf8_lossy(c).trim().to_string()),
+            _ => {}
+        }
+        if !matches!(classify(line).0, Kind::Comment) && !line.iter().all(|b| b.is_ascii_whitespace()) {
+            leading = false;
+        }
+    }
+    (nv, nf, comments)
+}
+
+fn make_info(nv: u64, nf: u64, comments: Vec<String>) -> MeshInfo {
+    MeshInfo {
+        format: Format::Obj,
+        encoding: "ascii".into(),
+        vertex_count: nv,
+        face_count: Some(nf),
+        elements: vec![
+            ElementInfo { name: "v".into(), count: nv, properties: vec!["x".into(), "y".into(), "z".into()] },
+            ElementInfo { name: "f".into(), count: nf, properties: vec!["vertex_indices".into()] },
+        ],
+        comments,
+        obj_info: Vec::new(),
+    }
+}
+
+/// Header information of an OBJ file: a full scan counting lines.
+pub(crate) fn info(_path: &Path, data: &[u8]) -> Result<MeshInfo, Error> {
+    let (nv, nf, comments) = scan(data);
+    Ok(make_info(nv, nf, comments))
+}
+
+/// First pass: spills vertex positions; returns the reader parts.
+pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Opened, Error> {
+    let data = map.bytes();
+    map.advise_sequential(0, data.len());
+    let mut spill = SpillFile::new(spill_dir, path)?;
+    let (mut nv, mut nf) = (0u64, 0u64);
+    let mut comments = Vec::new();
+    let mut leading = true;
+    let mut lines = Lines::new(data, 0);
+    while let Some((at, line)) = lines.next_line() {
+        let (kind, rest) = classify(line);
+        match kind {
+            Kind::Vertex => {
+                let p = parse_vertex(path, data, rest, nv, at)?;
+                spill.write_point(p)?;
+                nv += 1;
+            }
+            Kind::Face => nf += 1,
+            Kind::Comment if leading => comments.push(String::from_utf8_lossy(rest).trim().to_string()),
+            _ => {}
+        }
+        if kind != Kind::Comment && !line.iter().all(|b| b.is_ascii_whitespace()) {
+            leading = false;
+        }
+    }
+    if nv > u32::MAX as u64 {
+        return Err(Error::unsupported(path, format!("{nv} vertices; mint reads at most {} (32-bit indices)", u32::MAX)).at_element("v"));
+    }
+    let positions = Positions::spilled(Arc::new(spill.into_mapped()?), nv as u32);
+    let body = ObjBody { path: path.to_path_buf(), map, pos: 0, v_seen: 0, f_rec: 0, poly: Vec::new(), next: 0, rec_at: 0 };
+    Ok(Opened { info: make_info(nv, nf, comments), positions, body: Box::new(body), range_grid: None, spilled_vertices: nv })
+}
+
+/// Second pass: streams the faces (see the module docs).
+struct ObjBody {
+    path: PathBuf,
+    map: Arc<Mapped>,
+    /// Start of the next unread line.
+    pos: usize,
+    /// `v` lines before `pos` (for negative indices).
+    v_seen: u64,
+    /// `f` lines before `pos`.
+    f_rec: u64,
+    /// Corners of the current polygon (0-based, range-checked) and the next
+    /// fan triangle to emit (`poly[0], poly[next-1], poly[next]`).
+    poly: Vec<u32>,
+    next: usize,
+    /// Where the current polygon's line starts.
+    rec_at: usize,
+}
+
+impl ObjBody {
+    /// Parses the corners of an `f` line into `self.poly`.
+    fn parse_face(&mut self, data: &[u8], rest: &[u8], nv: u32, at: usize) -> Result<(), Error> {
+        self.poly.clear();
+        let record = self.f_rec;
+        for tok in words(rest) {
+            let num = match tok.iter().position(|&b| b == b'/') {
+                Some(n) => &tok[..n],
+                None => tok,
+            };
+            let bad = |kind, msg: String| err_at(Error::new(kind, &self.path, msg), data, "f", record, at);
+            let i = parse_i64(num).ok_or_else(|| bad(ErrorKind::Format, format!("expected a vertex index, found {}", show_token(tok))))?;
+            let abs = match i {
+                0 => return Err(bad(ErrorKind::Index, "vertex index 0 (OBJ indices start at 1)".into())),
+                i if i > 0 => i - 1,
+                i => self.v_seen as i64 + i,
+            };
+            if abs < 0 || abs >= nv as i64 {
+                return Err(bad(
+                    ErrorKind::Index,
+                    format!("vertex index {i} is out of range ({} vertices in the file, {} defined before this line)", nv, self.v_seen),
+                ));
+            }
+            self.poly.push(abs as u32);
+        }
+        Ok(())
+    }
+}
+
+impl FaceStream for ObjBody {
+    fn fill(&mut self, out: &mut Emit, stats: &mut ReadStats) -> Result<bool, Error> {
+        let map = self.map.clone();
+        let data = map.bytes();
+        let nv = out.pos.count();
+        let mut lines = Lines::new(data, self.pos);
+        loop {
+            while self.next < self.poly.len() {
+                if !out.room() {
+                    self.pos = lines.pos;
+                    return Ok(true);
+                }
+                let t = [self.poly[0], self.poly[self.next - 1], self.poly[self.next]];
+                if let Err(Reject::NotFinite(v)) = out.tri_checked(t) {
+                    return Err(err_at(not_finite(&self.path, v, out.pos), data, "f", self.f_rec - 1, self.rec_at));
+                }
+                self.next += 1;
+            }
+            let Some((at, line)) = lines.next_line() else {
+                self.pos = data.len();
+                return Ok(false);
+            };
+            match classify(line) {
+                (Kind::Vertex, _) => self.v_seen += 1,
+                (Kind::Face, rest) => {
+                    self.parse_face(data, rest, nv, at)?;
+                    self.f_rec += 1;
+                    self.rec_at = at;
+                    if self.poly.len() < 3 {
+                        stats.short_faces += 1;
+                        self.poly.clear();
+                    }
+                    self.next = 2;
+                }
+                _ => {}
+            }
+        }
+    }
+
+    fn bytes_done(&self) -> u64 {
+        self.pos as u64
+    }
+}
+
+/// Writes `v` then `f` lines.
+pub(crate) struct ObjWriter {
+    out: OutFile,
+    double: bool,
+}
+
+impl ObjWriter {
+    pub(crate) fn create(path: &Path, opts: &WriteOptions) -> Result<ObjWriter, Error> {
+        let mut out = OutFile::create(path)?;
+        out.put(b"# written by mint-io\n")?;
+        Ok(ObjWriter { out, double: opts.double })
+    }
+}
+
+impl FormatWriter for ObjWriter {
+    fn vertex(&mut self, p: [f64; 3]) -> Result<(), Error> {
+        let t = self.out.text();
+        t.extend_from_slice(b"v ");
+        write_coord(t, p[0], self.double);
+        t.push(b' ');
+        write_coord(t, p[1], self.double);
+        t.push(b' ');
+        write_coord(t, p[2], self.double);
+        t.push(b'\n');
+        self.out.maybe_flush()
+    }
+
+    fn face(&mut self, f: [u32; 3]) -> Result<(), Error> {
+        let _ = writeln!(self.out.text(), "f {} {} {}", f[0] as u64 + 1, f[1] as u64 + 1, f[2] as u64 + 1);
+        self.out.maybe_flush()
+    }
+
+    fn finish(self: Box<Self>, _vertices: u64, _faces: u64) -> Result<u64, Error> {
+        self.out.commit()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn classify_lines() {
+        assert_eq!(classify(b"  v 1 2 3 # c").0, Kind::Vertex);
+        assert_eq!(classify(b"v 1 2 3 # c").1, b"1 2 3 ");
+        assert_eq!(classify(b"vt 1 2").0, Kind::Other);
+        assert_eq!(classify(b"f\t1 2 3").0, Kind::Face);
+        assert_eq!(classify(b"# hi").0, Kind::Comment);
+        assert_eq!(classify(b"v").0, Kind::Vertex);
+        assert_eq!(classify(b"vp 1").0, Kind::Other);
+    }
+}

@@ -1,0 +1,12 @@
+//! The integration suite: round trips between every format and option
+//! (`roundtrip`), hand-made files exercising format features (`features`),
+//! the real scans in shared/data (`real_data`), one test per kind of bad
+//! input or failing output (`bad_input`), and a multi-million-triangle
+//! streaming test under a heap limit (`streaming`). Shared helpers live in
+//! `util`.
+mod bad_input;
+mod features;
+mod real_data;
+mod roundtrip;
+mod streaming;
+pub mod util;

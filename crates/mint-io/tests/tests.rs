@@ -1,0 +1,2 @@
+//! mint-io integration tests, built into one binary (see `suite/`).
+mod suite;
