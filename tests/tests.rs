@@ -1,0 +1,6 @@
+//! Cross-crate integration tests, built into one binary (ripgrep's layout).
+//! Heavy cases are `#[ignore]`d and run by hand; see each module.
+
+mod common;
+mod core_props;
+mod resample;

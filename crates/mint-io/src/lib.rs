@@ -46,3 +46,18 @@ pub use error::{Error, ErrorKind, Position};
 pub use format::Format;
 pub use reader::{read_info, ElementInfo, MeshInfo, MeshReader, RangeGrid, ReadOptions, ReadStats, TriangleChunk};
 pub use writer::{MeshWriter, WriteOptions, WriteSummary};
+
+#[cfg(test)]
+mod tests {
+    /// Readers and writers move between pipeline threads.
+    #[test]
+    fn readers_and_writers_are_send() {
+        fn send<T: Send>() {}
+        send::<crate::MeshReader>();
+        send::<crate::MeshWriter>();
+        send::<crate::AtomicFile>();
+        send::<crate::Error>();
+        fn sync<T: Sync>() {}
+        sync::<crate::Error>();
+    }
+}

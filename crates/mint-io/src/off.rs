@@ -170,7 +170,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         spill.write_point(p)?;
     }
     let positions = Positions::spilled(Arc::new(spill.into_mapped()?), h.nv as u32);
-    let body = OffBody { path: path.to_path_buf(), map: map.clone(), pos: lines.pos.min(data.len()), nf: h.nf, rec: 0, poly: Vec::new(), next: 0, rec_at: 0, done: false };
+    let body = OffBody { path: path.to_path_buf(), map: map.clone(), pos: lines.pos.min(data.len()), nf: h.nf, rec: 0, poly: Vec::new(), next: 0, rec_at: 0 };
     Ok(Opened { info: make_info(&h), positions, body: Box::new(body), range_grid: None, spilled_vertices: h.nv })
 }
 
@@ -185,7 +185,6 @@ struct OffBody {
     poly: Vec<u32>,
     next: usize,
     rec_at: usize,
-    done: bool,
 }
 
 impl OffBody {
@@ -241,7 +240,6 @@ impl FaceStream for OffBody {
                     ));
                 }
                 self.pos = data.len();
-                self.done = true;
                 return Ok(false);
             }
             let Some((a, line)) = content_line(&mut lines) else {

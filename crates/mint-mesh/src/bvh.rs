@@ -15,13 +15,16 @@
 //! parameters and bounds the depth by `log2(n)`).
 //!
 //! Data model, chosen for memory locality since queries are bound by cache
-//! misses: nodes are stored depth-first (a left child follows its parent)
-//! with `f32` boxes rounded outward (32 bytes a node; a conservative box
-//! only prunes a little less, it never changes an answer, because distances
-//! to triangles are computed in `f64`). Triangles are stored in leaf order,
+//! misses: each inner node holds the boxes of *both* its children (so one
+//! 64-byte cache line decides which to visit) and refers to each child as
+//! either another inner node or a leaf's range of triangles; inner nodes are
+//! stored depth-first (a left inner child follows its parent). Boxes are
+//! `f32` rounded outward: a conservative box only prunes a little less, it
+//! never changes an answer, because distances to triangles are computed in
+//! `f64`. Triangles are stored in leaf order,
 //! with their original face index, and the positions are renumbered in
 //! order of first use by that order, so one leaf's corners sit together in
-//! memory. Memory is about 24 bytes per vertex plus 36 bytes per face. Every
+//! memory. Memory is about 24 bytes per vertex plus 37 bytes per face. Every
 //! subtree's node count follows from its triangle count alone, so the two
 //! halves of each split are built in parallel into disjoint slices; the tree
 //! is identical under any thread count. Queries use an explicit stack and
@@ -37,17 +40,25 @@ const LEAF_SIZE: usize = 4;
 /// Subtrees smaller than this are built on the current thread.
 const PAR_THRESHOLD: usize = 1 << 14;
 
+/// A child of an inner node: inner node `index` if `count == 0`, else the
+/// leaf of `count` triangles starting at `index`.
 #[derive(Debug, Clone, Copy)]
-struct Node {
-    min: [f32; 3],
-    max: [f32; 3],
-    /// Leaf: first triangle. Inner: index of the right child.
-    a: u32,
-    /// Leaf: number of triangles (> 0). Inner: 0.
+struct Child {
+    index: u32,
     count: u32,
 }
 
-const EMPTY_NODE: Node = Node { min: [0.0; 3], max: [0.0; 3], a: 0, count: 0 };
+/// An inner node: both children's boxes and references, one cache line.
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
+struct Node {
+    min: [[f32; 3]; 2],
+    max: [[f32; 3]; 2],
+    child: [Child; 2],
+}
+
+const EMPTY_NODE: Node =
+    Node { min: [[0.0; 3]; 2], max: [[0.0; 3]; 2], child: [Child { index: 0, count: 0 }; 2] };
 
 /// A bounding-volume hierarchy over triangles with exact nearest-point
 /// queries. Build once with [`TriangleBvh::new`], then call
@@ -60,7 +71,10 @@ pub struct TriangleBvh {
     tris: Vec<[u32; 3]>,
     /// Original face index of each triangle in `tris`.
     ids: Vec<u32>,
+    /// Inner nodes (none when everything fits one leaf).
     nodes: Vec<Node>,
+    /// The root: inner node 0, or the single leaf.
+    root: Child,
     /// Exact bounds of all triangles.
     bounds: ([f64; 3], [f64; 3]),
 }
@@ -105,9 +119,9 @@ impl TriangleBvh {
                 Item { c: std::array::from_fn(|k| ((a[k] + b[k] + c[k]) / 3.0) as f32), id: id as u32 }
             })
             .collect();
-        let mut nodes = vec![EMPTY_NODE; node_count(faces.len())];
+        let mut nodes = vec![EMPTY_NODE; inner_count(faces.len())];
         let ctx = BuildCtx { positions, faces };
-        build(&ctx, &mut items, 0, 0, &mut nodes);
+        let (_, _, root) = build(&ctx, &mut items, 0, 0, &mut nodes);
         let ids: Vec<u32> = items.iter().map(|it| it.id).collect();
         drop(items);
 
@@ -135,7 +149,7 @@ impl TriangleBvh {
             || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
             |a, b| (std::array::from_fn(|k| a.0[k].min(b.0[k])), std::array::from_fn(|k| a.1[k].max(b.1[k]))),
         );
-        Ok(Self { positions: local, tris, ids, nodes, bounds })
+        Ok(Self { positions: local, tris, ids, nodes, root, bounds })
     }
 
     /// Number of triangles in the tree.
@@ -193,43 +207,40 @@ impl TriangleBvh {
         }
         // Depth is at most log2(faces) + 1 <= 33, and each level leaves at
         // most one deferred sibling on the stack.
-        let mut stack = [0u32; 96];
+        let mut stack = [(self.root, 0.0f64); 96];
         let mut sp = 1usize;
         while sp > 0 {
             sp -= 1;
-            let ni = stack[sp] as usize;
-            let node = &self.nodes[ni];
-            if box_dist2(node, p) >= best_d2 {
+            let (c, d2) = stack[sp];
+            if d2 >= best_d2 {
                 continue;
             }
-            if node.count > 0 {
-                let first = node.a as usize;
-                for t in first..first + node.count as usize {
+            if c.count > 0 {
+                let first = c.index as usize;
+                for t in first..first + c.count as usize {
                     let (d2, q) = self.tri_dist2(p, t);
                     if d2 < best_d2 {
                         best_d2 = d2;
                         best = Some((q, t));
                     }
                 }
-            } else {
-                let (l, r) = (ni + 1, node.a as usize);
-                let (dl, dr) = (box_dist2(&self.nodes[l], p), box_dist2(&self.nodes[r], p));
-                // Push the farther child first so the nearer one pops first.
-                let (near, far, df) = if dl <= dr { (l, r, dr) } else { (r, l, dl) };
-                if !(df >= best_d2) {
-                    stack[sp] = far as u32;
-                    sp += 1;
-                }
-                stack[sp] = near as u32;
+                continue;
+            }
+            let node = &self.nodes[c.index as usize];
+            let dl = box_dist2(node.min[0], node.max[0], p);
+            let dr = box_dist2(node.min[1], node.max[1], p);
+            // Push the farther child first so the nearer one pops first.
+            let (near, dn, far, df) = if dl <= dr { (0, dl, 1, dr) } else { (1, dr, 0, dl) };
+            if df < best_d2 {
+                stack[sp] = (node.child[far], df);
+                sp += 1;
+            }
+            if dn < best_d2 {
+                stack[sp] = (node.child[near], dn);
                 sp += 1;
             }
         }
         best.map(|(q, t)| (best_d2, q, t))
-    }
-
-    /// Original face index of internal triangle `t`.
-    pub(crate) fn face_id(&self, t: usize) -> u32 {
-        self.ids[t]
     }
 
     #[inline]
@@ -246,9 +257,10 @@ struct BuildCtx<'a> {
     faces: &'a [[u32; 3]],
 }
 
-/// Nodes in a subtree over `n` triangles (median splits: `n/2` and `n - n/2`).
-fn node_count(n: usize) -> usize {
-    2 * leaf_count(n) - 1
+/// Inner nodes in a subtree over `n` triangles (median splits: `n/2` and
+/// `n - n/2`).
+fn inner_count(n: usize) -> usize {
+    leaf_count(n) - 1
 }
 
 fn leaf_count(n: usize) -> usize {
@@ -273,16 +285,22 @@ fn leaf_count_pair(m: usize) -> (usize, usize) {
     (lm, lm1)
 }
 
-/// Builds the subtree over `items` into `nodes` (whose first slot is its
-/// root, at absolute index `base`); `items` starts at absolute position
-/// `first` of the whole item array.
-fn build(ctx: &BuildCtx, items: &mut [Item], base: usize, first: usize, nodes: &mut [Node]) {
+/// Builds the subtree over `items` into `nodes` (its inner nodes, the first
+/// of which is its root at absolute index `base`); `items` starts at
+/// absolute position `first` of the whole item array. Returns the
+/// subtree's box and how to refer to it.
+fn build(
+    ctx: &BuildCtx,
+    items: &mut [Item],
+    base: usize,
+    first: usize,
+    nodes: &mut [Node],
+) -> ([f32; 3], [f32; 3], Child) {
     let n = items.len();
-    debug_assert_eq!(nodes.len(), node_count(n));
+    debug_assert_eq!(nodes.len(), inner_count(n));
     if n <= LEAF_SIZE {
         let (min, max) = tri_bounds(ctx, items);
-        nodes[0] = Node { min, max, a: first as u32, count: n as u32 };
-        return;
+        return (min, max, Child { index: first as u32, count: n as u32 });
     }
     // Split on the longest axis of the centroid bounds, at the median.
     let mut lo = [f32::INFINITY; 3];
@@ -299,25 +317,26 @@ fn build(ctx: &BuildCtx, items: &mut [Item], base: usize, first: usize, nodes: &
     let half = n / 2;
     items.select_nth_unstable_by(half, |x, y| x.c[axis].total_cmp(&y.c[axis]).then(x.id.cmp(&y.id)));
     let (litems, ritems) = items.split_at_mut(half);
-    let nl = node_count(half);
-    let (root, rest) = nodes.split_first_mut().expect("non-empty");
+    let nl = inner_count(half);
+    let (root, rest) = nodes.split_first_mut().expect("an inner node");
     let (lnodes, rnodes) = rest.split_at_mut(nl);
-    if n >= PAR_THRESHOLD {
+    let (l, r) = if n >= PAR_THRESHOLD {
         rayon::join(
             || build(ctx, litems, base + 1, first, lnodes),
             || build(ctx, ritems, base + 1 + nl, first + half, rnodes),
-        );
+        )
     } else {
-        build(ctx, litems, base + 1, first, lnodes);
-        build(ctx, ritems, base + 1 + nl, first + half, rnodes);
-    }
-    let (l, r) = (&lnodes[0], &rnodes[0]);
-    *root = Node {
-        min: std::array::from_fn(|k| l.min[k].min(r.min[k])),
-        max: std::array::from_fn(|k| l.max[k].max(r.max[k])),
-        a: (base + 1 + nl) as u32,
-        count: 0,
+        (
+            build(ctx, litems, base + 1, first, lnodes),
+            build(ctx, ritems, base + 1 + nl, first + half, rnodes),
+        )
     };
+    *root = Node { min: [l.0, r.0], max: [l.1, r.1], child: [l.2, r.2] };
+    (
+        std::array::from_fn(|k| l.0[k].min(r.0[k])),
+        std::array::from_fn(|k| l.1[k].max(r.1[k])),
+        Child { index: base as u32, count: 0 },
+    )
 }
 
 /// Bounds of a leaf's triangles, rounded outward to `f32`.
@@ -356,10 +375,10 @@ fn f32_up(x: f64) -> f32 {
 }
 
 #[inline]
-fn box_dist2(n: &Node, p: [f64; 3]) -> f64 {
+fn box_dist2(min: [f32; 3], max: [f32; 3], p: [f64; 3]) -> f64 {
     let mut d2 = 0.0;
     for k in 0..3 {
-        let d = (f64::from(n.min[k]) - p[k]).max(0.0).max(p[k] - f64::from(n.max[k]));
+        let d = (f64::from(min[k]) - p[k]).max(0.0).max(p[k] - f64::from(max[k]));
         d2 += d * d;
     }
     d2
@@ -465,19 +484,19 @@ mod tests {
     }
 
     #[test]
-    fn node_count_matches_recursion() {
+    fn inner_count_matches_recursion() {
         fn rec(n: usize) -> usize {
             if n <= LEAF_SIZE {
-                1
+                0
             } else {
                 1 + rec(n / 2) + rec(n - n / 2)
             }
         }
         for n in 1..2000 {
-            assert_eq!(node_count(n), rec(n), "n = {n}");
+            assert_eq!(inner_count(n), rec(n), "n = {n}");
         }
-        assert_eq!(node_count(1 << 20), rec(1 << 20));
-        assert_eq!(node_count(1_000_003), rec(1_000_003));
+        assert_eq!(inner_count(1 << 20), rec(1 << 20));
+        assert_eq!(inner_count(1_000_003), rec(1_000_003));
     }
 
     #[test]

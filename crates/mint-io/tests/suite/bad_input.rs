@@ -378,3 +378,57 @@ fn child_write_past_fsize_limit() {
     assert!(entries(Path::new(&dir)).is_empty(), "left behind: {:?}", entries(Path::new(&dir)));
     println!("CHILD-OK {e}");
 }
+
+/// Reads a file to the end; any outcome but a panic is fine.
+fn read_never_panics(path: &Path) {
+    if let Ok(mut r) = MeshReader::open(path, ReadOptions { chunk_triangles: 3, ..ReadOptions::default() }) {
+        let mut c = TriangleChunk::new();
+        while let Ok(true) = r.next_chunk(&mut c) {}
+    }
+}
+
+/// Valid files of every kind, to be damaged (made once).
+fn seeds() -> &'static [(&'static str, Vec<u8>)] {
+    static SEEDS: std::sync::OnceLock<Vec<(&'static str, Vec<u8>)>> = std::sync::OnceLock::new();
+    SEEDS.get_or_init(|| make_seeds(tempfile::tempdir().unwrap().path()))
+}
+
+fn make_seeds(dir: &Path) -> Vec<(&'static str, Vec<u8>)> {
+    let m = octahedron();
+    let mut out = Vec::new();
+    for (name, format, ascii) in [
+        ("s.ply", Format::Ply, false),
+        ("s_ascii.ply", Format::Ply, true),
+        ("s.obj", Format::Obj, false),
+        ("s.off", Format::Off, false),
+        ("s.stl", Format::Stl, false),
+        ("s_ascii.stl", Format::Stl, true),
+    ] {
+        let p = dir.join(name);
+        write(&p, format, WriteOptions { ascii, ..WriteOptions::default() }, &m);
+        out.push((name, std::fs::read(&p).unwrap()));
+    }
+    out
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig { cases: 200, ..Default::default() })]
+    /// Truncated or corrupted files give errors, never panics (the
+    /// unchecked position reads rely on the layout checks made at open).
+    #[test]
+    fn damaged_files_never_panic(cut in 0.0f64..1.0, flips in proptest::collection::vec((0.0f64..1.0, 0u8..=255), 0..4)) {
+        let dir = tempfile::tempdir().unwrap();
+        for (name, bytes) in seeds() {
+            let mut bytes = bytes.clone();
+            for &(at, b) in &flips {
+                let last = bytes.len() - 1;
+                let i = ((at * bytes.len() as f64) as usize).min(last);
+                bytes[i] = b;
+            }
+            let keep = (cut * bytes.len() as f64) as usize + 1;
+            bytes.truncate(keep.min(bytes.len()));
+            let p = write_file(dir.path(), &format!("bad_{name}"), &bytes);
+            read_never_panics(&p);
+        }
+    }
+}

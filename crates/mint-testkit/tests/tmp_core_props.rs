@@ -1,1 +1,0 @@
-#[path = "../../../tests/core_props.rs"] mod core_props;

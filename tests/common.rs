@@ -1,0 +1,56 @@
+//! Helpers for the integration tests: write generated meshes to files, run
+//! the pipeline, load results back.
+
+use mint_core::{MeshSink, TriMesh};
+use mint_io::{Format, MeshReader, MeshWriter, ReadOptions, TriangleChunk, WriteOptions};
+use std::path::{Path, PathBuf};
+
+/// Writes a mesh produced by `f` into `dir/name`.
+pub fn write_mesh(dir: &Path, name: &str, f: impl FnOnce(&mut dyn MeshSink)) -> PathBuf {
+    let path = dir.join(name);
+    let mut w = MeshWriter::create(&path, Format::from_path(&path).unwrap(), WriteOptions::default()).unwrap();
+    f(&mut w);
+    w.finish().unwrap();
+    path
+}
+
+/// Writes an in-memory mesh.
+pub fn write_trimesh(dir: &Path, name: &str, m: &TriMesh) -> PathBuf {
+    write_mesh(dir, name, |s| {
+        for p in &m.positions {
+            s.vertex(*p).unwrap();
+        }
+        for f in &m.faces {
+            s.face(*f).unwrap();
+        }
+    })
+}
+
+/// Reads a mesh file fully into memory.
+pub fn load(path: &Path) -> TriMesh {
+    let mut r = MeshReader::open(path, ReadOptions { resolve_positions: false, ..Default::default() }).unwrap();
+    let positions = (0..r.vertex_count()).map(|i| r.vertex(i)).collect();
+    let mut faces = Vec::new();
+    let mut chunk = TriangleChunk::default();
+    while r.next_chunk(&mut chunk).unwrap() {
+        faces.extend_from_slice(&chunk.indices);
+    }
+    TriMesh { positions, faces }
+}
+
+/// An axis-aligned box with 12 outward triangles.
+pub fn box_mesh(lo: [f64; 3], hi: [f64; 3]) -> TriMesh {
+    let v = |i: usize| [if i & 1 == 0 { lo[0] } else { hi[0] }, if i & 2 == 0 { lo[1] } else { hi[1] }, if i & 4 == 0 { lo[2] } else { hi[2] }];
+    let quads = [[0u32, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+    TriMesh {
+        positions: (0..8).map(v).collect(),
+        faces: quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect(),
+    }
+}
+
+/// Appends `b` to `a` (disjoint union).
+pub fn union(a: &mut TriMesh, b: &TriMesh) {
+    let off = a.positions.len() as u32;
+    a.positions.extend_from_slice(&b.positions);
+    a.faces.extend(b.faces.iter().map(|f| f.map(|i| i + off)));
+}
