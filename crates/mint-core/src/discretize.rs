@@ -61,8 +61,8 @@ pub fn discretize_triangle(p: &[[f64; 3]; 3], mut emit: impl FnMut(Crossing)) {
     }
     // Candidate integer range per axis for a perturbed lattice coordinate
     // q + δ inside [lo, hi]: q in [ceil(lo), ceil(hi) - 1].
-    let first = [lo[0].ceil(), lo[1].ceil(), lo[2].ceil()];
-    let last = [hi[0].ceil() - 1.0, hi[1].ceil() - 1.0, hi[2].ceil() - 1.0];
+    let first = [ceil(lo[0]), ceil(lo[1]), ceil(lo[2])];
+    let last = [ceil(hi[0]) - 1.0, ceil(hi[1]) - 1.0, ceil(hi[2]) - 1.0];
     let has = [first[0] <= last[0], first[1] <= last[1], first[2] <= last[2]];
     // Fast reject: no family has a lattice point in its projected box.
     if !((has[1] && has[2]) || (has[2] && has[0]) || (has[0] && has[1])) {
@@ -95,6 +95,18 @@ pub fn discretize_triangle(p: &[[f64; 3]; 3], mut emit: impl FnMut(Crossing)) {
                 emit(Crossing { family: d as u8, u: qu, v: qv, cell, value, entering: orient < 0 });
             }
         }
+    }
+}
+
+/// `x.ceil()` for grid coordinates (|x| < 2^62), without the libm call
+/// that `f64::ceil` compiles to on baseline x86-64.
+#[inline(always)]
+fn ceil(x: f64) -> f64 {
+    let t = x as i64 as f64;
+    if t < x {
+        t + 1.0
+    } else {
+        t
     }
 }
 
@@ -135,7 +147,7 @@ fn locate_along_line(
         x[v] = q[1];
         x
     };
-    let mut cell = t.floor();
+    let mut cell = -ceil(-t); // floor
     // Walk to the cell whose lower node is below and upper node is above.
     // The crossing lies within [lo, hi], so this ends within a few steps.
     loop {

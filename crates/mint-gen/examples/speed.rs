@@ -9,7 +9,11 @@ use std::time::Instant;
 fn peak_rss_mb() -> String {
     std::fs::read_to_string("/proc/self/status")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).map(|l| l[6..].trim().to_string()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .map(|l| l[6..].trim().to_string())
+        })
         .unwrap_or_else(|| "?".into())
 }
 
@@ -40,7 +44,10 @@ fn line(what: &str, faces: u64, t: Clock) {
 }
 
 fn main() {
-    let max: u64 = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(10_000_000);
+    let max: u64 = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(10_000_000);
     let t = start();
     let mut c = CountingSink::default();
     sphere([0.0; 3], 1.0, max, &mut c).unwrap();
@@ -70,7 +77,10 @@ fn main() {
     let t = start();
     let dr = mint_mesh::distance_to_bvh((&s.positions, &s.faces), &bvh, 1_000_000, 1).unwrap();
     line("distance, 1M samples", m.faces.len() as u64, t);
-    println!("  mean {:.3e} max {:.3e} (noisy surface: far from A relative to B's triangles)", dr.mean, dr.max);
+    println!(
+        "  mean {:.3e} max {:.3e} (noisy surface: far from A relative to B's triangles)",
+        dr.mean, dr.max
+    );
     drop(bvh);
     drop(m);
 
@@ -82,5 +92,8 @@ fn main() {
     let t = start();
     let dr = mint_mesh::distance_to_bvh((&s.positions, &s.faces), &bvh, 1_000_000, 1).unwrap();
     line("distance, 1M samples", b.faces.len() as u64, t);
-    println!("  mean {:.3e} max {:.3e} (same sphere, finer)", dr.mean, dr.max);
+    println!(
+        "  mean {:.3e} max {:.3e} (same sphere, finer)",
+        dr.mean, dr.max
+    );
 }

@@ -51,7 +51,14 @@ impl BallLattice {
         while side > 1 && (side - 1).pow(3) >= count {
             side -= 1;
         }
-        Self { count, side, spacing: 1.0, min_radius: 0.25, max_radius: 0.4, seed }
+        Self {
+            count,
+            side,
+            spacing: 1.0,
+            min_radius: 0.25,
+            max_radius: 0.4,
+            seed,
+        }
     }
 
     /// Centre of ball `i`.
@@ -109,12 +116,16 @@ impl BallLattice {
 
     /// `Σ 4/3 π r_i³`.
     pub fn volume(&self) -> f64 {
-        (0..self.count).map(|i| 4.0 / 3.0 * PI * self.radius(i).powi(3)).sum()
+        (0..self.count)
+            .map(|i| 4.0 / 3.0 * PI * self.radius(i).powi(3))
+            .sum()
     }
 
     /// `Σ 4 π r_i²`.
     pub fn area(&self) -> f64 {
-        (0..self.count).map(|i| 4.0 * PI * self.radius(i).powi(2)).sum()
+        (0..self.count)
+            .map(|i| 4.0 * PI * self.radius(i).powi(2))
+            .sum()
     }
 }
 
@@ -130,7 +141,10 @@ pub fn components(
     let lattice = BallLattice::for_faces(target_faces, seed);
     let vertices = lattice.count * BallLattice::VERTICES_PER_BALL;
     check_vertex_count(vertices)?;
-    let grid = SphereGrid { rings: BallLattice::RINGS, segments: BallLattice::SEGMENTS };
+    let grid = SphereGrid {
+        rings: BallLattice::RINGS,
+        segments: BallLattice::SEGMENTS,
+    };
     let tables = TrigTables::new(&grid);
     for i in 0..lattice.count {
         grid.emit_vertices(&tables, lattice.center(i), lattice.radius(i), sink)?;
@@ -153,7 +167,13 @@ mod tests {
 
     #[test]
     fn lattice_side_is_the_ceiling_cube_root() {
-        for (t, count, side) in [(0, 1, 1), (120, 1, 1), (1200, 10, 3), (120 * 27, 27, 3), (120 * 28, 28, 4)] {
+        for (t, count, side) in [
+            (0, 1, 1),
+            (120, 1, 1),
+            (1200, 10, 3),
+            (120 * 27, 27, 3),
+            (120 * 28, 28, 4),
+        ] {
             let l = BallLattice::for_faces(t, 0);
             assert_eq!((l.count, l.side), (count, side), "target {t}");
         }

@@ -1,8 +1,9 @@
 //! mint's synthetic test meshes. Every generator streams an indexed triangle
 //! mesh into a [`MeshSink`] (all vertices, then all faces, outward
 //! orientation, as the sink contract says) and computes each vertex and
-//! face from its index by formula, so memory stays `O(√faces)` at most and
-//! hundreds of millions of faces can go straight to a file writer. No
+//! face from its index by formula, so memory stays `O(√faces)` (trig tables
+//! and per-row tables; plus `O(defects)` for the scan) and hundreds of
+//! millions of faces can go straight to a file writer. No
 //! generator does I/O.
 //!
 //! - [`sphere()`] ([`sphere`](mod@sphere)): a UV sphere with poles.
@@ -70,7 +71,10 @@ pub(crate) fn positive(name: &'static str, x: f64) -> Result<(), GenError> {
     if x.is_finite() && x > 0.0 {
         Ok(())
     } else {
-        Err(GenError::InvalidParameter { name, reason: format!("{x} is not a finite positive number") })
+        Err(GenError::InvalidParameter {
+            name,
+            reason: format!("{x} is not a finite positive number"),
+        })
     }
 }
 
@@ -78,6 +82,9 @@ pub(crate) fn finite3(name: &'static str, p: [f64; 3]) -> Result<(), GenError> {
     if p.iter().all(|x| x.is_finite()) {
         Ok(())
     } else {
-        Err(GenError::InvalidParameter { name, reason: format!("{p:?} is not finite") })
+        Err(GenError::InvalidParameter {
+            name,
+            reason: format!("{p:?} is not finite"),
+        })
     }
 }

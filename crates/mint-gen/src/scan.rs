@@ -1,5 +1,5 @@
 //! A scan-like mesh with known defects: [`scan_like()`] streams a noisy UV
-//! sphere (the numbering of [`crate::sphere`]) with holes, flipped faces,
+//! sphere (the numbering of [`mod@crate::sphere`]) with holes, flipped faces,
 //! duplicated patches and non-manifold slivers, and returns
 //! [`ScanDefects`]: where each defect is and the exact totals
 //! `mint_mesh::check` must report ([`ExpectedCheck`]).
@@ -10,8 +10,8 @@
 //! band of quad rows with polar angle in about `[30°, 150°]` is cut into
 //! equal rectangular slots of quads, each big enough for the largest defect
 //! plus a margin of [`MARGIN`] quads on every side, and the seed picks
-//! distinct slots (Fisher-Yates), holes first, then flips, patches,
-//! slivers. Defects are therefore at least `2·MARGIN` quads apart and away
+//! distinct slots (Floyd's sampling, then a shuffle), holes first, then
+//! flips, patches, slivers. Defects are therefore at least `2·MARGIN` quads apart and away
 //! from the poles and the `φ = 0` seam, which is what makes their effect on
 //! the counts exact:
 //!
@@ -196,9 +196,12 @@ pub struct ScanDefects {
 }
 
 /// Streams a scan-like mesh: the noisy sphere of about `target_faces` faces
-/// (resolution from [`SphereGrid::for_faces`]; holes remove and patches and
-/// slivers add a few, all listed in the result) with the defects of `opts`
-/// placed by `seed`. See the module docs for the construction.
+/// (resolution from [`SphereGrid::for_faces`]) with the defects of `opts`
+/// placed by `seed`; each default hole removes about 0.1% of the faces and
+/// patches and slivers add a few dozen, so the default options land about
+/// 0.4% under the target (exact counts in [`ExpectedCheck`]). With default
+/// options the smallest workable target is about 6,000 faces. See the
+/// module docs for the construction.
 ///
 /// Errors: [`GenError::InvalidParameter`] for options out of range,
 /// [`GenError::TooSmallForDefects`] when the defects cannot be kept apart
@@ -216,7 +219,11 @@ pub fn scan_like(
     let plan = Plan::new(&grid, target_faces, seed, opts)?;
     let layout = Layout::new(&grid, &plan);
     check_vertex_count(layout.total_vertices(&plan, opts))?;
-    let geo = Geometry { grid, tables: TrigTables::new(&grid), surface: &surface };
+    let geo = Geometry {
+        grid,
+        tables: TrigTables::new(&grid),
+        surface: &surface,
+    };
     emit(&geo, &plan, &layout, opts, sink, target_faces, seed)
 }
 
@@ -229,7 +236,10 @@ fn validate(o: &ScanOptions) -> Result<(), GenError> {
             Ok(())
         } else {
             let l = if open_lo { "(" } else { "[" };
-            Err(GenError::InvalidParameter { name, reason: format!("{x} is outside {l}{lo}, {hi}]") })
+            Err(GenError::InvalidParameter {
+                name,
+                reason: format!("{x} is outside {l}{lo}, {hi}]"),
+            })
         }
     };
     range("hole_radius", o.hole_radius, 0.0, 1.0, true)?;
@@ -254,10 +264,18 @@ fn noise_surface(seed: u64, o: &ScanOptions) -> ScanSurface {
             let phi = 2.0 * PI * rng.next_f64();
             let s = (1.0 - z * z).sqrt();
             let f = 2.0 + 3.0 * rng.next_f64();
-            Wave { k: [f * s * phi.cos(), f * s * phi.sin(), f * z], phase: 2.0 * PI * rng.next_f64() }
+            Wave {
+                k: [f * s * phi.cos(), f * s * phi.sin(), f * z],
+                phase: 2.0 * PI * rng.next_f64(),
+            }
         })
         .collect();
-    ScanSurface { center: o.center, radius: o.radius, amplitude: o.noise_amplitude, waves }
+    ScanSurface {
+        center: o.center,
+        radius: o.radius,
+        amplitude: o.noise_amplitude,
+        waves,
+    }
 }
 
 /// A hole: centre vertex and the half-width of each of its quad rows.
@@ -323,22 +341,36 @@ impl Plan {
         let slot_rows = row_hi.saturating_sub(row_lo) / sr;
         let slot_cols = ns.saturating_sub(2) / sc;
         let available = u64::from(slot_rows) * u64::from(slot_cols);
-        let needed = u64::from(o.holes) + u64::from(o.flips) + u64::from(o.patches) + u64::from(o.slivers);
+        let needed =
+            u64::from(o.holes) + u64::from(o.flips) + u64::from(o.patches) + u64::from(o.slivers);
         if needed > available {
-            return Err(GenError::TooSmallForDefects { target_faces: target, needed, available });
+            return Err(GenError::TooSmallForDefects {
+                target_faces: target,
+                needed,
+                available,
+            });
         }
-        // Partial Fisher-Yates over slot numbers.
+        // Floyd's sampling of `needed` distinct slots out of `available`
+        // (memory O(needed)), then a Fisher-Yates shuffle so the kinds of
+        // defect are spread at random over them.
         let mut rng = SplitMix64::for_stream(seed, 0x51075);
-        let mut slots: Vec<u32> = (0..available as u32).collect();
-        for i in 0..needed as usize {
-            let j = i + rng.below((slots.len() - i) as u64) as usize;
+        let mut chosen = std::collections::BTreeSet::new();
+        for j in available - needed..available {
+            let t = rng.below(j + 1);
+            if !chosen.insert(t) {
+                chosen.insert(j);
+            }
+        }
+        let mut slots: Vec<u32> = chosen.into_iter().map(|s| s as u32).collect();
+        for i in (1..slots.len()).rev() {
+            let j = rng.below(i as u64 + 1) as usize;
             slots.swap(i, j);
         }
         let anchor = |s: u32| {
             let (r, c) = (s / slot_cols, s % slot_cols);
             (row_lo + r * sr + sr / 2, 1 + c * sc + sc / 2)
         };
-        let mut picks = slots[..needed as usize].iter().map(|&s| anchor(s));
+        let mut picks = slots.iter().map(|&s| anchor(s));
         let mut take = |n: u32| -> Vec<(u32, u32)> { picks.by_ref().take(n as usize).collect() };
         let hole_sites = take(o.holes);
         let flips = take(o.flips);
@@ -352,7 +384,8 @@ impl Plan {
                     .filter_map(|q| {
                         let delta = (f64::from(q) + 0.5 - f64::from(i0)) * dtheta;
                         let mut h = if delta.abs() <= rho {
-                            ((rho * rho - delta * delta).sqrt() / (dphi * sin0) + 0.5).floor() as u32
+                            ((rho * rho - delta * delta).sqrt() / (dphi * sin0) + 0.5).floor()
+                                as u32
                         } else {
                             0
                         };
@@ -365,7 +398,13 @@ impl Plan {
                 HolePlan { i0, j0, rows }
             })
             .collect();
-        Ok(Plan { holes, flips, patches, slivers, patch_size: p })
+        Ok(Plan {
+            holes,
+            flips,
+            patches,
+            slivers,
+            patch_size: p,
+        })
     }
 }
 
@@ -411,7 +450,14 @@ impl Layout {
             let removed: u32 = vskip[r].iter().map(|&(lo, hi)| hi - lo + 1).sum();
             base[r + 1] = base[r] + ns - removed;
         }
-        Layout { rings: grid.rings, segments: ns, vskip, qremove, qflip, base }
+        Layout {
+            rings: grid.rings,
+            segments: ns,
+            vskip,
+            qremove,
+            qflip,
+            base,
+        }
     }
 
     /// Sphere vertices actually emitted (poles included).
@@ -435,7 +481,11 @@ impl Layout {
         if r == self.rings {
             return self.base[r as usize];
         }
-        let j = if j >= self.segments { j - self.segments } else { j };
+        let j = if j >= self.segments {
+            j - self.segments
+        } else {
+            j
+        };
         let mut i = self.base[r as usize] + j;
         for &(lo, hi) in &self.vskip[r as usize] {
             if j > hi {
@@ -475,7 +525,11 @@ impl Geometry<'_> {
     fn at(&self, u: [f64; 3], extra: f64) -> [f64; 3] {
         let s = self.surface;
         let r = s.radius_at(u) + extra;
-        [s.center[0] + r * u[0], s.center[1] + r * u[1], s.center[2] + r * u[2]]
+        [
+            s.center[0] + r * u[0],
+            s.center[1] + r * u[1],
+            s.center[2] + r * u[2],
+        ]
     }
 }
 
@@ -581,7 +635,11 @@ fn emit(
         let (a, d) = (lay.index(i, j), lay.index(i + 1, j + 1));
         let apex = apex_base + s as u32;
         sink.face([a, d, apex])?;
-        slivers.push(Sliver { face, edge: [a, d], apex });
+        slivers.push(Sliver {
+            face,
+            edge: [a, d],
+            apex,
+        });
         face += 1;
     }
     let mut patches = Vec::new();
@@ -615,7 +673,10 @@ fn emit(
             radius: o.hole_radius * o.radius,
             boundary_edges: h.boundary_edges(),
             faces_removed: h.faces_removed(),
-            vertices_removed: h.removed_vertices().map(|(_, lo, hi)| u64::from(hi - lo + 1)).sum(),
+            vertices_removed: h
+                .removed_vertices()
+                .map(|(_, lo, hi)| u64::from(hi - lo + 1))
+                .sum(),
         })
         .collect();
     let counts = DefectCounts {
@@ -667,23 +728,43 @@ mod tests {
 
     #[test]
     fn a_single_small_hole_has_the_rim_of_its_polyomino() {
-        let o = ScanOptions { holes: 1, flips: 0, patches: 0, slivers: 0, ..ScanOptions::default() };
+        let o = ScanOptions {
+            holes: 1,
+            flips: 0,
+            patches: 0,
+            slivers: 0,
+            ..ScanOptions::default()
+        };
         let mut m = TriMesh::default();
         let d = scan_like(20_000, 1, &o, &mut m).unwrap();
         let h = &d.holes[0];
         // Rim edges = 2·(rows + widest row width) for a nested, centred disk.
         let plan = Plan::new(&SphereGrid::for_faces(20_000), 20_000, 1, &o).unwrap();
         let rows = plan.holes[0].rows.len() as u64;
-        let widest = plan.holes[0].rows.iter().map(|r| 2 * u64::from(r.1)).max().unwrap();
+        let widest = plan.holes[0]
+            .rows
+            .iter()
+            .map(|r| 2 * u64::from(r.1))
+            .max()
+            .unwrap();
         assert_eq!(h.boundary_edges, 2 * (rows + widest));
         assert_eq!(d.expected.faces, m.faces.len() as u64);
         assert_eq!(d.expected.vertices, m.positions.len() as u64);
-        assert_eq!(m.faces.len() as u64, SphereGrid::for_faces(20_000).faces() - h.faces_removed);
+        assert_eq!(
+            m.faces.len() as u64,
+            SphereGrid::for_faces(20_000).faces() - h.faces_removed
+        );
     }
 
     #[test]
     fn no_defects_is_a_plain_noisy_sphere() {
-        let o = ScanOptions { holes: 0, flips: 0, patches: 0, slivers: 0, ..ScanOptions::default() };
+        let o = ScanOptions {
+            holes: 0,
+            flips: 0,
+            patches: 0,
+            slivers: 0,
+            ..ScanOptions::default()
+        };
         let mut m = TriMesh::default();
         let d = scan_like(1000, 3, &o, &mut m).unwrap();
         assert!(d.expected.watertight);
@@ -697,11 +778,20 @@ mod tests {
     fn too_small_is_a_typed_error() {
         let mut s = mint_core::CountingSink::default();
         let e = scan_like(500, 0, &ScanOptions::default(), &mut s).unwrap_err();
-        assert!(matches!(e, GenError::TooSmallForDefects { needed: 18, .. }), "{e}");
-        let bad = ScanOptions { noise_amplitude: 0.5, ..ScanOptions::default() };
+        assert!(
+            matches!(e, GenError::TooSmallForDefects { needed: 18, .. }),
+            "{e}"
+        );
+        let bad = ScanOptions {
+            noise_amplitude: 0.5,
+            ..ScanOptions::default()
+        };
         assert!(matches!(
             scan_like(50_000, 0, &bad, &mut s),
-            Err(GenError::InvalidParameter { name: "noise_amplitude", .. })
+            Err(GenError::InvalidParameter {
+                name: "noise_amplitude",
+                ..
+            })
         ));
     }
 }

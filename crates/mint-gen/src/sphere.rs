@@ -59,12 +59,22 @@ impl SphereGrid {
                 continue;
             };
             let aspect = s as f64 / (m + 1) as f64;
-            let key = (!(1.5..=2.5).contains(&aspect), (2 * s * m).abs_diff(t as u64), (aspect - 2.0).abs());
+            let key = (
+                !(1.5..=2.5).contains(&aspect),
+                (2 * s * m).abs_diff(t as u64),
+                (aspect - 2.0).abs(),
+            );
             if best.as_ref().is_none_or(|(k, _)| key < *k) {
                 best = Some((key, SphereGrid { rings, segments }));
             }
         }
-        best.map_or(SphereGrid { rings: 2, segments: 3 }, |b| b.1)
+        best.map_or(
+            SphereGrid {
+                rings: 2,
+                segments: 3,
+            },
+            |b| b.1,
+        )
     }
 
     /// `2·segments·(rings - 1)`.
@@ -209,14 +219,27 @@ mod tests {
 
     #[test]
     fn face_counts_are_close_to_target() {
-        for t in (100..20_000).step_by(37).chain([1_000_000, 5_000_000, 100_000_000]) {
+        for t in (100..20_000)
+            .step_by(37)
+            .chain([1_000_000, 5_000_000, 100_000_000])
+        {
             let g = SphereGrid::for_faces(t);
             let err = g.faces().abs_diff(t) as f64;
-            assert!(err <= 0.7 * (t as f64).sqrt(), "target {t}: {g:?} gives {}", g.faces());
+            assert!(
+                err <= 0.7 * (t as f64).sqrt(),
+                "target {t}: {g:?} gives {}",
+                g.faces()
+            );
             let aspect = f64::from(g.segments) / f64::from(g.rings);
             assert!((1.5..=2.5).contains(&aspect), "target {t}: {g:?}");
         }
-        assert_eq!(SphereGrid::for_faces(0), SphereGrid { rings: 2, segments: 3 });
+        assert_eq!(
+            SphereGrid::for_faces(0),
+            SphereGrid {
+                rings: 2,
+                segments: 3
+            }
+        );
         assert_eq!(SphereGrid::for_faces(6).faces(), 6);
     }
 

@@ -207,8 +207,8 @@ impl PlateSurface {
     pub fn area(&self) -> f64 {
         let c = self.cell;
         let faces = 2.0 * f64::from(9 * self.blocks() - self.holes) * c * c;
-        let perimeter = 2.0 * (3.0 * f64::from(self.blocks()) * c + 3.0 * c)
-            + 4.0 * f64::from(self.holes) * c;
+        let perimeter =
+            2.0 * (3.0 * f64::from(self.blocks()) * c + 3.0 * c) + 4.0 * f64::from(self.holes) * c;
         faces + perimeter * self.thickness
     }
 }
@@ -275,7 +275,11 @@ mod tests {
 
     #[test]
     fn plate_distance_at_known_points() {
-        let s = PlateSurface { holes: 2, cell: 1.0, thickness: 0.5 };
+        let s = PlateSurface {
+            holes: 2,
+            cell: 1.0,
+            thickness: 0.5,
+        };
         // Centre of the solid between the holes: 0.25 below the top.
         assert_eq!(s.signed_distance([3.0, 1.5, 0.25]), -0.25);
         // Centre of hole 0 at mid-thickness: half a cell to its walls.
@@ -295,16 +299,26 @@ mod tests {
 
     #[test]
     fn torus_and_sphere_distances() {
-        let t = TorusSurface { center: [1.0, 0.0, 0.0], major: 2.0, minor: 0.5 };
+        let t = TorusSurface {
+            center: [1.0, 0.0, 0.0],
+            major: 2.0,
+            minor: 0.5,
+        };
         assert_eq!(t.signed_distance([3.0, 0.0, 0.0]), -0.5);
         assert_eq!(t.signed_distance([1.0, 0.0, 0.0]), 1.5);
-        let s = SphereSurface { center: [0.0; 3], radius: 2.0 };
+        let s = SphereSurface {
+            center: [0.0; 3],
+            radius: 2.0,
+        };
         assert_eq!(s.signed_distance([0.0, 3.0, 0.0]), 1.0);
     }
 
     #[test]
     fn serializes_with_a_shape_tag() {
-        let e = ExactSurface::Sphere(SphereSurface { center: [0.0; 3], radius: 1.0 });
+        let e = ExactSurface::Sphere(SphereSurface {
+            center: [0.0; 3],
+            radius: 1.0,
+        });
         let j = serde_json::to_value(&e).unwrap();
         assert_eq!(j["shape"], "sphere");
         assert_eq!(serde_json::from_value::<ExactSurface>(j).unwrap(), e);

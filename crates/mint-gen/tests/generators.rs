@@ -13,22 +13,44 @@ use std::time::Instant;
 fn assert_clean(m: &TriMesh, g: &Generated) -> CheckReport {
     let r = check(&m.positions, &m.faces);
     assert_eq!((r.vertices, r.faces), (g.vertices, g.faces));
-    assert_eq!((r.unreferenced_vertices, r.degenerate_faces, r.duplicate_faces), (0, 0, 0));
+    assert_eq!(
+        (
+            r.unreferenced_vertices,
+            r.degenerate_faces,
+            r.duplicate_faces
+        ),
+        (0, 0, 0)
+    );
     assert!(r.watertight, "{r:?}");
     assert_eq!(r.components, g.components);
     assert_eq!(r.closed_components, g.components);
-    assert!(r.genera.iter().all(|&x| x == g.genus as i64), "{:?}", r.genera);
+    assert!(
+        r.genera.iter().all(|&x| x == g.genus as i64),
+        "{:?}",
+        r.genera
+    );
     r
 }
 
 fn assert_volume(r: &CheckReport, s: &ExactSurface, tol: f64) {
     let exact = s.volume().unwrap();
-    assert!(r.signed_volume > 0.0, "inward orientation? volume {}", r.signed_volume);
-    assert!((r.signed_volume / exact - 1.0).abs() < tol, "volume {} vs {exact}", r.signed_volume);
+    assert!(
+        r.signed_volume > 0.0,
+        "inward orientation? volume {}",
+        r.signed_volume
+    );
+    assert!(
+        (r.signed_volume / exact - 1.0).abs() < tol,
+        "volume {} vs {exact}",
+        r.signed_volume
+    );
 }
 
 fn max_vertex_offset(m: &TriMesh, s: &ExactSurface) -> f64 {
-    m.positions.iter().map(|&p| s.signed_distance(p).abs()).fold(0.0, f64::max)
+    m.positions
+        .iter()
+        .map(|&p| s.signed_distance(p).abs())
+        .fold(0.0, f64::max)
 }
 
 /// Largest |signed distance| of face centroids: bounded by the sagitta.
@@ -37,7 +59,8 @@ fn max_centroid_offset(m: &TriMesh, s: &ExactSurface) -> f64 {
         .iter()
         .map(|f| {
             let [a, b, c] = f.map(|i| m.positions[i as usize]);
-            s.signed_distance(std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0)).abs()
+            s.signed_distance(std::array::from_fn(|k| (a[k] + b[k] + c[k]) / 3.0))
+                .abs()
         })
         .fold(0.0, f64::max)
 }
@@ -107,7 +130,9 @@ fn components_are_disjoint_closed_balls() {
         let exact = g.surface.volume().unwrap();
         assert!(r.signed_volume > 0.8 * exact && r.signed_volume < exact);
         assert!(max_vertex_offset(&m, &g.surface) < 1e-12);
-        let ExactSurface::Balls(l) = &g.surface else { panic!("balls") };
+        let ExactSurface::Balls(l) = &g.surface else {
+            panic!("balls")
+        };
         assert_eq!(l.count * BallLattice::FACES_PER_BALL, g.faces);
     }
     // The seed moves the radii, nothing else.
@@ -150,7 +175,11 @@ fn assert_matches(d: &ScanDefects, r: &CheckReport) {
         e.duplicate_faces,
         e.closed_components,
     ];
-    assert_eq!(got, want, "seed {} target {}: {r:#?}", d.seed, d.target_faces);
+    assert_eq!(
+        got, want,
+        "seed {} target {}: {r:#?}",
+        d.seed, d.target_faces
+    );
     assert_eq!(r.watertight, e.watertight);
 }
 
@@ -191,11 +220,46 @@ fn scan_like_defects_are_exactly_what_check_reports() {
 #[test]
 fn scan_like_with_other_options() {
     let cases = [
-        ScanOptions { holes: 12, flips: 0, patches: 0, slivers: 0, hole_radius: 0.03, ..Default::default() },
-        ScanOptions { holes: 0, flips: 20, patches: 0, slivers: 0, noise_amplitude: 0.0, ..Default::default() },
-        ScanOptions { holes: 1, flips: 1, patches: 5, slivers: 7, patch_size: 1, ..Default::default() },
-        ScanOptions { holes: 2, flips: 0, patches: 2, slivers: 0, patch_size: 6, hole_radius: 0.2, ..Default::default() },
-        ScanOptions { holes: 0, flips: 0, patches: 4, slivers: 0, ..Default::default() },
+        ScanOptions {
+            holes: 12,
+            flips: 0,
+            patches: 0,
+            slivers: 0,
+            hole_radius: 0.03,
+            ..Default::default()
+        },
+        ScanOptions {
+            holes: 0,
+            flips: 20,
+            patches: 0,
+            slivers: 0,
+            noise_amplitude: 0.0,
+            ..Default::default()
+        },
+        ScanOptions {
+            holes: 1,
+            flips: 1,
+            patches: 5,
+            slivers: 7,
+            patch_size: 1,
+            ..Default::default()
+        },
+        ScanOptions {
+            holes: 2,
+            flips: 0,
+            patches: 2,
+            slivers: 0,
+            patch_size: 6,
+            hole_radius: 0.2,
+            ..Default::default()
+        },
+        ScanOptions {
+            holes: 0,
+            flips: 0,
+            patches: 4,
+            slivers: 0,
+            ..Default::default()
+        },
     ];
     for (i, o) in cases.iter().enumerate() {
         for seed in [11u64, 12] {
@@ -240,10 +304,16 @@ fn scan_like_is_deterministic_and_seed_dependent() {
 
 #[test]
 fn scan_like_vertices_lie_on_the_noisy_surface() {
-    let o = ScanOptions { noise_amplitude: 0.05, ..Default::default() };
+    let o = ScanOptions {
+        noise_amplitude: 0.05,
+        ..Default::default()
+    };
     let mut m = TriMesh::default();
     let d = scan_like(50_000, 9, &o, &mut m).unwrap();
-    let sphere_vertices = d.slivers.first().map_or(m.positions.len(), |s| s.apex as usize);
+    let sphere_vertices = d
+        .slivers
+        .first()
+        .map_or(m.positions.len(), |s| s.apex as usize);
     let off = m.positions[..sphere_vertices]
         .iter()
         .map(|&p| d.surface.radial_offset(p).abs())
@@ -253,7 +323,9 @@ fn scan_like_vertices_lie_on_the_noisy_surface() {
     let spread = m.positions[..sphere_vertices]
         .iter()
         .map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt())
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), r| (lo.min(r), hi.max(r)));
+        .fold((f64::INFINITY, 0.0f64), |(lo, hi), r| {
+            (lo.min(r), hi.max(r))
+        });
     assert!(spread.1 - spread.0 > 0.02, "{spread:?}");
 }
 
@@ -273,5 +345,8 @@ fn five_million_face_sphere_streams_quickly() {
 fn big_scan_like_streams_and_counts_match() {
     let mut s = CountingSink::default();
     let d = scan_like(3_000_000, 1, &ScanOptions::default(), &mut s).unwrap();
-    assert_eq!((s.vertices, s.faces), (d.expected.vertices, d.expected.faces));
+    assert_eq!(
+        (s.vertices, s.faces),
+        (d.expected.vertices, d.expected.faces)
+    );
 }

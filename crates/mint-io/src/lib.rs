@@ -44,7 +44,7 @@ pub use atomic::AtomicFile;
 pub use convert::{convert, ConvertSummary};
 pub use error::{Error, ErrorKind, Position};
 pub use format::Format;
-pub use reader::{read_info, ElementInfo, MeshInfo, MeshReader, RangeGrid, ReadOptions, ReadStats, TriangleChunk};
+pub use reader::{read_info, ElementInfo, MeshInfo, MeshReader, RangeGrid, ReadOptions, ReadStats, TriangleChunk, VertexPositions};
 pub use writer::{MeshWriter, WriteOptions, WriteSummary};
 
 #[cfg(test)]

@@ -194,6 +194,28 @@ pub(crate) struct Opened {
     pub(crate) spilled_vertices: u64,
 }
 
+/// Vertex positions by index, shareable across threads; see
+/// [`MeshReader::positions`]. Does not check for NaN (the reader checks
+/// resolved triangles; callers resolving themselves check what they need).
+#[derive(Debug, Clone)]
+pub struct VertexPositions(Positions);
+
+impl VertexPositions {
+    /// Number of vertices.
+    pub fn len(&self) -> u32 {
+        self.0.count()
+    }
+    /// True when there are no vertices.
+    pub fn is_empty(&self) -> bool {
+        self.0.count() == 0
+    }
+    /// Position of vertex `i` (panics if `i >= len()`).
+    #[inline]
+    pub fn get(&self, i: u32) -> [f64; 3] {
+        self.0.get(i)
+    }
+}
+
 /// A streaming mesh reader; see the module docs.
 pub struct MeshReader {
     path: PathBuf,
@@ -265,6 +287,13 @@ impl MeshReader {
     /// Panics if `i >= vertex_count()`.
     pub fn vertex(&self, i: u32) -> [f64; 3] {
         self.positions.get(i)
+    }
+
+    /// A cheap, thread-safe handle on the vertex positions (it shares the
+    /// reader's memory map), so worker threads can resolve indices that the
+    /// reader streams with `resolve_positions: false`.
+    pub fn positions(&self) -> VertexPositions {
+        VertexPositions(self.positions.clone())
     }
 
     /// Clears `chunk` and fills it with up to

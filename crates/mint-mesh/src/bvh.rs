@@ -1,7 +1,7 @@
 //! [`TriangleBvh`]: an axis-aligned bounding-box tree over a mesh's
 //! triangles, answering "which point of the mesh is nearest to `p`?"
 //! exactly, for point-to-surface distances (Metro sampling in
-//! [`crate::distance`], error measures in other crates).
+//! [`mod@crate::distance`], error measures in other crates).
 //!
 //! Sources: the closest point on a triangle is Ericson, *Real-Time Collision
 //! Detection* (2005), §5.1.5 "Closest point on triangle to point", which
@@ -57,8 +57,11 @@ struct Node {
     child: [Child; 2],
 }
 
-const EMPTY_NODE: Node =
-    Node { min: [[0.0; 3]; 2], max: [[0.0; 3]; 2], child: [Child { index: 0, count: 0 }; 2] };
+const EMPTY_NODE: Node = Node {
+    min: [[0.0; 3]; 2],
+    max: [[0.0; 3]; 2],
+    child: [Child { index: 0, count: 0 }; 2],
+};
 
 /// A bounding-volume hierarchy over triangles with exact nearest-point
 /// queries. Build once with [`TriangleBvh::new`], then call
@@ -97,18 +100,32 @@ impl TriangleBvh {
     /// of [`MeshError`].
     pub fn new(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<Self, MeshError> {
         if faces.is_empty() {
-            return Err(MeshError::Empty { what: "a BVH needs at least one face" });
+            return Err(MeshError::Empty {
+                what: "a BVH needs at least one face",
+            });
         }
         if positions.len() > u32::MAX as usize {
-            return Err(MeshError::TooManyVertices { vertices: positions.len() });
+            return Err(MeshError::TooManyVertices {
+                vertices: positions.len(),
+            });
         }
         if faces.len() > u32::MAX as usize {
-            return Err(MeshError::TooManyFaces { faces: faces.len(), max: u32::MAX as usize });
+            return Err(MeshError::TooManyFaces {
+                faces: faces.len(),
+                max: u32::MAX as usize,
+            });
         }
         let nv = positions.len() as u32;
-        if let Some(face) = faces.par_iter().position_first(|f| f.iter().any(|&i| i >= nv)) {
+        if let Some(face) = faces
+            .par_iter()
+            .position_first(|f| f.iter().any(|&i| i >= nv))
+        {
             let index = *faces[face].iter().find(|&&i| i >= nv).expect("found above");
-            return Err(MeshError::IndexOutOfRange { face, index, vertices: positions.len() });
+            return Err(MeshError::IndexOutOfRange {
+                face,
+                index,
+                vertices: positions.len(),
+            });
         }
 
         let mut items: Vec<Item> = faces
@@ -116,7 +133,10 @@ impl TriangleBvh {
             .enumerate()
             .map(|(id, f)| {
                 let [a, b, c] = f.map(|i| positions[i as usize]);
-                Item { c: std::array::from_fn(|k| ((a[k] + b[k] + c[k]) / 3.0) as f32), id: id as u32 }
+                Item {
+                    c: std::array::from_fn(|k| ((a[k] + b[k] + c[k]) / 3.0) as f32),
+                    id: id as u32,
+                }
             })
             .collect();
         let mut nodes = vec![EMPTY_NODE; inner_count(faces.len())];
@@ -142,14 +162,34 @@ impl TriangleBvh {
             })
             .collect();
         drop(remap);
-        let bounds = local.par_iter().fold(
-            || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
-            |(lo, hi), p| (std::array::from_fn(|k| lo[k].min(p[k])), std::array::from_fn(|k| hi[k].max(p[k]))),
-        ).reduce(
-            || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
-            |a, b| (std::array::from_fn(|k| a.0[k].min(b.0[k])), std::array::from_fn(|k| a.1[k].max(b.1[k]))),
-        );
-        Ok(Self { positions: local, tris, ids, nodes, root, bounds })
+        let bounds = local
+            .par_iter()
+            .fold(
+                || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+                |(lo, hi), p| {
+                    (
+                        std::array::from_fn(|k| lo[k].min(p[k])),
+                        std::array::from_fn(|k| hi[k].max(p[k])),
+                    )
+                },
+            )
+            .reduce(
+                || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+                |a, b| {
+                    (
+                        std::array::from_fn(|k| a.0[k].min(b.0[k])),
+                        std::array::from_fn(|k| a.1[k].max(b.1[k])),
+                    )
+                },
+            );
+        Ok(Self {
+            positions: local,
+            tris,
+            ids,
+            nodes,
+            root,
+            bounds,
+        })
     }
 
     /// Number of triangles in the tree.
@@ -182,7 +222,8 @@ impl TriangleBvh {
     /// closer than `max_dist`; `None` if there is none. A finite radius
     /// prunes the search.
     pub fn nearest_within(&self, p: [f64; 3], max_dist: f64) -> Option<(f64, [f64; 3], u32)> {
-        self.search(p, max_dist * max_dist, None).map(|(d2, q, t)| (d2.sqrt(), q, self.ids[t]))
+        self.search(p, max_dist * max_dist, None)
+            .map(|(d2, q, t)| (d2.sqrt(), q, self.ids[t]))
     }
 
     /// The nearest point as `(squared distance, point, internal triangle)`,
@@ -230,7 +271,11 @@ impl TriangleBvh {
             let dl = box_dist2(node.min[0], node.max[0], p);
             let dr = box_dist2(node.min[1], node.max[1], p);
             // Push the farther child first so the nearer one pops first.
-            let (near, dn, far, df) = if dl <= dr { (0, dl, 1, dr) } else { (1, dr, 0, dl) };
+            let (near, dn, far, df) = if dl <= dr {
+                (0, dl, 1, dr)
+            } else {
+                (1, dr, 0, dl)
+            };
             if df < best_d2 {
                 stack[sp] = (node.child[far], df);
                 sp += 1;
@@ -276,12 +321,12 @@ fn leaf_count_pair(m: usize) -> (usize, usize) {
     let (lh, lh1) = leaf_count_pair(m / 2);
     let lm = if m <= LEAF_SIZE {
         1
-    } else if m % 2 == 0 {
+    } else if m & 1 == 0 {
         2 * lh
     } else {
         lh + lh1
     };
-    let lm1 = if m % 2 == 0 { lh + lh1 } else { 2 * lh1 };
+    let lm1 = if m & 1 == 0 { lh + lh1 } else { 2 * lh1 };
     (lm, lm1)
 }
 
@@ -300,7 +345,14 @@ fn build(
     debug_assert_eq!(nodes.len(), inner_count(n));
     if n <= LEAF_SIZE {
         let (min, max) = tri_bounds(ctx, items);
-        return (min, max, Child { index: first as u32, count: n as u32 });
+        return (
+            min,
+            max,
+            Child {
+                index: first as u32,
+                count: n as u32,
+            },
+        );
     }
     // Split on the longest axis of the centroid bounds, at the median.
     let mut lo = [f32::INFINITY; 3];
@@ -315,7 +367,9 @@ fn build(
         .max_by(|&x, &y| (hi[x] - lo[x]).total_cmp(&(hi[y] - lo[y])).then(y.cmp(&x)))
         .expect("three axes");
     let half = n / 2;
-    items.select_nth_unstable_by(half, |x, y| x.c[axis].total_cmp(&y.c[axis]).then(x.id.cmp(&y.id)));
+    items.select_nth_unstable_by(half, |x, y| {
+        x.c[axis].total_cmp(&y.c[axis]).then(x.id.cmp(&y.id))
+    });
     let (litems, ritems) = items.split_at_mut(half);
     let nl = inner_count(half);
     let (root, rest) = nodes.split_first_mut().expect("an inner node");
@@ -331,11 +385,18 @@ fn build(
             build(ctx, ritems, base + 1 + nl, first + half, rnodes),
         )
     };
-    *root = Node { min: [l.0, r.0], max: [l.1, r.1], child: [l.2, r.2] };
+    *root = Node {
+        min: [l.0, r.0],
+        max: [l.1, r.1],
+        child: [l.2, r.2],
+    };
     (
         std::array::from_fn(|k| l.0[k].min(r.0[k])),
         std::array::from_fn(|k| l.1[k].max(r.1[k])),
-        Child { index: base as u32, count: 0 },
+        Child {
+            index: base as u32,
+            count: 0,
+        },
     )
 }
 
@@ -378,7 +439,9 @@ fn f32_up(x: f64) -> f32 {
 fn box_dist2(min: [f32; 3], max: [f32; 3], p: [f64; 3]) -> f64 {
     let mut d2 = 0.0;
     for k in 0..3 {
-        let d = (f64::from(min[k]) - p[k]).max(0.0).max(p[k] - f64::from(max[k]));
+        let d = (f64::from(min[k]) - p[k])
+            .max(0.0)
+            .max(p[k] - f64::from(max[k]));
         d2 += d * d;
     }
     d2
@@ -515,7 +578,10 @@ mod tests {
     #[test]
     fn degenerate_triangles_are_segments_or_points() {
         let (a, b, c) = ([0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
-        assert_eq!(closest_point_on_triangle([1.5, 1.0, 0.0], a, b, c), [1.5, 0.0, 0.0]);
+        assert_eq!(
+            closest_point_on_triangle([1.5, 1.0, 0.0], a, b, c),
+            [1.5, 0.0, 0.0]
+        );
         let p = [3.0; 3];
         assert_eq!(closest_point_on_triangle([1.0, 2.0, 3.0], p, p, p), p);
     }
@@ -553,7 +619,9 @@ mod tests {
 
     #[test]
     fn f32_rounding_is_outward() {
-        for x in [0.1f64, -0.1, 1e-50, -1e-50, 0.0, 3.0, 1e40, -1e40, 16777217.0] {
+        for x in [
+            0.1f64, -0.1, 1e-50, -1e-50, 0.0, 3.0, 1e40, -1e40, 16777217.0,
+        ] {
             assert!(f64::from(f32_down(x)) <= x, "{x}");
             assert!(f64::from(f32_up(x)) >= x, "{x}");
         }
@@ -564,7 +632,9 @@ mod tests {
     #[test]
     fn hints_do_not_change_distances() {
         let mut rng = SplitMix64::new(11);
-        let positions: Vec<[f64; 3]> = (0..300).map(|_| std::array::from_fn(|_| rng.next_f64())).collect();
+        let positions: Vec<[f64; 3]> = (0..300)
+            .map(|_| std::array::from_fn(|_| rng.next_f64()))
+            .collect();
         let faces: Vec<[u32; 3]> = (0..100).map(|t| [3 * t, 3 * t + 1, 3 * t + 2]).collect();
         let bvh = TriangleBvh::new(&positions, &faces).unwrap();
         for i in 0..200 {
@@ -587,10 +657,17 @@ mod tests {
     #[test]
     fn errors_are_typed() {
         let p = [[0.0; 3]; 3];
-        assert!(matches!(TriangleBvh::new(&p, &[]), Err(MeshError::Empty { .. })));
+        assert!(matches!(
+            TriangleBvh::new(&p, &[]),
+            Err(MeshError::Empty { .. })
+        ));
         assert_eq!(
             TriangleBvh::new(&p, &[[0, 1, 3]]).unwrap_err(),
-            MeshError::IndexOutOfRange { face: 0, index: 3, vertices: 3 }
+            MeshError::IndexOutOfRange {
+                face: 0,
+                index: 3,
+                vertices: 3
+            }
         );
     }
 }

@@ -105,7 +105,10 @@ pub fn try_symmetric_distance(
     samples: usize,
     seed: u64,
 ) -> Result<(DistanceReport, DistanceReport), MeshError> {
-    Ok((try_distance(a, b, samples, seed)?, try_distance(b, a, samples, seed)?))
+    Ok((
+        try_distance(a, b, samples, seed)?,
+        try_distance(b, a, samples, seed)?,
+    ))
 }
 
 /// Distance from A to the surface already indexed in `bvh` (build the tree
@@ -117,7 +120,9 @@ pub fn distance_to_bvh(
     seed: u64,
 ) -> Result<DistanceReport, MeshError> {
     if samples == 0 {
-        return Err(MeshError::Empty { what: "a distance needs at least one sample" });
+        return Err(MeshError::Empty {
+            what: "a distance needs at least one sample",
+        });
     }
     let sampler = AreaSampler::new(a.0, a.1)?;
     let (lo, hi) = bvh.bounds();
@@ -139,7 +144,9 @@ pub fn distance_to_bvh(
             let mut acc = Block::new();
             let mut hint = None;
             for &(_, i, p) in &pts {
-                let (d2, _, t) = bvh.search(p, f64::INFINITY, hint).unwrap_or((f64::NAN, p, 0));
+                let (d2, _, t) = bvh
+                    .search(p, f64::INFINITY, hint)
+                    .unwrap_or((f64::NAN, p, 0));
                 hint = Some(t);
                 let d = d2.sqrt();
                 acc.sum += d;
@@ -191,7 +198,13 @@ struct Block {
 
 impl Block {
     fn new() -> Self {
-        Block { sum: 0.0, sum2: 0.0, max: -1.0, max_index: u64::MAX, max_point: [0.0; 3] }
+        Block {
+            sum: 0.0,
+            sum2: 0.0,
+            max: -1.0,
+            max_index: u64::MAX,
+            max_point: [0.0; 3],
+        }
     }
 }
 
@@ -199,7 +212,11 @@ impl Block {
 /// coordinate.
 fn morton(p: [f64; 3], lo: [f64; 3], hi: [f64; 3]) -> u64 {
     let spread = |x: f64, l: f64, h: f64| -> u64 {
-        let t = if h > l { ((x - l) / (h - l)).clamp(0.0, 1.0) } else { 0.0 };
+        let t = if h > l {
+            ((x - l) / (h - l)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         let mut v = (t * f64::from((1u32 << 21) - 1)) as u64;
         v = (v | v << 32) & 0x001F_0000_0000_FFFF;
         v = (v | v << 16) & 0x001F_0000_FF00_00FF;
@@ -225,11 +242,19 @@ struct AreaSampler<'a> {
 impl<'a> AreaSampler<'a> {
     fn new(positions: &'a [[f64; 3]], faces: &'a [[u32; 3]]) -> Result<Self, MeshError> {
         let nv = positions.len();
-        if let Some(face) =
-            faces.par_iter().position_first(|f| f.iter().any(|&i| i as usize >= nv))
+        if let Some(face) = faces
+            .par_iter()
+            .position_first(|f| f.iter().any(|&i| i as usize >= nv))
         {
-            let index = *faces[face].iter().find(|&&i| i as usize >= nv).expect("found above");
-            return Err(MeshError::IndexOutOfRange { face, index, vertices: nv });
+            let index = *faces[face]
+                .iter()
+                .find(|&&i| i as usize >= nv)
+                .expect("found above");
+            return Err(MeshError::IndexOutOfRange {
+                face,
+                index,
+                vertices: nv,
+            });
         }
         let areas: Vec<f64> = faces
             .par_iter()
@@ -253,9 +278,17 @@ impl<'a> AreaSampler<'a> {
             cum.push(total);
         }
         let Some(last) = last else {
-            return Err(MeshError::Empty { what: "mesh A has no face with positive area to sample" });
+            return Err(MeshError::Empty {
+                what: "mesh A has no face with positive area to sample",
+            });
         };
-        Ok(Self { positions, faces, cum, total, last })
+        Ok(Self {
+            positions,
+            faces,
+            cum,
+            total,
+            last,
+        })
     }
 
     /// Sample `i` of the run seeded with `seed`.
@@ -332,11 +365,21 @@ mod tests {
             try_distance((&flat, &[[0, 1, 2]]), (&p, &f), 10, 0),
             Err(MeshError::Empty { .. })
         ));
-        assert!(matches!(try_distance((&p, &f), (&p, &[]), 10, 0), Err(MeshError::Empty { .. })));
-        assert!(matches!(try_distance((&p, &f), (&p, &f), 0, 0), Err(MeshError::Empty { .. })));
+        assert!(matches!(
+            try_distance((&p, &f), (&p, &[]), 10, 0),
+            Err(MeshError::Empty { .. })
+        ));
+        assert!(matches!(
+            try_distance((&p, &f), (&p, &f), 0, 0),
+            Err(MeshError::Empty { .. })
+        ));
         assert!(matches!(
             try_distance((&p, &[[0, 1, 9]]), (&p, &f), 10, 0),
-            Err(MeshError::IndexOutOfRange { face: 0, index: 9, vertices: 4 })
+            Err(MeshError::IndexOutOfRange {
+                face: 0,
+                index: 9,
+                vertices: 4
+            })
         ));
     }
 }

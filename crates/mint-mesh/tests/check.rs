@@ -161,7 +161,14 @@ fn bowtie_is_a_non_manifold_vertex_with_non_simple_boundary() {
 fn single_triangle() {
     let p = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
     let r = check(&p, &[[0, 1, 2]]);
-    assert_eq!((r.boundary_edges, r.boundary_loops, r.non_simple_boundary_edges), (3, 1, 0));
+    assert_eq!(
+        (
+            r.boundary_edges,
+            r.boundary_loops,
+            r.non_simple_boundary_edges
+        ),
+        (3, 1, 0)
+    );
     assert_eq!(r.surface_area, 0.5);
 }
 
@@ -239,7 +246,12 @@ fn duplicate_and_degenerate_faces() {
 
 #[test]
 fn degeneracy_is_exact_not_epsilon() {
-    let p = vec![[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0 + 1e-15], [3.0, 3.0, 3.0]];
+    let p = vec![
+        [0.0, 0.0, 0.0],
+        [1.0, 1.0, 1.0],
+        [2.0, 2.0, 2.0 + 1e-15],
+        [3.0, 3.0, 3.0],
+    ];
     // 0,1,2 are not collinear (by 1e-15); 0,1,3 are.
     assert_eq!(check(&p, &[[0, 1, 2]]).degenerate_faces, 0);
     assert_eq!(check(&p, &[[0, 1, 3]]).degenerate_faces, 1);
@@ -254,7 +266,10 @@ fn unreferenced_vertices_and_empty_meshes() {
     let mut m = tetrahedron();
     m.0.push([5.0, 5.0, 5.0]);
     let r = report(&m);
-    assert_eq!((r.vertices, r.referenced_vertices, r.unreferenced_vertices), (5, 4, 1));
+    assert_eq!(
+        (r.vertices, r.referenced_vertices, r.unreferenced_vertices),
+        (5, 4, 1)
+    );
     assert_eq!(r.bbox_max, Some([5.0; 3]));
     assert!(r.watertight);
 
@@ -275,7 +290,11 @@ fn out_of_range_index_is_a_typed_error() {
     f[2] = [0, 1, 7];
     assert_eq!(
         try_check(&m.0, &f).unwrap_err(),
-        MeshError::IndexOutOfRange { face: 2, index: 7, vertices: 4 }
+        MeshError::IndexOutOfRange {
+            face: 2,
+            index: 7,
+            vertices: 4
+        }
     );
 }
 
@@ -296,8 +315,14 @@ fn same_report_under_every_thread_count() {
     let n = m.1.len();
     m.1.remove(n / 2);
     m.1[n / 3].swap(0, 1);
-    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let two = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
     let r1 = one.install(|| report(&m));
     let r2 = two.install(|| report(&m));
     assert_eq!(r1, r2);
@@ -309,8 +334,10 @@ fn same_report_under_every_thread_count() {
 /// Naive reference: maps of edges and per-vertex fans, for cross-checking.
 fn reference(nv: usize, faces: &[[u32; 3]]) -> [u64; 5] {
     let mut edges: BTreeMap<(u32, u32), (u32, u32)> = BTreeMap::new();
-    let proper: Vec<&[u32; 3]> =
-        faces.iter().filter(|f| f[0] != f[1] && f[1] != f[2] && f[0] != f[2]).collect();
+    let proper: Vec<&[u32; 3]> = faces
+        .iter()
+        .filter(|f| f[0] != f[1] && f[1] != f[2] && f[0] != f[2])
+        .collect();
     for f in &proper {
         for k in 0..3 {
             let (a, b) = (f[k], f[(k + 1) % 3]);
@@ -324,7 +351,10 @@ fn reference(nv: usize, faces: &[[u32; 3]]) -> [u64; 5] {
     }
     let boundary = edges.values().filter(|e| e.0 + e.1 == 1).count() as u64;
     let nme = edges.values().filter(|e| e.0 + e.1 >= 3).count() as u64;
-    let inc = edges.values().filter(|e| e.0 + e.1 == 2 && e.0 != 1).count() as u64;
+    let inc = edges
+        .values()
+        .filter(|e| e.0 + e.1 == 2 && e.0 != 1)
+        .count() as u64;
     // Fans: faces around v joined when they share an edge {v, w}.
     let mut nmv = 0;
     for v in 0..nv as u32 {
@@ -334,7 +364,10 @@ fn reference(nv: usize, faces: &[[u32; 3]]) -> [u64; 5] {
             let mut changed = false;
             for i in 0..around.len() {
                 for j in 0..around.len() {
-                    let shared = around[i].iter().filter(|&&w| w != v && around[j].contains(&w)).count();
+                    let shared = around[i]
+                        .iter()
+                        .filter(|&&w| w != v && around[j].contains(&w))
+                        .count();
                     if shared > 0 && class[i] != class[j] {
                         let m = class[i].min(class[j]);
                         class[i] = m;

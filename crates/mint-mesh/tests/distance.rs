@@ -60,15 +60,14 @@ fn bvh_nearest_agrees_with_brute_force_on_a_sphere() {
     for _ in 0..300 {
         let p: [f64; 3] = std::array::from_fn(|_| s.next_f64() * 4.0 - 2.0);
         let (d, q, id) = bvh.nearest(p);
-        let brute = m
-            .1
-            .iter()
-            .map(|f| {
-                let [a, b, c] = f.map(|i| m.0[i as usize]);
-                let q = mint_mesh::closest_point_on_triangle(p, a, b, c);
-                ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
-            })
-            .fold(f64::INFINITY, f64::min);
+        let brute =
+            m.1.iter()
+                .map(|f| {
+                    let [a, b, c] = f.map(|i| m.0[i as usize]);
+                    let q = mint_mesh::closest_point_on_triangle(p, a, b, c);
+                    ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+                })
+                .fold(f64::INFINITY, f64::min);
         assert_eq!(d, brute);
         let f = m.1[id as usize].map(|i| m.0[i as usize]);
         assert_eq!(mint_mesh::closest_point_on_triangle(p, f[0], f[1], f[2]), q);

@@ -37,7 +37,7 @@ use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
 /// Triangles per chunk handed from the reader to the workers.
-const CHUNK_TRIANGLES: usize = 16 * 1024;
+const CHUNK_TRIANGLES: usize = 64 * 1024;
 /// Estimated heap bytes per stored record while its slab is reconstructed:
 /// the record, its vertex, about two faces, active-cell ids, and slack.
 pub const BYTES_PER_RECORD_IN_SLAB: u64 = 128;
@@ -161,7 +161,7 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
     let out_format = Format::from_path(output)?;
     let mut reader = MeshReader::open(
         input,
-        ReadOptions { chunk_triangles: CHUNK_TRIANGLES, spill_dir: Some(tmp_root.clone()), resolve_positions: true },
+        ReadOptions { chunk_triangles: CHUNK_TRIANGLES, spill_dir: Some(tmp_root.clone()), resolve_positions: false },
     )?;
     let mut summary = ResampleSummary {
         input: input.display().to_string(),
@@ -300,25 +300,48 @@ fn check_cancel(progress: &dyn Progress) -> Result<(), PipelineError> {
     }
 }
 
-/// The bounding box of all vertices, read from the map. (Single-threaded:
-/// the reader is not `Sync`; this pass runs at memory speed.)
-fn bounds(reader: &MeshReader, path: &Path, _threads: usize, progress: &dyn Progress) -> Result<([f64; 3], [f64; 3]), PipelineError> {
-    let n = reader.vertex_count();
-    progress.start(Phase::Bounds, n as u64);
+/// The bounding box of all vertices, read from the map in parallel. Also
+/// the check that every vertex is finite, so that workers resolving indices
+/// later need not check again.
+fn bounds(reader: &MeshReader, path: &Path, threads: usize, progress: &dyn Progress) -> Result<([f64; 3], [f64; 3]), PipelineError> {
+    let positions = reader.positions();
+    let n = positions.len() as u64;
+    progress.start(Phase::Bounds, n);
+    let per = n.div_ceil(threads as u64).max(1);
+    let parts: Vec<Result<([f64; 3], [f64; 3]), PipelineError>> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads as u64)
+            .map(|t| {
+                let positions = &positions;
+                s.spawn(move || {
+                    let mut lo = [f64::INFINITY; 3];
+                    let mut hi = [f64::NEG_INFINITY; 3];
+                    let (a, b) = ((t * per).min(n), ((t + 1) * per).min(n));
+                    for i in a..b {
+                        let p = positions.get(i as u32);
+                        if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
+                            return Err(PipelineError::NonFinite { path: path.to_path_buf(), index: i, x: p[0], y: p[1], z: p[2] });
+                        }
+                        for d in 0..3 {
+                            lo[d] = lo[d].min(p[d]);
+                            hi[d] = hi[d].max(p[d]);
+                        }
+                        if (i - a) % (1 << 20) == (1 << 20) - 1 {
+                            progress.advance(1 << 20);
+                        }
+                    }
+                    Ok((lo, hi))
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().expect("bounds worker panicked")).collect()
+    });
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for i in 0..n {
-        let p = reader.vertex(i);
-        if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
-            return Err(PipelineError::NonFinite { path: path.to_path_buf(), index: i as u64, x: p[0], y: p[1], z: p[2] });
-        }
+    for part in parts {
+        let (l, h) = part?;
         for d in 0..3 {
-            lo[d] = lo[d].min(p[d]);
-            hi[d] = hi[d].max(p[d]);
-        }
-        if i % (1 << 20) == 0 {
-            progress.advance((1u64 << 20).min((n - i) as u64));
-            check_cancel(progress)?;
+            lo[d] = lo[d].min(l[d]);
+            hi[d] = hi[d].max(h[d]);
         }
     }
     progress.finish();
@@ -337,6 +360,8 @@ fn discretize_all(
 ) -> Result<(u64, f64), PipelineError> {
     use crossbeam_channel::bounded;
     let [_, nb, _] = grid.local_dims();
+    let positions = reader.positions();
+    let positions = &positions;
     let (chunk_tx, chunk_rx) = bounded::<(usize, TriangleChunk)>(threads * 2);
     let (free_tx, free_rx) = bounded::<TriangleChunk>(threads * 3 + 2);
     let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
@@ -348,10 +373,12 @@ fn discretize_all(
             let (chunk_rx, free_tx, rec_tx) = (chunk_rx.clone(), free_tx.clone(), rec_tx.clone());
             s.spawn(move || {
                 for (seq, chunk) in chunk_rx {
-                    let mut recs = Vec::with_capacity(chunk.positions.len() / 4 + 16);
+                    let mut recs = Vec::with_capacity(chunk.indices.len() / 4 + 16);
                     let mut volume = 0.0;
-                    for tri in &chunk.positions {
-                        let local = tri.map(|p| grid.to_local(p));
+                    for tri in &chunk.indices {
+                        // Indices were range-checked by the reader; positions
+                        // were checked finite by the bounds pass.
+                        let local = [grid.to_local(positions.get(tri[0])), grid.to_local(positions.get(tri[1])), grid.to_local(positions.get(tri[2]))];
                         volume += signed_volume6(&local);
                         discretize_triangle(&local, |c| recs.push(crossing_to_intercept(&c, nb)));
                     }
@@ -382,7 +409,7 @@ fn discretize_all(
                 if !reader.next_chunk(&mut chunk)? {
                     return Ok(());
                 }
-                let n = chunk.positions.len() as u64;
+                let n = chunk.indices.len() as u64;
                 faces += n;
                 if chunk_tx.send((seq, chunk)).is_err() {
                     return Ok(()); // workers gone: the writer failed; its error follows
