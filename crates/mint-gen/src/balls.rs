@@ -43,7 +43,8 @@ impl BallLattice {
     /// The lattice for about `target_faces` faces: `max(1, round(target /
     /// 120))` balls, so within 60 faces of the target (at least 120).
     pub fn for_faces(target_faces: u64, seed: u64) -> Self {
-        let count = ((target_faces + Self::FACES_PER_BALL / 2) / Self::FACES_PER_BALL).max(1);
+        let count =
+            (target_faces.saturating_add(Self::FACES_PER_BALL / 2) / Self::FACES_PER_BALL).max(1);
         let mut side = (count as f64).cbrt().round() as u64;
         while side.pow(3) < count {
             side += 1;

@@ -46,7 +46,9 @@ impl SphereGrid {
     /// targets of 100 or more, often 0; below 12 faces the result is the
     /// 6-face bipyramid (`R = 2, S = 3`) or a 2-band one.
     pub fn for_faces(target_faces: u64) -> Self {
-        let t = target_faces.max(6) as f64;
+        // Beyond 2³⁶ faces the vertices overflow u32 anyway; clamping keeps
+        // the search short.
+        let t = target_faces.clamp(6, 1 << 36) as f64;
         let m0 = (t / 4.0).sqrt(); // F ≈ 4 m² with m = R - 1, S ≈ 2m
         let lo = ((m0 * 0.75).floor() as u64).max(1);
         let hi = (m0 * 1.3).ceil() as u64 + 2;

@@ -31,7 +31,8 @@ impl TorusGrid {
     /// `major/minor ≥ 3`, often exact. At least 18 faces.
     pub fn for_faces(target_faces: u64, major: f64, minor: f64) -> Self {
         let k = (major / minor).max(1.0);
-        let t = target_faces.max(18) as f64;
+        // Beyond 2³⁶ faces the vertices overflow u32 anyway.
+        let t = target_faces.clamp(18, 1 << 36) as f64;
         let w0 = (t / (2.0 * k)).sqrt();
         let lo = ((w0 * 0.6).floor() as u64).max(3);
         let hi = ((w0 * 1.5).ceil() as u64).max(3) + 2;
@@ -135,6 +136,28 @@ mod tests {
             let rel = g.faces().abs_diff(t) as f64 / t as f64;
             assert!(rel < if t >= 10_000 { 0.01 } else { 0.05 }, "{t}: {g:?}");
         }
+    }
+
+    #[test]
+    fn absurd_targets_fail_fast() {
+        let mut s = mint_core::CountingSink::default();
+        assert!(matches!(
+            torus([0.0; 3], 2.0, 1.0, u64::MAX, &mut s),
+            Err(GenError::TooManyVertices { .. })
+        ));
+        assert!(matches!(
+            crate::sphere([0.0; 3], 1.0, u64::MAX, &mut s),
+            Err(GenError::TooManyVertices { .. })
+        ));
+        assert!(matches!(
+            crate::genus(2, u64::MAX, &mut s),
+            Err(GenError::TooManyVertices { .. })
+        ));
+        assert!(matches!(
+            crate::components(u64::MAX, 0, &mut s),
+            Err(GenError::TooManyVertices { .. })
+        ));
+        assert_eq!(s.faces, 0);
     }
 
     #[test]

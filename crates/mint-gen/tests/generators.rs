@@ -8,7 +8,6 @@ use mint_gen::{
     Generated, ScanDefects, ScanOptions, TriMesh,
 };
 use mint_mesh::{check, CheckReport};
-use std::time::Instant;
 
 fn assert_clean(m: &TriMesh, g: &Generated) -> CheckReport {
     let r = check(&m.positions, &m.faces);
@@ -329,16 +328,13 @@ fn scan_like_vertices_lie_on_the_noisy_surface() {
     assert!(spread.1 - spread.0 > 0.02, "{spread:?}");
 }
 
+/// Counts only; speed is measured by `examples/speed.rs`, not by tests.
 #[test]
-fn five_million_face_sphere_streams_quickly() {
+fn five_million_face_sphere_streams_with_exact_counts() {
     let mut s = CountingSink::default();
-    let t = Instant::now();
     let g = sphere([0.0; 3], 1.0, 5_000_000, &mut s).unwrap();
-    let dt = t.elapsed();
     assert_eq!((s.vertices, s.faces), (g.vertices, g.faces));
     assert!(g.faces.abs_diff(5_000_000) < 2_000);
-    let limit = if cfg!(debug_assertions) { 30.0 } else { 2.0 };
-    assert!(dt.as_secs_f64() < limit, "{dt:?}");
 }
 
 #[test]
