@@ -2,5 +2,6 @@
 //! Heavy cases are `#[ignore]`d and run by hand; see each module.
 
 mod common;
+mod cli;
 mod core_props;
 mod resample;

@@ -386,7 +386,16 @@ fn cmd_convert(a: ConvertArgs) -> Result<()> {
     .with_context(|| format!("converting {} to {}", a.input.display(), a.output.display()))?;
     bars.finish();
     if !a.quiet {
-        eprintln!("converted {} -> {}: {:?}", a.input.display(), a.output.display(), summary);
+        eprintln!(
+            "converted {} ({:?}) -> {} ({:?}): {} vertices, {} triangles, {}",
+            a.input.display(),
+            summary.input_format,
+            a.output.display(),
+            summary.output_format,
+            summary.vertices_written,
+            summary.triangles,
+            human_bytes(summary.bytes_written)
+        );
     }
     Ok(())
 }
@@ -526,7 +535,14 @@ fn cmd_gen(a: GenArgs) -> Result<()> {
     if a.json {
         println!("{}", serde_json::to_string_pretty(&generated)?);
     } else {
-        eprintln!("generated {:?} -> {}: {:?}", a.shape, a.output.display(), written);
+        eprintln!(
+            "generated {:?}: {} vertices, {} faces -> {} ({})",
+            a.shape,
+            written.vertices,
+            written.faces,
+            a.output.display(),
+            human_bytes(written.bytes)
+        );
         if defects.is_some() {
             eprintln!("defects listed in {}", sidecar_path(&a.output).display());
         }
