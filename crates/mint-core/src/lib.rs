@@ -7,7 +7,8 @@
 //! - [`discretize`]: one triangle → its signed [`Crossing`]s with grid lines;
 //! - [`intercept`]: the 16-byte [`Intercept`] record, per-line sorting and the removal filter;
 //! - [`mc_table`]: the generated marching-cubes table;
-//! - [`reconstruct`]: one layer of cells → vertices and triangles;
+//! - [`reconstruct`]: one layer of cells → vertices and triangles (the paper's strict rule);
+//! - [`signs`], [`robust`]: sign rules for dirty scans and the state-first reconstruction;
 //! - [`sink`]: the [`MeshSink`] trait through which meshes leave algorithms.
 
 pub mod discretize;
@@ -16,6 +17,8 @@ pub mod intercept;
 pub mod mc_table;
 pub mod predicates;
 pub mod reconstruct;
+pub mod robust;
+pub mod signs;
 pub mod sink;
 
 pub use discretize::{discretize_triangle, Crossing, MARGIN};

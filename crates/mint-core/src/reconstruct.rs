@@ -120,7 +120,7 @@ pub fn reconstruct_slab(grid: &Grid, k0: u32, planes: &[Vec<Intercept>], max_lis
 
 /// Collects the ids `j * na + i` of the cells of the layer between `lower`
 /// and `upper` that have an intercept on an edge, sorted and unique.
-fn active_cells(lower: &PlaneLines, upper: &PlaneLines, na: u32, nb: u32, cells: &mut Vec<u64>) {
+pub(crate) fn active_cells(lower: &PlaneLines, upper: &PlaneLines, na: u32, nb: u32, cells: &mut Vec<u64>) {
     cells.clear();
     let mut mark = |i: i64, j: i64| {
         if i >= 0 && j >= 0 && (i as u32) < na && (j as u32) < nb {
@@ -252,6 +252,51 @@ where
         sink.face(*f)?;
     }
     Ok(result)
+}
+
+/// [`resample_in_core`] under a sign rule: `Orient` is the strict path;
+/// `Union`, `Parity` and `Auto` (resolved by a census of all planes) use the
+/// robust state-first reconstruction of [`crate::robust`].
+pub fn resample_in_core_with<I>(
+    grid: &Grid,
+    triangles: I,
+    rule: crate::signs::SignRule,
+    sink: &mut dyn crate::MeshSink,
+) -> Result<(SlabResult, crate::signs::RepairStats, crate::signs::SignRule), crate::SinkError>
+where
+    I: IntoIterator<Item = [[f64; 3]; 3]>,
+{
+    use crate::signs::SignRule;
+    if rule == SignRule::Orient {
+        let r = resample_in_core(grid, triangles, sink)?;
+        return Ok((r, Default::default(), SignRule::Orient));
+    }
+    let [_, nb, ns] = grid.local_dims();
+    let mut planes: Vec<Vec<Intercept>> = vec![Vec::new(); ns as usize + 1];
+    for t in triangles {
+        let local = t.map(|p| grid.to_local(p));
+        crate::discretize::discretize_triangle(&local, |c| {
+            let r = crossing_to_intercept(&c, nb);
+            planes[r.plane as usize].push(r);
+        });
+    }
+    let rule = if rule == SignRule::Auto {
+        let mut census = crate::signs::LineCensus::default();
+        for p in &mut planes {
+            census += crate::robust::census_plane(p);
+        }
+        census.resolve()
+    } else {
+        rule
+    };
+    let (result, repair) = crate::robust::reconstruct_slab_robust(grid, 0, planes, rule);
+    for v in &result.vertices {
+        sink.vertex(*v)?;
+    }
+    for f in &result.faces {
+        sink.face(*f)?;
+    }
+    Ok((result, repair, rule))
 }
 
 /// Packs a crossing of a triangle in local grid coordinates into its record.

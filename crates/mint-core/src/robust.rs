@@ -1,0 +1,468 @@
+//! Robust reconstruction for dirty scans: node states first, then exactly
+//! one vertex on every edge whose end states differ.
+//!
+//! The paper's reconstruction ([`crate::reconstruct::reconstruct_slab`])
+//! trusts the intercepts: a cell whose edges disagree with its nodes is
+//! *non-canonical* and left empty, which leaves holes. Here the order is
+//! reversed. Every node of a plane first gets one state from the sign rules
+//! of [`crate::signs`] ([`NodeStates`]); then every edge whose two end
+//! states differ gets exactly one vertex:
+//! - the intercepts of that cell edge are filtered as usual (discordant
+//!   pairs removed), and those whose sign matches the change (entering when
+//!   going from outside to inside along the axis) are merged into their mean
+//!   — overlapping layers become one vertex;
+//! - with no matching intercept, the mean of the others;
+//! - with no intercept at all (a hole in the input), a vertex at the
+//!   edge's midpoint is *synthesized*.
+//! Intercepts on edges with equal end states are dropped (detail below a
+//! cell). Because every cell is then canonical by construction, the
+//! marching-cubes table's guarantee applies to the whole output: it is a
+//! closed, oriented 2-manifold for *any* input, and holes of any size are
+//! closed by the states around them (see docs/INVARIANTS.md).
+//!
+//! Vertex ids follow the same scheme as the strict path: per plane, the
+//! final records sorted (A, then B, then S of the layer above), planes in
+//! order; a plane's A/B records and states depend on that plane alone, and
+//! its S records on it and the plane above, so the output is the same for
+//! any slab partition.
+
+use crate::grid::Grid;
+use crate::intercept::{filter_plane, Intercept, PlaneLines, FAMILY_A, FAMILY_B, FAMILY_S};
+use crate::mc_table::{corner_offset, mc_table, EDGE_CORNERS};
+use crate::reconstruct::{active_cells, intercept_local_position, SlabResult};
+use crate::signs::{effective_rule, lines, nearest_vote, resign_parity, winding_valid, LineCensus, NodeStates, RepairStats, SignRule};
+use crate::MARGIN;
+
+/// One plane after its states and A/B vertices are decided.
+struct Prepared {
+    /// One record per A/B edge with a state change, sorted.
+    ab: Vec<Intercept>,
+    /// The plane's raw family-S records (layer above), sorted.
+    s_raw: Vec<Intercept>,
+    states: NodeStates,
+}
+
+/// A line after filtering under its effective rule.
+struct Line {
+    records: Vec<Intercept>,
+    /// None: inconsistent (odd count): states come from elsewhere.
+    rule: Option<SignRule>,
+}
+
+/// Filters one line's raw records (sorted) under `rule` (Union or Parity).
+fn filter_line(raw: &[Intercept], rule: SignRule) -> Line {
+    let mut own = raw.to_vec();
+    filter_plane(&mut own);
+    if rule == SignRule::Union && winding_valid(&own) {
+        return Line { records: own, rule: Some(SignRule::Union) };
+    }
+    let eff = effective_rule(&own, rule);
+    if own.len() % 2 == 1 {
+        return Line { records: own, rule: None };
+    }
+    debug_assert_eq!(eff, SignRule::Parity);
+    let mut p = raw.to_vec();
+    resign_parity(&mut p);
+    filter_plane(&mut p);
+    Line { records: p, rule: Some(SignRule::Parity) }
+}
+
+/// The census of one plane's A/B lines (for resolving [`SignRule::Auto`]):
+/// validity is judged after the removal filter, as reconstruction does.
+pub fn census_plane(raw: &mut [Intercept]) -> LineCensus {
+    raw.sort_unstable_by_key(|r| r.sort_key());
+    let mut c = LineCensus::default();
+    for range in lines(raw) {
+        if raw[range.start].family() > FAMILY_B {
+            break;
+        }
+        let mut own = raw[range].to_vec();
+        filter_plane(&mut own);
+        if own.is_empty() {
+            continue;
+        }
+        c.lines += 1;
+        if winding_valid(&own) {
+            c.winding_valid += 1;
+        }
+        if own.len() % 2 == 1 {
+            c.odd += 1;
+        }
+    }
+    c
+}
+
+/// Walks a valid line and sets the states of its nodes in `row_set`.
+fn line_states(line: &Line, n_nodes: u32, mut set: impl FnMut(u32)) {
+    let mut w = 0i64;
+    let mut next_node = 0u32;
+    for (k, r) in line.records.iter().enumerate() {
+        let c = r.cell();
+        // Nodes next_node ..= c lie before this record.
+        let inside = match line.rule {
+            Some(SignRule::Parity) => k % 2 == 1,
+            _ => w > 0,
+        };
+        if inside {
+            for i in next_node..=c.min(n_nodes - 1) {
+                set(i);
+            }
+        }
+        next_node = next_node.max(c + 1);
+        w += if r.entering() { 1 } else { -1 };
+    }
+    let inside = match line.rule {
+        Some(SignRule::Parity) => line.records.len() % 2 == 1,
+        _ => w > 0,
+    };
+    if inside {
+        for i in next_node..n_nodes {
+            set(i);
+        }
+    }
+}
+
+/// Picks the one vertex of an edge with a state change from the records of
+/// that cell edge (sorted by position); `None` means synthesize.
+fn select(cell_records: &[Intercept], entering: bool, rule: SignRule, stats: &mut RepairStats) -> Option<f64> {
+    if cell_records.is_empty() {
+        return None;
+    }
+    let mut v = cell_records.to_vec();
+    if rule == SignRule::Parity {
+        // Alternate from the change's sign, as the line would.
+        for (k, r) in v.iter_mut().enumerate() {
+            let e = if k % 2 == 0 { entering } else { !entering };
+            let x = r.value();
+            r.signed_value = if e { x } else { -x };
+        }
+    }
+    filter_plane(&mut v);
+    let matching: Vec<f64> = v.iter().filter(|r| r.entering() == entering).map(|r| r.value()).collect();
+    let pick = if !matching.is_empty() { matching } else { cell_records.iter().map(|r| r.value()).collect() };
+    if pick.len() > 1 {
+        stats.merged_edges += 1;
+    }
+    Some(pick.iter().sum::<f64>() / pick.len() as f64)
+}
+
+fn vertex_record(plane: u32, family: u32, index: u32, cell: u32, value: Option<f64>, entering: bool, stats: &mut RepairStats) -> Intercept {
+    let c = cell as f64;
+    let v = match value {
+        Some(v) => v.clamp(c + MARGIN, c + 1.0 - MARGIN),
+        None => {
+            stats.synthesized_vertices += 1;
+            c + 0.5
+        }
+    };
+    Intercept::new(plane, family, index, v, entering)
+}
+
+/// Decides a plane's node states and its A/B edge vertices.
+fn prepare_plane(mut raw: Vec<Intercept>, plane: u32, na: u32, nb: u32, rule: SignRule, stats: &mut RepairStats) -> Prepared {
+    raw.sort_unstable_by_key(|r| r.sort_key());
+    let s_start = raw.partition_point(|r| r.family() < FAMILY_S);
+    let s_raw = raw.split_off(s_start);
+    // Filter every A and B line under the rule.
+    let mut a_lines: Vec<Option<Line>> = (0..=nb).map(|_| None).collect();
+    let mut b_lines: Vec<Option<Line>> = (0..=na).map(|_| None).collect();
+    for range in lines(&raw) {
+        let r0 = raw[range.start];
+        let line = filter_line(&raw[range.clone()], rule);
+        if line.rule.is_none() {
+            stats.inconsistent_lines += 1;
+        }
+        if r0.family() == FAMILY_A {
+            a_lines[r0.index() as usize] = Some(line);
+        } else {
+            b_lines[r0.index() as usize] = Some(line);
+        }
+    }
+    // States: from the A line when it is consistent, else from the B line,
+    // else from the nearest intercept's orientation.
+    let mut states = NodeStates::new(na, nb);
+    for j in 0..=nb {
+        match &a_lines[j as usize] {
+            None => {}
+            Some(l) if l.rule.is_some() => line_states(l, na + 1, |i| states.set(i, j)),
+            Some(l) => {
+                for i in 0..=na {
+                    let from_b = b_lines[i as usize].as_ref().map(|b| match b.rule {
+                        Some(_) => state_on(b, j),
+                        None => None,
+                    });
+                    let s = match from_b {
+                        Some(Some(s)) => s,
+                        Some(None) => nearest_vote(&l.records, i),
+                        None => false, // the B line has no intercept: outside
+                    };
+                    if s {
+                        states.set(i, j);
+                    }
+                }
+            }
+        }
+    }
+    // One vertex per A edge and per B edge whose end states differ.
+    let mut ab = Vec::new();
+    let empty = Line { records: Vec::new(), rule: Some(rule) };
+    let mut used = 0u64;
+    let mut total = 0u64;
+    for j in 0..=nb {
+        let l = a_lines[j as usize].as_ref().unwrap_or(&empty);
+        total += l.records.len() as u64;
+        for i in 0..na {
+            let (s0, s1) = (states.get(i, j), states.get(i + 1, j));
+            if s0 != s1 {
+                let cell = cell_slice(&l.records, i);
+                used += cell.len() as u64;
+                let v = select(cell, s1, l.rule.unwrap_or(rule), stats);
+                ab.push(vertex_record(plane, FAMILY_A, j, i, v, s1, stats));
+            }
+        }
+    }
+    for i in 0..=na {
+        let l = b_lines[i as usize].as_ref().unwrap_or(&empty);
+        total += l.records.len() as u64;
+        for j in 0..nb {
+            let (s0, s1) = (states.get(i, j), states.get(i, j + 1));
+            if s0 != s1 {
+                let cell = cell_slice(&l.records, j);
+                used += cell.len() as u64;
+                let v = select(cell, s1, l.rule.unwrap_or(rule), stats);
+                ab.push(vertex_record(plane, FAMILY_B, i, j, v, s1, stats));
+            }
+        }
+    }
+    stats.dropped_intercepts += total - used;
+    Prepared { ab, s_raw, states }
+}
+
+/// The state a consistent line gives node `node`.
+fn state_on(l: &Line, node: u32) -> Option<bool> {
+    let before = l.records.partition_point(|r| r.cell() < node);
+    match l.rule {
+        Some(SignRule::Parity) => Some(before % 2 == 1),
+        Some(_) => Some(l.records[..before].iter().map(|r| if r.entering() { 1i64 } else { -1 }).sum::<i64>() > 0),
+        None => None,
+    }
+}
+
+fn cell_slice(records: &[Intercept], cell: u32) -> &[Intercept] {
+    let a = records.partition_point(|r| r.cell() < cell);
+    let b = a + records[a..].partition_point(|r| r.cell() == cell);
+    &records[a..b]
+}
+
+/// The family-S vertices of layer `k` (between planes with `lower` and
+/// `upper` states), one per node whose state changes across the layer.
+fn layer_s_vertices(s_raw: &[Intercept], lower: &NodeStates, upper: &NodeStates, k: u32, na: u32, nb: u32, rule: SignRule, stats: &mut RepairStats) -> Vec<Intercept> {
+    let mut out = Vec::new();
+    let lines_view = PlaneLines::new(s_raw);
+    let mut used = 0usize;
+    for i in 0..=na {
+        for j in 0..=nb {
+            let (s0, s1) = (lower.get(i, j), upper.get(i, j));
+            if s0 == s1 {
+                continue;
+            }
+            let idx = i * (nb + 1) + j;
+            let range = lines_view.line(FAMILY_S, idx);
+            used += range.len();
+            let v = select(&s_raw[range], s1, rule, stats);
+            out.push(vertex_record(k, FAMILY_S, idx, k, v, s1, stats));
+        }
+    }
+    stats.dropped_intercepts += (s_raw.len() - used) as u64;
+    out
+}
+
+/// Robust reconstruction of layers `k0 .. k0 + planes.len() - 1` from the
+/// *raw* (unsorted, unfiltered) intercepts of planes `k0 ..= k1`, under
+/// `rule` (Union or Parity; resolve Auto first with [`census_plane`]).
+pub fn reconstruct_slab_robust(grid: &Grid, k0: u32, planes: Vec<Vec<Intercept>>, rule: SignRule) -> (SlabResult, RepairStats) {
+    assert!(matches!(rule, SignRule::Union | SignRule::Parity), "resolve the sign rule first");
+    let [na, nb, _] = grid.local_dims();
+    let mut stats = RepairStats::default();
+    let n = planes.len();
+    let prepared: Vec<Prepared> = planes
+        .into_iter()
+        .enumerate()
+        .map(|(p, raw)| prepare_plane(raw, k0 + p as u32, na, nb, rule, &mut stats))
+        .collect();
+    // Final records per owned plane: A/B, then the layer's S vertices.
+    let mut finals: Vec<Vec<Intercept>> = Vec::with_capacity(n);
+    for p in 0..n - 1 {
+        let mut f = prepared[p].ab.clone();
+        let mut s = layer_s_vertices(&prepared[p].s_raw, &prepared[p].states, &prepared[p + 1].states, k0 + p as u32, na, nb, rule, &mut stats);
+        s.sort_unstable_by_key(|r| r.sort_key());
+        f.extend(s);
+        finals.push(f);
+    }
+    finals.push(prepared[n - 1].ab.clone());
+    for f in &mut finals {
+        // A/B records were produced line by line in id order; keep one order.
+        f.sort_unstable_by_key(|r| r.sort_key());
+    }
+    let mut bases = Vec::with_capacity(n);
+    let mut total = 0u64;
+    for f in &finals {
+        bases.push(total as u32);
+        total += f.len() as u64;
+    }
+    let mut out = SlabResult::default();
+    let mut cells = Vec::new();
+    for layer in 0..n - 1 {
+        for r in &finals[layer] {
+            out.vertices.push(grid.to_world(intercept_local_position(r, nb)));
+        }
+        let lower = PlaneLines::new(&finals[layer]);
+        let upper = PlaneLines::new(&finals[layer + 1]);
+        active_cells(&lower, &upper, na, nb, &mut cells);
+        out.stats.active_cells += cells.len() as u64;
+        let k = k0 + layer as u32;
+        let st = [&prepared[layer].states, &prepared[layer + 1].states];
+        let pl = [&lower, &upper];
+        for &id in &cells {
+            let (i, j) = ((id % na as u64) as u32, (id / na as u64) as u32);
+            let mut code = 0u8;
+            for c in 0..8u8 {
+                let [x, y, z] = corner_offset(c);
+                if st[z as usize].get(i + x, j + y) {
+                    code |= 1 << c;
+                }
+            }
+            let mut ids = [u32::MAX; 12];
+            for e in 0..12u8 {
+                let [c0, c1] = EDGE_CORNERS[e as usize];
+                if ((code >> c0) & 1) == ((code >> c1) & 1) {
+                    continue;
+                }
+                let o = corner_offset(c0);
+                let (plane, range) = match e / 4 {
+                    0 => {
+                        let z = o[2] as usize;
+                        (z, pl[z].in_cell(pl[z].line(FAMILY_A, j + o[1]), i))
+                    }
+                    1 => {
+                        let z = o[2] as usize;
+                        (z, pl[z].in_cell(pl[z].line(FAMILY_B, i + o[0]), j))
+                    }
+                    _ => (0, lower.in_cell(lower.line(FAMILY_S, (i + o[0]) * (nb + 1) + (j + o[1])), k)),
+                };
+                assert_eq!(range.len(), 1, "robust reconstruction: edge {e} of cell ({i},{j},{k}) has {} vertices", range.len());
+                ids[e as usize] = bases[layer + plane] + range.start as u32;
+            }
+            for t in mc_table().triangles(code) {
+                out.faces.push(t.map(|e| ids[e as usize]));
+            }
+        }
+    }
+    out.stats.vertices = out.vertices.len() as u64;
+    out.stats.faces = out.faces.len() as u64;
+    (out, stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::grid::{Grid, GridSize};
+    use crate::reconstruct::resample_in_core_with;
+    use crate::signs::SignRule;
+    use crate::TriMesh;
+    use std::collections::HashMap;
+
+    fn sphere(c: [f64; 3], r: f64, n_lat: usize, n_lon: usize) -> Vec<[[f64; 3]; 3]> {
+        let p = |i: usize, j: usize| {
+            let th = std::f64::consts::PI * i as f64 / n_lat as f64;
+            let ph = 2.0 * std::f64::consts::PI * j as f64 / n_lon as f64;
+            [c[0] + r * th.sin() * ph.cos(), c[1] + r * th.sin() * ph.sin(), c[2] + r * th.cos()]
+        };
+        let mut t = Vec::new();
+        for i in 0..n_lat {
+            for j in 0..n_lon {
+                let (a, b, cc, d) = (p(i, j), p(i + 1, j), p(i + 1, j + 1), p(i, j + 1));
+                if i != 0 {
+                    t.push([a, b, d]);
+                }
+                if i != n_lat - 1 {
+                    t.push([b, cc, d]);
+                }
+            }
+        }
+        t
+    }
+
+    fn same(a: &TriMesh, b: &TriMesh, ctx: &str) {
+        assert_eq!(a.positions.len(), b.positions.len(), "{ctx}: vertex count");
+        assert_eq!(a.faces.len(), b.faces.len(), "{ctx}: face count");
+        if let Some(i) = (0..a.positions.len()).find(|&i| a.positions[i] != b.positions[i]) {
+            panic!("{ctx}: vertex {i} differs: {:?} vs {:?}", a.positions[i], b.positions[i]);
+        }
+        if let Some(i) = (0..a.faces.len()).find(|&i| a.faces[i] != b.faces[i]) {
+            let norm = |f: &[u32; 3]| { let k = (0..3).min_by_key(|&k| f[k]).unwrap(); [f[k], f[(k + 1) % 3], f[(k + 2) % 3]] };
+            let mut sa: Vec<_> = a.faces.iter().map(norm).collect();
+            let mut sb: Vec<_> = b.faces.iter().map(norm).collect();
+            sa.sort();
+            sb.sort();
+            eprintln!("{ctx}: as sets equal: {}", sa == sb);
+            panic!("{ctx}: face {i} differs: {:?} vs {:?}", a.faces[i], b.faces[i]);
+        }
+    }
+
+    fn closed(m: &TriMesh) -> bool {
+        let mut half = HashMap::new();
+        for f in &m.faces {
+            for i in 0..3 {
+                if half.insert((f[i], f[(i + 1) % 3]), ()).is_some() {
+                    return false;
+                }
+            }
+        }
+        half.keys().all(|&(a, b)| half.contains_key(&(b, a)))
+    }
+
+    fn run(tris: &[[[f64; 3]; 3]], rule: SignRule, cells: u64) -> (TriMesh, SignRule) {
+        let g = Grid::around([-1.5; 3], [1.5; 3], GridSize::Cells(cells), [0.1, 0.2, 0.3], None).unwrap();
+        let mut m = TriMesh::default();
+        let (_, _, r) = resample_in_core_with(&g, tris.iter().copied(), rule, &mut m).unwrap();
+        (m, r)
+    }
+
+    #[test]
+    fn clean_input_gives_the_same_mesh_under_every_rule() {
+        let s = sphere([0.0; 3], 1.0, 30, 60);
+        let (orient, _) = run(&s, SignRule::Orient, 20_000);
+        for rule in [SignRule::Union, SignRule::Parity, SignRule::Auto] {
+            let (m, _) = run(&s, rule, 20_000);
+            same(&m, &orient, &format!("{rule:?}"));
+        }
+    }
+
+    #[test]
+    fn flipped_faces_resolve_to_parity_and_match_the_clean_output() {
+        let s = sphere([0.0; 3], 1.0, 30, 60);
+        let flipped: Vec<_> = s.iter().enumerate().map(|(k, t)| if (k * 7919) % 5 < 2 { [t[0], t[2], t[1]] } else { *t }).collect();
+        let (clean, _) = run(&s, SignRule::Orient, 20_000);
+        let (m, rule) = run(&flipped, SignRule::Auto, 20_000);
+        assert_eq!(rule, SignRule::Parity);
+        same(&m, &clean, "flipped");
+    }
+
+    #[test]
+    fn a_sphere_with_a_hole_is_closed_and_two_overlapping_copies_merge() {
+        let s = sphere([0.0; 3], 1.0, 30, 60);
+        // Remove a cap of faces near the north pole: a hole ~ 0.5 wide.
+        let holed: Vec<_> = s.iter().copied().filter(|t| t.iter().map(|p| p[2]).sum::<f64>() / 3.0 < 0.97).collect();
+        let (m, rule) = run(&holed, SignRule::Auto, 20_000);
+        assert_eq!(rule, SignRule::Union);
+        assert!(closed(&m));
+        let mut two = s.clone();
+        two.extend(sphere([0.013, 0.0, 0.0], 1.0, 30, 60));
+        let (m, rule) = run(&two, SignRule::Auto, 20_000);
+        assert_eq!(rule, SignRule::Union);
+        assert!(closed(&m));
+        let (single, _) = run(&s, SignRule::Orient, 20_000);
+        // One shell, about the size of one sphere (not two shells).
+        assert!((m.faces.len() as f64) < 1.2 * single.faces.len() as f64, "{} vs {}", m.faces.len(), single.faces.len());
+    }
+}
