@@ -5,3 +5,4 @@ mod common;
 mod cli;
 mod core_props;
 mod resample;
+mod scans;

@@ -195,6 +195,13 @@ pub struct ResampleArgs {
     /// Force slabs of K cell layers (for tests and tuning); without it, --mem decides.
     #[arg(long, value_name = "K")]
     pub slab: Option<u32>,
+    /// How crossing signs become inside/outside. auto: robust; picks union
+    /// (orientation kept, overlapping scans merge) or parity (orientation
+    /// ignored, for flipped faces) from a census of all grid lines, and
+    /// always gives a closed surface, closing holes. orient: the original
+    /// paper's rule; cells that disagree are left open and counted.
+    #[arg(long, value_enum, default_value_t = SignsArg::Auto)]
+    pub signs: SignsArg,
     /// Shift the grid by fractions of a cell, e.g. 0.5,0,0 [default: 0,0,0].
     #[arg(long, value_parser = parse_triple, hide = true)]
     pub grid_offset: Option<[f64; 3]>,
@@ -210,6 +217,14 @@ pub struct ResampleArgs {
     /// Print the summary as JSON on stdout.
     #[arg(long)]
     pub json: bool,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SignsArg {
+    Auto,
+    Orient,
+    Union,
+    Parity,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -301,6 +316,12 @@ fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::ResampleSummary
         grid_offset: a.grid_offset.unwrap_or([0.0; 3]),
         write: WriteOptions { ascii: a.ascii, double: a.double, ..Default::default() },
         max_listed: 100,
+        signs: match a.signs {
+            SignsArg::Auto => mint_core::signs::SignRule::Auto,
+            SignsArg::Orient => mint_core::signs::SignRule::Orient,
+            SignsArg::Union => mint_core::signs::SignRule::Union,
+            SignsArg::Parity => mint_core::signs::SignRule::Parity,
+        },
     };
     let bars = Bars::new(a.quiet || a.json);
     let summary = resample(&a.input, &a.output, &opts, &bars)?;
@@ -333,7 +354,14 @@ fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::ResampleSummary
             human_bytes(s.shard_bytes)
         );
         eprintln!("  output       {} vertices, {} faces", s.output_vertices, s.output_faces);
-        eprintln!("  non-canonical cells  {}", s.non_canonical_cells);
+        if s.sign_rule == "orient" {
+            eprintln!("  signs        orient; non-canonical cells {} (left open)", s.non_canonical_cells);
+        } else {
+            eprintln!(
+                "  signs        {} ({} of {} lines winding-valid, {} odd); {} lines through holes, {} vertices synthesized, {} overlapping edges merged",
+                s.sign_rule, s.census_winding_valid, s.census_lines, s.census_odd, s.inconsistent_lines, s.synthesized_vertices, s.merged_edges
+            );
+        }
         eprintln!(
             "  time         {:.2}s (bounds {:.2}s, discretize {:.2}s, reconstruct {:.2}s, write {:.2}s)",
             s.seconds_total, s.seconds_bounds, s.seconds_discretize, s.seconds_reconstruct, s.seconds_write
@@ -597,6 +625,7 @@ fn cmd_demo(a: DemoArgs) -> Result<()> {
         tmp: None,
         axis: AxisArg::Auto,
         slab: None,
+        signs: SignsArg::Auto,
         grid_offset: None,
         ascii: false,
         double: false,

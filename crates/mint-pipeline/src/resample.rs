@@ -26,6 +26,8 @@ use crate::progress::{Phase, Progress};
 use mint_core::grid::{Axis, Grid, GridError, GridSize};
 use mint_core::intercept::filter_plane;
 use mint_core::reconstruct::{crossing_to_intercept, reconstruct_slab, SlabResult};
+use mint_core::robust::{census_plane, reconstruct_slab_robust};
+use mint_core::signs::{LineCensus, RepairStats, SignRule};
 use mint_core::{discretize_triangle, FilterStats, Intercept};
 use mint_io::{Format, MeshReader, MeshWriter, ReadOptions, TriangleChunk, WriteOptions};
 use mint_store::{ShardStore, StoreError};
@@ -65,6 +67,11 @@ pub struct ResampleOptions {
     pub write: WriteOptions,
     /// How many non-canonical cells to list in the summary. Default 100.
     pub max_listed: usize,
+    /// How intercept signs become inside/outside states (see
+    /// `mint_core::signs`). Default `Auto`: robust, state-first
+    /// reconstruction whose output is always closed; `Orient` is the paper's
+    /// strict rule, which leaves non-canonical cells open.
+    pub signs: SignRule,
 }
 
 impl Default for ResampleOptions {
@@ -79,6 +86,7 @@ impl Default for ResampleOptions {
             grid_offset: [0.0; 3],
             write: WriteOptions::default(),
             max_listed: 100,
+            signs: SignRule::Auto,
         }
     }
 }
@@ -118,6 +126,22 @@ pub struct ResampleSummary {
     pub seconds_total: f64,
     /// Largest planned slab, in estimated heap bytes.
     pub planned_slab_bytes: u64,
+    /// The sign rule used (`auto` resolved to `union` or `parity`).
+    pub sign_rule: String,
+    /// A and B lines with intercepts, winding-valid ones, odd ones (auto's census).
+    pub census_lines: u64,
+    pub census_winding_valid: u64,
+    pub census_odd: u64,
+    /// Lines through holes whose nodes took states from elsewhere.
+    pub inconsistent_lines: u64,
+    /// Vertices made at edge midpoints where states change but no intercept
+    /// exists (hole closing).
+    pub synthesized_vertices: u64,
+    /// Edges whose several same-sign intercepts were merged (overlapping layers).
+    pub merged_edges: u64,
+    /// Intercepts on edges without a state change, dropped.
+    pub dropped_intercepts: u64,
+    pub seconds_census: f64,
 }
 
 /// Why a run failed. Each variant's text is one line naming the file.
@@ -214,6 +238,33 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
         .max()
         .unwrap_or(0);
 
+    // 3b. Resolve the sign rule (auto: a census of all A/B lines).
+    let t = Instant::now();
+    let rule = match opts.signs {
+        SignRule::Auto => {
+            let mut census = LineCensus::default();
+            for &(k0, k1) in &slabs {
+                let mut planes = store.read_planes(k0, k1 - 1, false)?;
+                for p in &mut planes {
+                    if invert {
+                        for r in p.iter_mut() {
+                            r.signed_value = -r.signed_value;
+                        }
+                    }
+                    census += census_plane(p);
+                }
+                check_cancel(progress)?;
+            }
+            summary.census_lines = census.lines;
+            summary.census_winding_valid = census.winding_valid;
+            summary.census_odd = census.odd;
+            census.resolve()
+        }
+        r => r,
+    };
+    summary.sign_rule = format!("{rule:?}").to_lowercase();
+    summary.seconds_census = t.elapsed().as_secs_f64();
+
     // 4. Reconstruct slabs in parallel, write in order.
     let t = Instant::now();
     let mut writer = MeshWriter::create(output, out_format, opts.write.clone())?;
@@ -226,10 +277,12 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
     let mut faces_out = BufWriter::with_capacity(1 << 20, face_spill);
     progress.start(Phase::Reconstruct, ns as u64);
     let mut removed = FilterStats::default();
+    let mut repair = RepairStats::default();
     let mut vertex_offset: u64 = 0;
     let mut face_count: u64 = 0;
-    let mut emit = |res: SlabResult, filter: FilterStats, layers: u64| -> Result<(), PipelineError> {
+    let mut emit = |res: SlabResult, filter: FilterStats, rep: RepairStats, layers: u64| -> Result<(), PipelineError> {
         removed += filter;
+        repair += rep;
         for v in &res.vertices {
             writer.write_vertex(*v)?;
         }
@@ -254,12 +307,21 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
         progress.advance(layers);
         Ok(())
     };
-    reconstruct_ordered(&store, &grid, &slabs, threads, opts.max_listed, invert, progress, &mut emit)?;
+    reconstruct_ordered(&store, &grid, &slabs, threads, opts.max_listed, invert, rule, progress, &mut emit)?;
     drop(emit);
     progress.finish();
     drop(store); // removes the shard directory before the final copy
-    summary.intercepts_removed = removed.removed;
-    summary.intercepts_kept = removed.kept;
+    if rule == SignRule::Orient {
+        summary.intercepts_removed = removed.removed;
+        summary.intercepts_kept = removed.kept;
+    } else {
+        summary.intercepts_kept = summary.intercepts_found - repair.dropped_intercepts;
+        summary.intercepts_removed = repair.dropped_intercepts;
+    }
+    summary.inconsistent_lines = repair.inconsistent_lines;
+    summary.synthesized_vertices = repair.synthesized_vertices;
+    summary.merged_edges = repair.merged_edges;
+    summary.dropped_intercepts = repair.dropped_intercepts;
     summary.output_vertices = vertex_offset;
     summary.output_faces = face_count;
     summary.seconds_reconstruct = t.elapsed().as_secs_f64();
@@ -470,14 +532,16 @@ fn reconstruct_ordered(
     threads: usize,
     max_listed: usize,
     invert: bool,
+    rule: SignRule,
     progress: &dyn Progress,
-    emit: &mut dyn FnMut(SlabResult, FilterStats, u64) -> Result<(), PipelineError>,
+    emit: &mut dyn FnMut(SlabResult, FilterStats, RepairStats, u64) -> Result<(), PipelineError>,
 ) -> Result<(), PipelineError> {
     let window = threads as u64 + 1;
     let next = AtomicU64::new(0);
     let written = (Mutex::new(0u64), Condvar::new());
     let stop = std::sync::atomic::AtomicBool::new(false);
-    let (tx, rx) = crossbeam_channel::unbounded::<(u64, Result<(SlabResult, FilterStats), PipelineError>)>();
+    type Done = (SlabResult, FilterStats, RepairStats);
+    let (tx, rx) = crossbeam_channel::unbounded::<(u64, Result<Done, PipelineError>)>();
     std::thread::scope(|s| {
         for _ in 0..threads {
             let tx = tx.clone();
@@ -495,8 +559,19 @@ fn reconstruct_ordered(
                     }
                 }
                 let (k0, k1) = slabs[i as usize];
-                let r = (|| -> Result<(SlabResult, FilterStats), PipelineError> {
+                let r = (|| -> Result<Done, PipelineError> {
                     let mut planes = store.read_planes(k0, k1, true)?;
+                    if rule != SignRule::Orient {
+                        if invert {
+                            for p in planes.iter_mut() {
+                                for r in p.iter_mut() {
+                                    r.signed_value = -r.signed_value;
+                                }
+                            }
+                        }
+                        let (res, rep) = reconstruct_slab_robust(grid, k0, planes, rule);
+                        return Ok((res, FilterStats::default(), rep));
+                    }
                     let mut stats = FilterStats::default();
                     let owned = planes.len() - 1;
                     for (n, p) in planes.iter_mut().enumerate() {
@@ -510,7 +585,7 @@ fn reconstruct_ordered(
                             stats += f;
                         }
                     }
-                    Ok((reconstruct_slab(grid, k0, &planes, max_listed), stats))
+                    Ok((reconstruct_slab(grid, k0, &planes, max_listed), stats, RepairStats::default()))
                 })();
                 if tx.send((i, r)).is_err() {
                     return;
@@ -524,9 +599,9 @@ fn reconstruct_ordered(
         for (i, r) in rx.iter() {
             pending.insert(i, r);
             while let Some(r) = pending.remove(&want) {
-                let step = r.and_then(|(res, f)| {
+                let step = r.and_then(|(res, f, rep)| {
                     let (k0, k1) = slabs[want as usize];
-                    emit(res, f, (k1 - k0) as u64)
+                    emit(res, f, rep, (k1 - k0) as u64)
                 });
                 let step = step.and_then(|_| check_cancel(progress));
                 if let Err(e) = step {
