@@ -198,3 +198,28 @@ fn ctrl_c_stops_a_run_and_removes_its_temporary_files() {
 fn unsafe_sigint(pid: u32) {
     let _ = Command::new("kill").args(["-INT", &pid.to_string()]).status();
 }
+
+#[test]
+fn bad_scenes_fail_with_the_line_and_key_and_no_output() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let cases = [
+        ("unknown.json", "{\n  \"blob\": { \"radius\": 1 }\n}\n", "2:", "blob"),
+        ("negative.json", "{ \"union\": [\n  { \"sphere\": { \"radius\": -2 } } ] }\n", "2:", "radius"),
+        ("missing.json", "{ \"union\": [\n  { \"mesh\": \"nowhere.ply\" } ] }\n", "2:", "nowhere.ply"),
+        ("cycle.json", "{ \"defs\": { \"a\": { \"union\": [ { \"ref\": \"b\" } ] },\n  \"b\": { \"ref\": \"a\" } },\n  \"scene\": { \"ref\": \"a\" } }\n", ":", "cycle"),
+        ("syntax.json", "{ \"sphere\": { \"radius\" 1 } }", "1:", "':'"),
+        ("unbounded.json", "{ \"halfspace\": { \"normal\": [0, 0, 1], \"offset\": 0 } }", "unbounded", "unbounded"),
+    ];
+    for (name, text, at, key) in cases {
+        let scene = d.path().join(name);
+        std::fs::write(&scene, text).unwrap();
+        let o = run(&["csg", p(&scene), p(&out.join("o.ply")), "--cells", "1000"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{name} succeeded");
+        assert_eq!(err.lines().count(), 1, "{name}: {err}");
+        assert!(err.contains(name) && err.contains(at) && err.contains(key), "{name}: {err}");
+        assert!(leftovers(&out, &[]).is_empty(), "{name} left files");
+    }
+}

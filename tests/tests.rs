@@ -4,5 +4,6 @@
 mod common;
 mod cli;
 mod core_props;
+mod csg;
 mod resample;
 mod scans;

@@ -8,6 +8,7 @@
 //! - [`intercept`]: the 16-byte [`Intercept`] record, per-line sorting and the removal filter;
 //! - [`mc_table`]: the generated marching-cubes table;
 //! - [`reconstruct`]: one layer of cells → vertices and triangles (the paper's strict rule);
+//! - [`primitives`]: analytic solids that intersect grid lines exactly (for CSG);
 //! - [`signs`], [`robust`]: sign rules for dirty scans and the state-first reconstruction;
 //! - [`sink`]: the [`MeshSink`] trait through which meshes leave algorithms.
 
@@ -16,6 +17,7 @@ pub mod grid;
 pub mod intercept;
 pub mod mc_table;
 pub mod predicates;
+pub mod primitives;
 pub mod reconstruct;
 pub mod robust;
 pub mod signs;

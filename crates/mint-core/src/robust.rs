@@ -281,28 +281,146 @@ fn layer_s_vertices(s_raw: &[Intercept], lower: &NodeStates, upper: &NodeStates,
 /// *raw* (unsorted, unfiltered) intercepts of planes `k0 ..= k1`, under
 /// `rule` (Union or Parity; resolve Auto first with [`census_plane`]).
 pub fn reconstruct_slab_robust(grid: &Grid, k0: u32, planes: Vec<Vec<Intercept>>, rule: SignRule) -> (SlabResult, RepairStats) {
-    assert!(matches!(rule, SignRule::Union | SignRule::Parity), "resolve the sign rule first");
+    reconstruct_slab_solids(grid, k0, vec![planes], &[rule], &Expr::Operand(0))
+}
+
+/// A boolean operator of [`Expr`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BoolOp {
+    /// Inside any child.
+    Union,
+    /// Inside every child.
+    Intersection,
+    /// Inside the first child and no other.
+    Difference,
+}
+
+/// A CSG expression over numbered operands (n-ary, nesting).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Expr {
+    Operand(usize),
+    Op(BoolOp, Vec<Expr>),
+}
+
+impl Expr {
+    /// The expression's value for the operands' inside/outside states.
+    pub fn eval(&self, inside: &[bool]) -> bool {
+        match self {
+            Expr::Operand(i) => inside[*i],
+            Expr::Op(BoolOp::Union, c) => c.iter().any(|e| e.eval(inside)),
+            Expr::Op(BoolOp::Intersection, c) => c.iter().all(|e| e.eval(inside)),
+            Expr::Op(BoolOp::Difference, c) => c.first().is_some_and(|e| e.eval(inside)) && !c[1..].iter().any(|e| e.eval(inside)),
+        }
+    }
+    /// The same, 64 nodes at a time on state bitmaps.
+    fn eval_words(&self, words: &[u64]) -> u64 {
+        match self {
+            Expr::Operand(i) => words[*i],
+            Expr::Op(BoolOp::Union, c) => c.iter().fold(0, |a, e| a | e.eval_words(words)),
+            Expr::Op(BoolOp::Intersection, c) => c.iter().fold(!0, |a, e| a & e.eval_words(words)),
+            Expr::Op(BoolOp::Difference, c) => {
+                let first = c.first().map_or(0, |e| e.eval_words(words));
+                c[1..].iter().fold(first, |a, e| a & !e.eval_words(words))
+            }
+        }
+    }
+    /// The largest operand number used, plus one.
+    pub fn operands(&self) -> usize {
+        match self {
+            Expr::Operand(i) => i + 1,
+            Expr::Op(_, c) => c.iter().map(Expr::operands).max().unwrap_or(0),
+        }
+    }
+}
+
+/// Where along an edge the result changes, given each operand's vertex on
+/// that edge (operands whose state does not change have none): walk the
+/// operands' vertices in order, flipping each operand's state, and stop at
+/// the first flip that changes the expression. With one operand this is
+/// that operand's vertex; for A ∪ A it is A's vertex again.
+fn result_vertex(expr: &Expr, lower: &mut [bool], changes: &mut [(f64, usize)]) -> Option<f64> {
+    changes.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut r = expr.eval(lower);
+    for &(v, o) in changes.iter() {
+        lower[o] = !lower[o];
+        let r2 = expr.eval(lower);
+        if r2 != r {
+            return Some(v);
+        }
+        r = r2;
+    }
+    None
+}
+
+/// Robust reconstruction of a CSG expression over several solids on one
+/// grid: `operands[o][p]` are the raw intercepts of operand `o` in plane
+/// `k0 + p`, read under `rules[o]`. Each operand's node states and edge
+/// vertices are decided alone (as in the single-solid case); the result's
+/// states are the expression of theirs, and each result edge takes the
+/// vertex at which the expression changes ([`result_vertex`]). The output
+/// is closed for any operands, and identical to the robust resampling of
+/// operand 0 when the expression is just that operand.
+pub fn reconstruct_slab_solids(grid: &Grid, k0: u32, operands: Vec<Vec<Vec<Intercept>>>, rules: &[SignRule], expr: &Expr) -> (SlabResult, RepairStats) {
+    assert!(rules.iter().all(|r| matches!(r, SignRule::Union | SignRule::Parity)), "resolve the sign rules first");
+    assert_eq!(rules.len(), operands.len());
+    assert!(expr.operands() <= operands.len());
     let [na, nb, _] = grid.local_dims();
     let mut stats = RepairStats::default();
-    let n = planes.len();
-    let prepared: Vec<Prepared> = planes
+    let n = operands[0].len();
+    let m = operands.len();
+    // Per operand, per plane: states and the operand's own edge vertices.
+    let prepared: Vec<Vec<Prepared>> = operands
         .into_iter()
-        .enumerate()
-        .map(|(p, raw)| prepare_plane(raw, k0 + p as u32, na, nb, rule, &mut stats))
+        .zip(rules)
+        .map(|(planes, &rule)| {
+            planes.into_iter().enumerate().map(|(p, raw)| prepare_plane(raw, k0 + p as u32, na, nb, rule, &mut stats)).collect()
+        })
         .collect();
-    // Final records per owned plane: A/B, then the layer's S vertices.
+    let single = m == 1 && *expr == Expr::Operand(0);
+    // Result states per plane.
+    let states: Vec<NodeStates> = (0..n)
+        .map(|p| {
+            if single {
+                return prepared[0][p].states.clone();
+            }
+            let mut st = NodeStates::new(na, nb);
+            let mut w = vec![0u64; m];
+            for k in 0..st.bits.len() {
+                for o in 0..m {
+                    w[o] = prepared[o][p].states.bits[k];
+                }
+                st.bits[k] = expr.eval_words(&w);
+            }
+            st.mask_tail();
+            st
+        })
+        .collect();
+    // Per operand, per owned layer: its S vertices.
+    let s_finals: Vec<Vec<Vec<Intercept>>> = (0..m)
+        .map(|o| {
+            (0..n - 1)
+                .map(|p| {
+                    let pr = &prepared[o];
+                    let mut s = layer_s_vertices(&pr[p].s_raw, &pr[p].states, &pr[p + 1].states, k0 + p as u32, na, nb, rules[o], &mut stats);
+                    s.sort_unstable_by_key(|r| r.sort_key());
+                    s
+                })
+                .collect()
+        })
+        .collect();
+    // Final records per plane: A/B (every plane), S (owned planes).
     let mut finals: Vec<Vec<Intercept>> = Vec::with_capacity(n);
-    for p in 0..n - 1 {
-        let mut f = prepared[p].ab.clone();
-        let mut s = layer_s_vertices(&prepared[p].s_raw, &prepared[p].states, &prepared[p + 1].states, k0 + p as u32, na, nb, rule, &mut stats);
-        s.sort_unstable_by_key(|r| r.sort_key());
-        f.extend(s);
-        finals.push(f);
-    }
-    finals.push(prepared[n - 1].ab.clone());
-    for f in &mut finals {
-        // A/B records were produced line by line in id order; keep one order.
+    for p in 0..n {
+        let mut f = if single { prepared[0][p].ab.clone() } else { combine_ab(&prepared, p, &states[p], k0 + p as u32, na, nb, expr) };
+        if p + 1 < n {
+            if single {
+                f.extend_from_slice(&s_finals[0][p]);
+            } else {
+                f.extend(combine_s(&prepared, &s_finals, p, &states[p], &states[p + 1], k0 + p as u32, na, nb, expr));
+            }
+        }
         f.sort_unstable_by_key(|r| r.sort_key());
+        finals.push(f);
     }
     let mut bases = Vec::with_capacity(n);
     let mut total = 0u64;
@@ -321,7 +439,7 @@ pub fn reconstruct_slab_robust(grid: &Grid, k0: u32, planes: Vec<Vec<Intercept>>
         active_cells(&lower, &upper, na, nb, &mut cells);
         out.stats.active_cells += cells.len() as u64;
         let k = k0 + layer as u32;
-        let st = [&prepared[layer].states, &prepared[layer + 1].states];
+        let st = [&states[layer], &states[layer + 1]];
         let pl = [&lower, &upper];
         for &id in &cells {
             let (i, j) = ((id % na as u64) as u32, (id / na as u64) as u32);
@@ -361,6 +479,78 @@ pub fn reconstruct_slab_robust(grid: &Grid, k0: u32, planes: Vec<Vec<Intercept>>
     out.stats.vertices = out.vertices.len() as u64;
     out.stats.faces = out.faces.len() as u64;
     (out, stats)
+}
+
+/// The vertex of operand `o` on a cell edge, if its state changes there.
+fn operand_vertex(records: &[Intercept], family: u32, index: u32, cell: u32) -> Option<f64> {
+    let pl = PlaneLines::new(records);
+    let r = pl.in_cell(pl.line(family, index), cell);
+    (!r.is_empty()).then(|| records[r.start].value())
+}
+
+/// The result's A/B edge vertices of plane `p`.
+#[allow(clippy::too_many_arguments)]
+fn combine_ab(prepared: &[Vec<Prepared>], p: usize, states: &NodeStates, plane: u32, na: u32, nb: u32, expr: &Expr) -> Vec<Intercept> {
+    let m = prepared.len();
+    let mut out = Vec::new();
+    let mut lower = vec![false; m];
+    let mut changes = Vec::with_capacity(m);
+    let mut edge = |family: u32, index: u32, cell: u32, n0: (u32, u32), entering: bool, out: &mut Vec<Intercept>| {
+        changes.clear();
+        for o in 0..m {
+            lower[o] = prepared[o][p].states.get(n0.0, n0.1);
+            if let Some(v) = operand_vertex(&prepared[o][p].ab, family, index, cell) {
+                changes.push((v, o));
+            }
+        }
+        let v = result_vertex(expr, &mut lower, &mut changes).unwrap_or(cell as f64 + 0.5);
+        out.push(Intercept::new(plane, family, index, v, entering));
+    };
+    for j in 0..=nb {
+        for i in 0..na {
+            let (s0, s1) = (states.get(i, j), states.get(i + 1, j));
+            if s0 != s1 {
+                edge(FAMILY_A, j, i, (i, j), s1, &mut out);
+            }
+        }
+    }
+    for i in 0..=na {
+        for j in 0..nb {
+            let (s0, s1) = (states.get(i, j), states.get(i, j + 1));
+            if s0 != s1 {
+                edge(FAMILY_B, i, j, (i, j), s1, &mut out);
+            }
+        }
+    }
+    out
+}
+
+/// The result's S edge vertices of layer `p` (between planes `p`, `p + 1`).
+#[allow(clippy::too_many_arguments)]
+fn combine_s(prepared: &[Vec<Prepared>], s_finals: &[Vec<Vec<Intercept>>], p: usize, lo: &NodeStates, hi: &NodeStates, k: u32, na: u32, nb: u32, expr: &Expr) -> Vec<Intercept> {
+    let m = prepared.len();
+    let mut out = Vec::new();
+    let mut lower = vec![false; m];
+    let mut changes = Vec::with_capacity(m);
+    for i in 0..=na {
+        for j in 0..=nb {
+            let (s0, s1) = (lo.get(i, j), hi.get(i, j));
+            if s0 == s1 {
+                continue;
+            }
+            let idx = i * (nb + 1) + j;
+            changes.clear();
+            for o in 0..m {
+                lower[o] = prepared[o][p].states.get(i, j);
+                if let Some(v) = operand_vertex(&s_finals[o][p], FAMILY_S, idx, k) {
+                    changes.push((v, o));
+                }
+            }
+            let v = result_vertex(expr, &mut lower, &mut changes).unwrap_or(k as f64 + 0.5);
+            out.push(Intercept::new(k, FAMILY_S, idx, v, s1));
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -136,14 +136,24 @@ pub fn winding_valid(line: &[Intercept]) -> bool {
 #[derive(Debug, Clone)]
 pub struct NodeStates {
     width: usize,
-    bits: Vec<u64>,
+    len: usize,
+    pub(crate) bits: Vec<u64>,
 }
 
 impl NodeStates {
     pub fn new(na: u32, nb: u32) -> NodeStates {
         let width = na as usize + 1;
         let n = width * (nb as usize + 1);
-        NodeStates { width, bits: vec![0; n.div_ceil(64)] }
+        NodeStates { width, len: n, bits: vec![0; n.div_ceil(64)] }
+    }
+    /// Clears the padding bits past the last node (after word-wise operations).
+    pub(crate) fn mask_tail(&mut self) {
+        let r = self.len % 64;
+        if r != 0 {
+            if let Some(last) = self.bits.last_mut() {
+                *last &= (1u64 << r) - 1;
+            }
+        }
     }
     #[inline]
     pub fn get(&self, i: u32, j: u32) -> bool {

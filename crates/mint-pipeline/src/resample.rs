@@ -24,6 +24,7 @@
 
 use crate::progress::{Phase, Progress};
 use mint_core::grid::{Axis, Grid, GridError, GridSize};
+use mint_core::primitives::Transform;
 use mint_core::intercept::filter_plane;
 use mint_core::reconstruct::{crossing_to_intercept, reconstruct_slab, SlabResult};
 use mint_core::robust::{census_plane, reconstruct_slab_robust};
@@ -165,6 +166,9 @@ pub enum PipelineError {
     /// A temporary file outside the store failed.
     #[error("{path}: {op}: {source}")]
     Temp { path: PathBuf, op: &'static str, source: std::io::Error },
+    /// A CSG scene whose result is unbounded (e.g. a lone half-space).
+    #[error("{path}: the scene is unbounded (intersect half-spaces with a bounded solid)")]
+    Unbounded { path: PathBuf },
     /// The user interrupted the run; temporary files were removed.
     #[error("interrupted; no output written")]
     Cancelled,
@@ -197,7 +201,7 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
 
     // 1. Bounds and grid.
     let t = Instant::now();
-    let (lo, hi) = bounds(&reader, input, threads, progress)?;
+    let (lo, hi) = bounds(&reader, input, threads, progress, None)?;
     let grid = Grid::around(lo, hi, opts.size, opts.grid_offset, opts.axis)
         .map_err(|source| PipelineError::Grid { path: input.to_path_buf(), source })?;
     summary.seconds_bounds = t.elapsed().as_secs_f64();
@@ -211,7 +215,7 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
     let t = Instant::now();
     let [_, _, ns] = grid.local_dims();
     let mut store = ShardStore::create(&tmp_root, ns + 1)?;
-    let (faces, volume) = discretize_all(&mut reader, &grid, &mut store, threads, progress)?;
+    let (faces, volume) = discretize_all(&mut reader, &grid, &mut store, threads, progress, None)?;
     summary.input_faces = faces;
     summary.input_signed_volume = volume * grid.cell.powi(3);
     // An inside-out input (negative volume) has every sign reversed: read it
@@ -307,7 +311,33 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
         progress.advance(layers);
         Ok(())
     };
-    reconstruct_ordered(&store, &grid, &slabs, threads, opts.max_listed, invert, rule, progress, &mut emit)?;
+    let max_listed = opts.max_listed;
+    let store_ref = &store;
+    let grid_ref = &grid;
+    let compute = move |k0: u32, k1: u32| -> Result<Done, PipelineError> {
+        let mut planes = store_ref.read_planes(k0, k1, true)?;
+        if invert {
+            for p in planes.iter_mut() {
+                for r in p.iter_mut() {
+                    r.signed_value = -r.signed_value;
+                }
+            }
+        }
+        if rule != SignRule::Orient {
+            let (res, rep) = reconstruct_slab_robust(grid_ref, k0, planes, rule);
+            return Ok((res, FilterStats::default(), rep));
+        }
+        let mut stats = FilterStats::default();
+        let owned = planes.len() - 1;
+        for (n, p) in planes.iter_mut().enumerate() {
+            let f = filter_plane(p);
+            if n < owned {
+                stats += f;
+            }
+        }
+        Ok((reconstruct_slab(grid_ref, k0, &planes, max_listed), stats, RepairStats::default()))
+    };
+    reconstruct_ordered(&slabs, threads, &compute, progress, &mut emit)?;
     drop(emit);
     progress.finish();
     drop(store); // removes the shard directory before the final copy
@@ -354,7 +384,7 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
     Ok(summary)
 }
 
-fn check_cancel(progress: &dyn Progress) -> Result<(), PipelineError> {
+pub(crate) fn check_cancel(progress: &dyn Progress) -> Result<(), PipelineError> {
     if progress.cancelled() {
         Err(PipelineError::Cancelled)
     } else {
@@ -365,7 +395,7 @@ fn check_cancel(progress: &dyn Progress) -> Result<(), PipelineError> {
 /// The bounding box of all vertices, read from the map in parallel. Also
 /// the check that every vertex is finite, so that workers resolving indices
 /// later need not check again.
-fn bounds(reader: &MeshReader, path: &Path, threads: usize, progress: &dyn Progress) -> Result<([f64; 3], [f64; 3]), PipelineError> {
+pub(crate) fn bounds(reader: &MeshReader, path: &Path, threads: usize, progress: &dyn Progress, xf: Option<&Transform>) -> Result<([f64; 3], [f64; 3]), PipelineError> {
     let positions = reader.positions();
     let n = positions.len() as u64;
     progress.start(Phase::Bounds, n);
@@ -383,6 +413,10 @@ fn bounds(reader: &MeshReader, path: &Path, threads: usize, progress: &dyn Progr
                         if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
                             return Err(PipelineError::NonFinite { path: path.to_path_buf(), index: i, x: p[0], y: p[1], z: p[2] });
                         }
+                        let p = match xf {
+                            Some(t) => t.apply_point(p),
+                            None => p,
+                        };
                         for d in 0..3 {
                             lo[d] = lo[d].min(p[d]);
                             hi[d] = hi[d].max(p[d]);
@@ -413,12 +447,13 @@ fn bounds(reader: &MeshReader, path: &Path, threads: usize, progress: &dyn Progr
 /// Streams every triangle through the workers into the store. Returns the
 /// number of triangles read and the input's signed volume (in grid units),
 /// summed per chunk in chunk order so that it does not depend on threads.
-fn discretize_all(
+pub(crate) fn discretize_all(
     reader: &mut MeshReader,
     grid: &Grid,
     store: &mut ShardStore,
     threads: usize,
     progress: &dyn Progress,
+    xf: Option<&Transform>,
 ) -> Result<(u64, f64), PipelineError> {
     use crossbeam_channel::bounded;
     let [_, nb, _] = grid.local_dims();
@@ -440,7 +475,14 @@ fn discretize_all(
                     for tri in &chunk.indices {
                         // Indices were range-checked by the reader; positions
                         // were checked finite by the bounds pass.
-                        let local = [grid.to_local(positions.get(tri[0])), grid.to_local(positions.get(tri[1])), grid.to_local(positions.get(tri[2]))];
+                        let at = |i: u32| {
+                            let p = positions.get(i);
+                            grid.to_local(match xf {
+                                Some(t) => t.apply_point(p),
+                                None => p,
+                            })
+                        };
+                        let local = [at(tri[0]), at(tri[1]), at(tri[2])];
                         volume += signed_volume6(&local);
                         discretize_triangle(&local, |c| recs.push(crossing_to_intercept(&c, nb)));
                     }
@@ -523,16 +565,15 @@ pub fn plan_slabs(counts: &[u64], ns: u32, fixed: Option<u32>, budget: u64) -> V
     slabs
 }
 
+/// What one slab's reconstruction returns.
+pub(crate) type Done = (SlabResult, FilterStats, RepairStats);
+
 /// Reconstructs `slabs` on `threads` workers and hands results to `emit`
 /// strictly in slab order. At most `threads + 1` slabs are held at once.
-fn reconstruct_ordered(
-    store: &ShardStore,
-    grid: &Grid,
+pub(crate) fn reconstruct_ordered(
     slabs: &[(u32, u32)],
     threads: usize,
-    max_listed: usize,
-    invert: bool,
-    rule: SignRule,
+    compute: &(dyn Fn(u32, u32) -> Result<Done, PipelineError> + Sync),
     progress: &dyn Progress,
     emit: &mut dyn FnMut(SlabResult, FilterStats, RepairStats, u64) -> Result<(), PipelineError>,
 ) -> Result<(), PipelineError> {
@@ -540,7 +581,6 @@ fn reconstruct_ordered(
     let next = AtomicU64::new(0);
     let written = (Mutex::new(0u64), Condvar::new());
     let stop = std::sync::atomic::AtomicBool::new(false);
-    type Done = (SlabResult, FilterStats, RepairStats);
     let (tx, rx) = crossbeam_channel::unbounded::<(u64, Result<Done, PipelineError>)>();
     std::thread::scope(|s| {
         for _ in 0..threads {
@@ -559,34 +599,7 @@ fn reconstruct_ordered(
                     }
                 }
                 let (k0, k1) = slabs[i as usize];
-                let r = (|| -> Result<Done, PipelineError> {
-                    let mut planes = store.read_planes(k0, k1, true)?;
-                    if rule != SignRule::Orient {
-                        if invert {
-                            for p in planes.iter_mut() {
-                                for r in p.iter_mut() {
-                                    r.signed_value = -r.signed_value;
-                                }
-                            }
-                        }
-                        let (res, rep) = reconstruct_slab_robust(grid, k0, planes, rule);
-                        return Ok((res, FilterStats::default(), rep));
-                    }
-                    let mut stats = FilterStats::default();
-                    let owned = planes.len() - 1;
-                    for (n, p) in planes.iter_mut().enumerate() {
-                        if invert {
-                            for r in p.iter_mut() {
-                                r.signed_value = -r.signed_value;
-                            }
-                        }
-                        let f = filter_plane(p);
-                        if n < owned {
-                            stats += f;
-                        }
-                    }
-                    Ok((reconstruct_slab(grid, k0, &planes, max_listed), stats, RepairStats::default()))
-                })();
+                let r = compute(k0, k1);
                 if tx.send((i, r)).is_err() {
                     return;
                 }
