@@ -82,7 +82,7 @@ fn two_copies_a_tenth_of_a_cell_apart_give_one_watertight_shell() {
 }
 
 #[test]
-fn real_meshes_resample_at_three_sizes_and_come_out_watertight() {
+fn real_meshes_resample_at_three_sizes_manifold_and_watertight_when_closed() {
     let Some(data) = mint_testkit::shared_data() else { return };
     let files = [
         "stanford_bunny_zipper_mesh/bun_zipper.ply",
@@ -96,11 +96,44 @@ fn real_meshes_resample_at_three_sizes_and_come_out_watertight() {
         let input = data.join(f);
         for n in [10_000u64, 100_000, 1_000_000] {
             let out = d.path().join("o.ply");
+            // Default: holes wider than 16 cells stay open (the bunny's base
+            // at 1M cells); never non-manifold, never misoriented.
             let (s, m) = run(&input, &out, cells(n));
             let r = mint_mesh::check(&m.positions, &m.faces);
-            assert!(r.watertight, "{f} at {n} cells: {r:?}");
-            assert_eq!(r.non_manifold_edges + r.non_manifold_vertices, 0);
-            eprintln!("{f} at {n} cells: {} faces, rule {}, {} holes lines, {} synthesized", s.output_faces, s.sign_rule, s.inconsistent_lines, s.synthesized_vertices);
+            assert_eq!((r.non_manifold_edges, r.non_manifold_vertices, r.inconsistently_oriented_edges), (0, 0, 0), "{f} at {n}: {r:?}");
+            assert_eq!(r.watertight, s.holes_left_open == 0, "{f} at {n}: {r:?}");
+            // --close-all: watertight.
+            let (s, m) = run(&input, &out, ResampleOptions { max_hole: None, ..cells(n) });
+            let r = mint_mesh::check(&m.positions, &m.faces);
+            assert!(r.watertight, "{f} at {n} cells with --close-all: {r:?}");
+            eprintln!("{f} at {n} cells: {} faces, rule {}, {} lines through holes, {} synthesized", s.output_faces, s.sign_rule, s.inconsistent_lines, s.synthesized_vertices);
         }
     }
+}
+
+#[test]
+fn a_hole_wider_than_max_hole_stays_open_with_one_loop_and_close_all_closes_it() {
+    let d = tempfile::tempdir().unwrap();
+    // A sphere of radius 1 on a grid of cell h; one hole 10 cells across.
+    let cells = 200_000u64;
+    let h = (2.3f64.powi(3) / cells as f64).cbrt();
+    let opts = mint_gen::ScanOptions { holes: 1, flips: 0, patches: 0, slivers: 0, hole_radius: 5.0 * h, noise_amplitude: 0.0, ..Default::default() };
+    let input = write_mesh(d.path(), "holed.ply", |s| {
+        mint_gen::scan_like(200_000, 3, &opts, s).unwrap();
+    });
+    let out = d.path().join("o.ply");
+    let (s, m) = run(&input, &out, ResampleOptions { max_hole: Some(4), ..cells_opts(cells) });
+    let r = mint_mesh::check(&m.positions, &m.faces);
+    assert_eq!(s.holes_left_open, 1, "{s:?}");
+    assert_eq!((r.non_manifold_edges, r.non_manifold_vertices, r.inconsistently_oriented_edges), (0, 0, 0), "{r:?}");
+    assert_eq!(r.boundary_loops, 1, "{r:?}");
+    assert_eq!(r.non_simple_boundary_edges, 0);
+    let (s, m) = run(&input, &out, ResampleOptions { max_hole: None, ..cells_opts(cells) });
+    assert_eq!(s.holes_left_open, 0);
+    let r = mint_mesh::check(&m.positions, &m.faces);
+    assert!(r.watertight, "{r:?}");
+}
+
+fn cells_opts(n: u64) -> ResampleOptions {
+    cells(n)
 }

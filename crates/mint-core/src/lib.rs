@@ -9,11 +9,13 @@
 //! - [`mc_table`]: the generated marching-cubes table;
 //! - [`reconstruct`]: one layer of cells → vertices and triangles (the paper's strict rule);
 //! - [`primitives`]: analytic solids that intersect grid lines exactly (for CSG);
+//! - [`holes`]: which hole-capping cells stay open under `--max-hole`;
 //! - [`signs`], [`robust`]: sign rules for dirty scans and the state-first reconstruction;
 //! - [`sink`]: the [`MeshSink`] trait through which meshes leave algorithms.
 
 pub mod discretize;
 pub mod grid;
+pub mod holes;
 pub mod intercept;
 pub mod mc_table;
 pub mod predicates;

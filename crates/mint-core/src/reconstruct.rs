@@ -50,6 +50,9 @@ pub struct SlabResult {
     pub faces: Vec<[u32; 3]>,
     /// Non-canonical cells, as world-axis cell coordinates (at most `max_listed`).
     pub non_canonical: Vec<[u32; 3]>,
+    /// Robust path: ids ([`crate::holes::cell_id`]) of cells with a
+    /// synthesized vertex on an edge, i.e. cells that cap a hole.
+    pub hole_cells: Vec<u64>,
     pub stats: SlabStats,
 }
 

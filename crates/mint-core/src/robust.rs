@@ -31,6 +31,7 @@ use crate::intercept::{filter_plane, Intercept, PlaneLines, FAMILY_A, FAMILY_B, 
 use crate::mc_table::{corner_offset, mc_table, EDGE_CORNERS};
 use crate::reconstruct::{active_cells, intercept_local_position, SlabResult};
 use crate::signs::{effective_rule, lines, nearest_vote, resign_parity, winding_valid, LineCensus, NodeStates, RepairStats, SignRule};
+use crate::holes::{cell_id, OpenCells};
 use crate::MARGIN;
 
 /// One plane after its states and A/B vertices are decided.
@@ -149,6 +150,8 @@ fn select(cell_records: &[Intercept], entering: bool, rule: SignRule, stats: &mu
 fn vertex_record(plane: u32, family: u32, index: u32, cell: u32, value: Option<f64>, entering: bool, stats: &mut RepairStats) -> Intercept {
     let c = cell as f64;
     let v = match value {
+        // An exact midpoint marks a synthesized vertex: keep real ones off it.
+        Some(v) if v == c + 0.5 => f64::from_bits((c + 0.5).to_bits() + 1),
         Some(v) => v.clamp(c + MARGIN, c + 1.0 - MARGIN),
         None => {
             stats.synthesized_vertices += 1;
@@ -281,7 +284,7 @@ fn layer_s_vertices(s_raw: &[Intercept], lower: &NodeStates, upper: &NodeStates,
 /// *raw* (unsorted, unfiltered) intercepts of planes `k0 ..= k1`, under
 /// `rule` (Union or Parity; resolve Auto first with [`census_plane`]).
 pub fn reconstruct_slab_robust(grid: &Grid, k0: u32, planes: Vec<Vec<Intercept>>, rule: SignRule) -> (SlabResult, RepairStats) {
-    reconstruct_slab_solids(grid, k0, vec![planes], &[rule], &Expr::Operand(0))
+    reconstruct_slab_solids(grid, k0, vec![planes], &[rule], &Expr::Operand(0), None)
 }
 
 /// A boolean operator of [`Expr`].
@@ -360,7 +363,17 @@ fn result_vertex(expr: &Expr, lower: &mut [bool], changes: &mut [(f64, usize)]) 
 /// vertex at which the expression changes ([`result_vertex`]). The output
 /// is closed for any operands, and identical to the robust resampling of
 /// operand 0 when the expression is just that operand.
-pub fn reconstruct_slab_solids(grid: &Grid, k0: u32, operands: Vec<Vec<Vec<Intercept>>>, rules: &[SignRule], expr: &Expr) -> (SlabResult, RepairStats) {
+///
+/// Cells in `open` (holes too large to close, see [`crate::holes`]) emit no
+/// triangles, and vertices all of whose cells are open are left out.
+pub fn reconstruct_slab_solids(
+    grid: &Grid,
+    k0: u32,
+    operands: Vec<Vec<Vec<Intercept>>>,
+    rules: &[SignRule],
+    expr: &Expr,
+    open: Option<&OpenCells>,
+) -> (SlabResult, RepairStats) {
     assert!(rules.iter().all(|r| matches!(r, SignRule::Union | SignRule::Parity)), "resolve the sign rules first");
     assert_eq!(rules.len(), operands.len());
     assert!(expr.operands() <= operands.len());
@@ -420,6 +433,9 @@ pub fn reconstruct_slab_solids(grid: &Grid, k0: u32, operands: Vec<Vec<Vec<Inter
             }
         }
         f.sort_unstable_by_key(|r| r.sort_key());
+        if let Some(open) = open {
+            f.retain(|r| !open.surrounds(r, [na, nb]));
+        }
         finals.push(f);
     }
     let mut bases = Vec::with_capacity(n);
@@ -443,6 +459,10 @@ pub fn reconstruct_slab_solids(grid: &Grid, k0: u32, operands: Vec<Vec<Vec<Inter
         let pl = [&lower, &upper];
         for &id in &cells {
             let (i, j) = ((id % na as u64) as u32, (id / na as u64) as u32);
+            let cell = cell_id([i, j, k], [na, nb]);
+            if open.is_some_and(|o| o.contains(cell)) {
+                continue;
+            }
             let mut code = 0u8;
             for c in 0..8u8 {
                 let [x, y, z] = corner_offset(c);
@@ -450,6 +470,7 @@ pub fn reconstruct_slab_solids(grid: &Grid, k0: u32, operands: Vec<Vec<Vec<Inter
                     code |= 1 << c;
                 }
             }
+            let mut hole = false;
             let mut ids = [u32::MAX; 12];
             for e in 0..12u8 {
                 let [c0, c1] = EDGE_CORNERS[e as usize];
@@ -469,7 +490,12 @@ pub fn reconstruct_slab_solids(grid: &Grid, k0: u32, operands: Vec<Vec<Vec<Inter
                     _ => (0, lower.in_cell(lower.line(FAMILY_S, (i + o[0]) * (nb + 1) + (j + o[1])), k)),
                 };
                 assert_eq!(range.len(), 1, "robust reconstruction: edge {e} of cell ({i},{j},{k}) has {} vertices", range.len());
+                let r = pl[plane].records()[range.start];
+                hole |= r.value() == r.cell() as f64 + 0.5;
                 ids[e as usize] = bases[layer + plane] + range.start as u32;
+            }
+            if hole {
+                out.hole_cells.push(cell);
             }
             for t in mc_table().triangles(code) {
                 out.faces.push(t.map(|e| ids[e as usize]));

@@ -192,7 +192,7 @@ pub fn csg(scene: &Scene, scene_name: &str, output: &Path, opts: &ResampleOption
                 Source::Primitive(p) => (k0..=k1).map(|k| p.plane_intercepts(&grid, k, k < k1)).collect(),
             });
         }
-        let (res, rep) = reconstruct_slab_solids(&grid, k0, operands, &rules, &scene.expr);
+        let (res, rep) = reconstruct_slab_solids(&grid, k0, operands, &rules, &scene.expr, None);
         Ok((res, FilterStats::default(), rep))
     };
     let mut writer = MeshWriter::create(output, out_format, opts.write.clone())?;

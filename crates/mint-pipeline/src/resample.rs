@@ -27,7 +27,8 @@ use mint_core::grid::{Axis, Grid, GridError, GridSize};
 use mint_core::primitives::Transform;
 use mint_core::intercept::filter_plane;
 use mint_core::reconstruct::{crossing_to_intercept, reconstruct_slab, SlabResult};
-use mint_core::robust::{census_plane, reconstruct_slab_robust};
+use mint_core::holes::{open_cells, OpenCells};
+use mint_core::robust::{census_plane, reconstruct_slab_solids, Expr};
 use mint_core::signs::{LineCensus, RepairStats, SignRule};
 use mint_core::{discretize_triangle, FilterStats, Intercept};
 use mint_io::{Format, MeshReader, MeshWriter, ReadOptions, TriangleChunk, WriteOptions};
@@ -73,6 +74,10 @@ pub struct ResampleOptions {
     /// reconstruction whose output is always closed; `Orient` is the paper's
     /// strict rule, which leaves non-canonical cells open.
     pub signs: SignRule,
+    /// Robust rules: holes whose capping cells span more than this many
+    /// cells along some axis are left open (a clean boundary loop); `None`
+    /// closes every hole. Default `Some(16)`.
+    pub max_hole: Option<u32>,
 }
 
 impl Default for ResampleOptions {
@@ -88,6 +93,7 @@ impl Default for ResampleOptions {
             write: WriteOptions::default(),
             max_listed: 100,
             signs: SignRule::Auto,
+            max_hole: Some(16),
         }
     }
 }
@@ -143,6 +149,11 @@ pub struct ResampleSummary {
     /// Intercepts on edges without a state change, dropped.
     pub dropped_intercepts: u64,
     pub seconds_census: f64,
+    /// Holes (groups of capping cells) closed, and left open by `max_hole`.
+    pub holes_closed: u64,
+    pub holes_left_open: u64,
+    /// Cells left open around those holes.
+    pub open_cells: u64,
 }
 
 /// Why a run failed. Each variant's text is one line naming the file.
@@ -314,6 +325,34 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
     let max_listed = opts.max_listed;
     let store_ref = &store;
     let grid_ref = &grid;
+    // Holes to leave open: a first robust pass only collects hole cells.
+    let open: Option<OpenCells> = match (rule, opts.max_hole) {
+        (SignRule::Union | SignRule::Parity, Some(k)) => {
+            let mut holes: Vec<u64> = Vec::new();
+            let collect = |k0: u32, k1: u32| -> Result<Done, PipelineError> {
+                let mut planes = store_ref.read_planes(k0, k1, true)?;
+                if invert {
+                    planes.iter_mut().flatten().for_each(|r| r.signed_value = -r.signed_value);
+                }
+                let (mut res, rep) = reconstruct_slab_solids(grid_ref, k0, vec![planes], &[rule], &Expr::Operand(0), None);
+                res.vertices = Vec::new();
+                res.faces = Vec::new();
+                Ok((res, FilterStats::default(), rep))
+            };
+            reconstruct_ordered(&slabs, threads, &collect, &mint_pipeline_null_progress(progress), &mut |res, _, _, _| {
+                holes.extend_from_slice(&res.hole_cells);
+                Ok(())
+            })?;
+            let [na, nb, ns] = grid.local_dims();
+            let (set, hs) = open_cells(&mut holes, [na, nb, ns], k);
+            summary.holes_closed = hs.closed;
+            summary.holes_left_open = hs.left_open;
+            summary.open_cells = set.len() as u64;
+            (!set.is_empty()).then_some(set)
+        }
+        _ => None,
+    };
+    let open_ref = open.as_ref();
     let compute = move |k0: u32, k1: u32| -> Result<Done, PipelineError> {
         let mut planes = store_ref.read_planes(k0, k1, true)?;
         if invert {
@@ -324,7 +363,7 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
             }
         }
         if rule != SignRule::Orient {
-            let (res, rep) = reconstruct_slab_robust(grid_ref, k0, planes, rule);
+            let (res, rep) = reconstruct_slab_solids(grid_ref, k0, vec![planes], &[rule], &Expr::Operand(0), open_ref);
             return Ok((res, FilterStats::default(), rep));
         }
         let mut stats = FilterStats::default();
@@ -563,6 +602,17 @@ pub fn plan_slabs(counts: &[u64], ns: u32, fixed: Option<u32>, budget: u64) -> V
         k0 = k1;
     }
     slabs
+}
+
+/// A progress hook that only forwards cancellation (for hidden passes).
+fn mint_pipeline_null_progress(p: &dyn Progress) -> impl Progress + '_ {
+    struct CancelOnly<'a>(&'a dyn Progress);
+    impl Progress for CancelOnly<'_> {
+        fn cancelled(&self) -> bool {
+            self.0.cancelled()
+        }
+    }
+    CancelOnly(p)
 }
 
 /// What one slab's reconstruction returns.
