@@ -77,6 +77,43 @@ See crates/mint-pipeline/src/scene.rs for the whole format (defs and refs, halfs
     /// Generate a genus-3 solid, resample it, and check the result: mint's
     /// main job on a built-in input, end to end.
     Demo(DemoArgs),
+    /// Cut a mesh by N parallel planes into a stack of contours (a .pro
+    /// profile): test data for `mint contours`, and cross-sections for users.
+    #[command(long_about = "Cut a mesh by N parallel planes into a profile (.pro): a stack of sections, \
+each a set of closed planar contours.\n\n\
+Plane k lies at min + (k + 1/2) * extent / N along --axis (default z), so no plane touches the mesh's extremes. \
+A vertex exactly on a plane counts as above it, so every crossing is decided exactly; holes in the mesh \
+leave open chains, which are closed to the nearest chain start. Contours that are degenerate or cross \
+another are dropped (and counted), so the output is always a valid profile.\n\n\
+Example:\n  mint slice bunny.ply bunny.pro --sections 100 --axis y")]
+    Slice(crate::contour_cmds::SliceArgs),
+    /// Rebuild a surface from a stack of planar contours (.pro) by the angle
+    /// criterion or by marching cubes.
+    #[command(long_about = "Rebuild a surface from a profile (.pro): sections of planar contours, holes by nesting.\n\n\
+--method angle (Dangl 1998, 2.2) joins the contour vertices of consecutive sections by strips of \
+triangles: from a start pair (the vertex farthest from its centroid and its best match above), it \
+advances on the side with the shorter new diagonal unless the edge directions disagree beyond \
+--threshold (a cosine, default 0.5). Exact contours and few triangles; one contour facing several is \
+split along chords (branching); --open for open polylines.\n\n\
+--method mc puts the stack on a grid of --cubes cubes (default 64) across its larger side, one layer \
+per section spacing, and runs mint's exact marching machinery: in-plane vertices where the contours \
+really cross the grid lines, between-section vertices interpolated from the distances to the contours. \
+Any holes and branching; watertight with --caps.\n\n\
+--caps closes the ends: triangulated end sections (angle), caps half a spacing beyond them (mc).\n\n\
+Examples:\n  mint contours organ.pro organ.ply --method mc --cubes 256 --caps --stats run.json\n  \
+mint contours vase.pro vase.wrl --method angle --threshold 0.7 --caps")]
+    Contours(crate::contour_cmds::ContoursArgs),
+    /// Reduce an over-tessellated mesh by merging near-coplanar triangles
+    /// (normals within --angle degrees) and re-triangulating each region.
+    #[command(long_about = "Reduce an over-tessellated mesh with the normal optimizer (Dangl 1998, 3).\n\n\
+Edge-connected triangles whose normals all lie within --angle degrees of one another form regions \
+(--angle 0: exactly coplanar ones only). Each region that is a disk (with holes) and projects without \
+folding on the plane of its Newell normal is re-triangulated from its boundary, smallest inner angle \
+first; boundary vertices collinear with their neighbours in every region around them are dropped. \
+Other regions stay as they are. No vertex moves: planar regions stay planar, and the topology and \
+boundary are kept.\n\n\
+Example:\n  mint optimize marching-cubed.ply clean.ply --angle 5 --stats opt.json")]
+    Optimize(crate::contour_cmds::OptimizeArgs),
     /// Cast range images of a mesh from N viewpoints: test scans with true
     /// (and, on request, perturbed) poses in a .conf.
     #[command(long_about = "Cast range images of a mesh from N viewpoints, as an orthographic range scanner would.\n\n\
@@ -391,6 +428,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Distance(a) => cmd_distance(a),
         Command::Gen(a) => cmd_gen(a),
         Command::Demo(a) => cmd_demo(a),
+        Command::Slice(a) => crate::contour_cmds::cmd_slice(a),
+        Command::Contours(a) => crate::contour_cmds::cmd_contours(a),
+        Command::Optimize(a) => crate::contour_cmds::cmd_optimize(a),
         Command::Scan(a) => crate::range_cmds::cmd_scan(a),
         Command::Align(a) => crate::range_cmds::cmd_align(a),
         Command::Zipper(a) => crate::range_cmds::cmd_zipper(a),

@@ -6,6 +6,8 @@
 
 pub mod alloc;
 mod commands;
+mod contour_cmds;
+mod range_cmds;
 pub mod progress;
 pub mod units;
 

@@ -7,12 +7,12 @@
 //! An error at any stage drops the writer, which deletes its temporary
 //! file: the target is created complete or not at all.
 //!
-//! STL input converted to an indexed format is welded: corners with exactly
+//! STL and raw input converted to an indexed format is welded: corners with exactly
 //! equal coordinates (bit for bit, with -0.0 taken as 0.0) become one
 //! vertex. Welding keeps a hash map over the distinct positions, about 40
 //! bytes per output vertex, so its memory grows with the vertex count of
 //! the result (not with the face count); that is accepted for now.
-//! Converting to STL keeps STL's soup layout.
+//! Converting between STL and raw keeps the soup layout.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -59,12 +59,13 @@ pub fn convert(
 ) -> Result<ConvertSummary, Error> {
     // Output format from the name: refuse before touching anything.
     let output_format = Format::from_extension(output).ok_or_else(|| {
-        Error::unsupported(output, "unknown output format: the file name must end in .ply, .obj, .stl or .off")
+        Error::unsupported(output, "unknown output format: the file name must end in .ply, .obj, .stl, .off, .mesh, .raw, .wrl or .3ds")
     })?;
     // Open the input; a bad input fails here, before any output exists.
     let mut reader = MeshReader::open(input, read)?;
     let input_format = reader.info().format;
-    let weld = input_format == Format::Stl && output_format != Format::Stl;
+    let soup = |f: Format| matches!(f, Format::Stl | Format::Raw);
+    let weld = soup(input_format) && !soup(output_format);
     let total = reader.bytes_total();
     // The writer's temporary file lives beside the target until `finish`.
     let mut writer = MeshWriter::create(output, output_format, write)?;

@@ -1,8 +1,10 @@
 //! Which mesh format a file holds. [`Format::from_path`] trusts the file name
 //! extension (case-insensitive) and otherwise sniffs the first bytes with
-//! [`Format::sniff`]: the `ply` magic line, an `OFF`-family keyword, an ASCII
-//! STL (`solid` followed by text that contains `facet`/`endsolid`), a binary
-//! STL (the file size is exactly `84 + 50 * count`), or OBJ keywords.
+//! [`Format::sniff`]: the `ply` magic line, `#VRML`, a 3DS main chunk whose
+//! length fits the file, an ASCII STL (`solid` followed by text that
+//! contains `facet`/`endsolid`), a binary STL (the file size is exactly
+//! `84 + 50 * count`), an `OFF`-family keyword, OBJ keywords, the `mesh`
+//! header, or a first line of nine numbers (raw).
 
 use std::fmt;
 use std::fs::File;
@@ -23,11 +25,20 @@ pub enum Format {
     Stl,
     /// Geomview OFF (ascii).
     Off,
+    /// The `mesh` text format of Dangl 1998: `v x y z` and `f i j k` lines.
+    Mesh,
+    /// Raw triangles: nine coordinates per line; a triangle soup.
+    Raw,
+    /// VRML 2.0 (VRML97): `IndexedFaceSet`s inside `Shape`s.
+    Vrml,
+    /// Autodesk 3D Studio, binary chunks.
+    ThreeDs,
 }
 
 impl Format {
     /// The format of the file at `path`: by extension (`.ply`, `.obj`,
-    /// `.stl`, `.off`, any case), else by sniffing its first 4 KiB.
+    /// `.stl`, `.off`, `.mesh`, `.raw`, `.wrl`/`.vrml`, `.3ds`, any case),
+    /// else by sniffing its first 4 KiB.
     /// Unknown formats give an [`ErrorKind::Unsupported`](crate::ErrorKind)
     /// error naming the file; an unreadable file an `Io` error.
     pub fn from_path(path: &Path) -> Result<Format, Error> {
@@ -57,6 +68,10 @@ impl Format {
             "obj" => Some(Format::Obj),
             "stl" => Some(Format::Stl),
             "off" => Some(Format::Off),
+            "mesh" => Some(Format::Mesh),
+            "raw" => Some(Format::Raw),
+            "wrl" | "vrml" => Some(Format::Vrml),
+            "3ds" => Some(Format::ThreeDs),
             _ => None,
         }
     }
@@ -66,6 +81,12 @@ impl Format {
     pub fn sniff(head: &[u8], file_len: u64) -> Option<Format> {
         if head.starts_with(b"ply\n") || head.starts_with(b"ply\r\n") {
             return Some(Format::Ply);
+        }
+        if head.starts_with(b"#VRML") {
+            return Some(Format::Vrml);
+        }
+        if crate::three_ds::sniff(head, file_len) {
+            return Some(Format::ThreeDs);
         }
         if stl_looks_ascii(head) || stl_binary_size_matches(head, file_len) {
             return Some(Format::Stl);
@@ -84,6 +105,13 @@ impl Format {
             if OBJ.contains(&first) {
                 return Some(Format::Obj);
             }
+            if first == b"mesh" {
+                return Some(Format::Mesh);
+            }
+            let n = words(line).take_while(|t| !t.starts_with(b"#")).count();
+            if n == 9 && words(line).take(9).all(|t| crate::text::parse_f64(t).is_some()) {
+                return Some(Format::Raw);
+            }
             return None;
         }
         None
@@ -96,6 +124,10 @@ impl Format {
             Format::Obj => "obj",
             Format::Stl => "stl",
             Format::Off => "off",
+            Format::Mesh => "mesh",
+            Format::Raw => "raw",
+            Format::Vrml => "wrl",
+            Format::ThreeDs => "3ds",
         }
     }
 }
@@ -107,6 +139,10 @@ impl fmt::Display for Format {
             Format::Obj => "OBJ",
             Format::Stl => "STL",
             Format::Off => "OFF",
+            Format::Mesh => "mesh",
+            Format::Raw => "raw",
+            Format::Vrml => "VRML 2.0",
+            Format::ThreeDs => "3DS",
         })
     }
 }

@@ -1,5 +1,6 @@
 //! mint-io: streaming readers and writers for triangle meshes (PLY, OBJ,
-//! STL, OFF) whose memory does not grow with the face count.
+//! STL, OFF, and the formats of layered reconstruction: `mesh`, raw,
+//! VRML 2.0, 3DS) whose memory does not grow with the face count.
 //!
 //! Reading: [`MeshReader::open`] detects the [`Format`], memory-maps the
 //! file, parses the header into a [`MeshInfo`] and makes vertex positions
@@ -20,7 +21,7 @@
 //!
 //! Modules: [`format`](mod@format) (detection), [`reader`], [`writer`], [`atomic`],
 //! [`convert`](mod@convert), [`error`]; the format modules `ply`, `obj`,
-//! `stl`, `off`; `mapped` (the only place that maps files), `positions`
+//! `stl`, `off`, `mesh`, `raw`, `vrml`, `three_ds`; `mapped` (the only place that maps files), `positions`
 //! (index-addressed vertex fetches and the triangle emitter), `text`
 //! (tokenizing).
 
@@ -31,13 +32,17 @@ pub mod convert;
 pub mod error;
 pub mod format;
 mod mapped;
+mod mesh;
 mod obj;
 mod off;
 mod ply;
 mod positions;
+mod raw;
 pub mod reader;
 mod stl;
 mod text;
+mod three_ds;
+mod vrml;
 pub mod writer;
 
 pub use atomic::AtomicFile;
@@ -46,6 +51,9 @@ pub use error::{Error, ErrorKind, Position};
 pub use format::Format;
 pub use reader::{read_info, ElementInfo, MeshInfo, MeshReader, RangeGrid, ReadOptions, ReadStats, TriangleChunk, VertexPositions};
 pub use writer::{MeshWriter, WriteOptions, WriteSummary};
+
+#[cfg(test)]
+mod layered_tests;
 
 #[cfg(test)]
 mod tests {

@@ -19,7 +19,7 @@ use crate::error::Error;
 use crate::format::Format;
 use crate::mapped::Mapped;
 use crate::positions::{Emit, Positions};
-use crate::{obj, off, ply, stl};
+use crate::{mesh, obj, off, ply, raw, stl, three_ds, vrml};
 
 /// What a file says about itself, from its header (see [`read_info`]).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -59,9 +59,10 @@ pub struct ElementInfo {
 
 /// Reads what the file says about itself without streaming its faces.
 ///
-/// PLY, binary STL and OFF: header only. OBJ and ascii STL have no header
-/// with counts, so this scans the whole file (one sequential pass over the
-/// mapped bytes, no spill) to count vertices and faces.
+/// PLY, binary STL and OFF: header only; 3DS: the chunk headers. OBJ,
+/// ascii STL, mesh, raw and VRML have no header with counts, so this scans
+/// the whole file (one sequential pass over the mapped bytes, no spill) to
+/// count vertices and faces.
 pub fn read_info(path: &Path) -> Result<MeshInfo, Error> {
     let format = Format::from_path(path)?;
     let map = Mapped::open(path, &std::env::temp_dir())?;
@@ -70,6 +71,10 @@ pub fn read_info(path: &Path) -> Result<MeshInfo, Error> {
         Format::Obj => obj::info(path, map.bytes()),
         Format::Stl => stl::info(path, map.bytes()),
         Format::Off => off::info(path, map.bytes()),
+        Format::Mesh => mesh::info(path, map.bytes()),
+        Format::Raw => raw::info(path, map.bytes()),
+        Format::Vrml => vrml::info(path, map.bytes()),
+        Format::ThreeDs => three_ds::info(path, map.bytes()),
     }
 }
 
@@ -254,6 +259,10 @@ impl MeshReader {
             Format::Obj => obj::open(path, map, &spill_dir)?,
             Format::Stl => stl::open(path, map, &spill_dir)?,
             Format::Off => off::open(path, map, &spill_dir)?,
+            Format::Mesh => mesh::open(path, map, &spill_dir)?,
+            Format::Raw => raw::open(path, map, &spill_dir)?,
+            Format::Vrml => vrml::open(path, map, &spill_dir)?,
+            Format::ThreeDs => three_ds::open(path, map, &spill_dir)?,
         };
         Ok(MeshReader {
             path: path.to_path_buf(),

@@ -1,6 +1,7 @@
 //! The streaming writer. [`MeshWriter`] checks the sink contract (all
 //! vertices before any face, finite coordinates, indices in range), counts,
-//! and hands each vertex and face to a format writer (PLY, OBJ, STL, OFF)
+//! and hands each vertex and face to a format writer (PLY, OBJ, STL, OFF,
+//! mesh, raw, VRML, 3DS)
 //! that appends bytes to an `OutFile`: a 1 MiB buffer over an
 //! [`AtomicFile`]. Counts that a format stores before the data (PLY header,
 //! OFF counts line, binary STL facet count) are written as placeholders of
@@ -9,8 +10,9 @@
 //! without `finish`, removes the temporary file and leaves the target as it
 //! was.
 //!
-//! Memory: the buffer, plus for STL output a spill file of vertex positions
-//! (f64 triples, mapped), since STL stores positions per facet.
+//! Memory: the buffer, plus for STL, raw and 3DS output a spill file of
+//! vertex positions (f64 triples, mapped), since those store positions per
+//! facet or per object.
 
 use std::io::{self, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -20,7 +22,7 @@ use mint_core::{MeshSink, SinkError};
 use crate::atomic::AtomicFile;
 use crate::error::{Error, ErrorKind};
 use crate::format::Format;
-use crate::{obj, off, ply, stl};
+use crate::{mesh, obj, off, ply, raw, stl, three_ds, vrml};
 
 /// Options of [`MeshWriter::create`].
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -29,10 +31,10 @@ pub struct WriteOptions {
     /// little-endian PLY, binary STL). OBJ and OFF are always text.
     pub ascii: bool,
     /// Store vertex coordinates as f64. Default false: f32 (PLY `float`;
-    /// in OBJ and OFF the shortest decimal that reads back as the same f32
-    /// (as f64 it reads back as that decimal, e.g. `0.1`));
+    /// in OBJ, OFF, mesh, raw and VRML the shortest decimal that reads back
+    /// as the same f32 (as f64 it reads back as that decimal, e.g. `0.1`));
     /// coordinates beyond the f32 range are then refused with a `Value`
-    /// error. STL always stores f32.
+    /// error. STL and 3DS always store f32.
     pub double: bool,
     /// Where the STL writer spills vertex positions. Default `None`: the
     /// system temporary directory, [`std::env::temp_dir`].
@@ -109,6 +111,11 @@ impl OutFile {
         Ok(())
     }
 
+    /// Bytes written so far (flushed and buffered).
+    pub(crate) fn len(&self) -> u64 {
+        self.flushed + self.buf.len() as u64
+    }
+
     /// Overwrites bytes at `offset` (which must already be written).
     pub(crate) fn patch(&mut self, offset: u64, bytes: &[u8]) -> Result<(), Error> {
         self.flush_buf()?;
@@ -171,8 +178,12 @@ impl MeshWriter {
             Format::Obj => Box::new(obj::ObjWriter::create(path, &opts)?),
             Format::Stl => Box::new(stl::StlWriter::create(path, &opts)?),
             Format::Off => Box::new(off::OffWriter::create(path, &opts)?),
+            Format::Mesh => Box::new(mesh::MeshFmtWriter::create(path, &opts)?),
+            Format::Raw => Box::new(raw::RawWriter::create(path, &opts)?),
+            Format::Vrml => Box::new(vrml::VrmlWriter::create(path, &opts)?),
+            Format::ThreeDs => Box::new(three_ds::ThreeDsWriter::create(path, &opts)?),
         };
-        let f32_out = !opts.double || format == Format::Stl;
+        let f32_out = !opts.double || matches!(format, Format::Stl | Format::ThreeDs);
         Ok(MeshWriter { path: path.to_path_buf(), format, inner, f32_out, vertices: 0, faces: 0 })
     }
 

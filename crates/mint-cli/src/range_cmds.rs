@@ -1,0 +1,234 @@
+//! The range-scan subcommands `mint scan`, `mint align` and `mint zipper`:
+//! argument definitions (clap derive, with help that teaches) and the glue
+//! to mint-range. Set files are Stanford `.conf` or MeshLab `.aln`, by
+//! extension; scan paths inside them are relative to the set file.
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use mint_range::icp::{align, AlignOptions, Metric, Status, Strategy};
+use mint_range::synth::{perturb, synthesize, SynthOptions};
+use mint_range::zipper::{zipper, ZipperOptions};
+use mint_range::{load_set, MeshOptions, ScanEntry, ScanMesh, ScanSet, SetFormat};
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+pub struct ScanArgs {
+    /// The mesh to scan (any format mint reads), ideally closed.
+    pub mesh: PathBuf,
+    /// Directory for the output (created if missing): view_NN.ply range
+    /// images, view_NN.mesh.ply their triangle meshes (in each view's own
+    /// frame), scans.conf with the true poses.
+    pub out_dir: PathBuf,
+    /// Number of viewpoints, spread evenly over the sphere.
+    #[arg(long, default_value_t = 8)]
+    pub views: usize,
+    /// Standard deviation of the depth noise, in model units.
+    #[arg(long, default_value_t = 0.0)]
+    pub noise: f64,
+    /// Seed of the noise and of the perturbation.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Samples across each view (each image has RES x RES cells).
+    #[arg(long, default_value_t = 200)]
+    pub resolution: u32,
+    /// Samples seen at more than this angle (degrees) from the surface normal are lost.
+    #[arg(long, default_value_t = 80.0)]
+    pub max_angle: f64,
+    /// Also write scans-perturbed.conf: every view but the first moved by a
+    /// random rotation of up to this many degrees about the mesh centre...
+    #[arg(long, default_value_t = 0.0)]
+    pub perturb_deg: f64,
+    /// ...and a random translation of up to this fraction of the bounding-box diagonal.
+    #[arg(long, default_value_t = 0.0)]
+    pub perturb_frac: f64,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MetricArg {
+    /// Point to point, Horn's closed-form quaternion (Turk and Levoy's choice).
+    Point,
+    /// Point to plane (Chen and Medioni), linearized.
+    Plane,
+}
+
+#[derive(Args, Debug)]
+pub struct AlignArgs {
+    /// Scan set with initial poses (.conf or .aln).
+    pub set: PathBuf,
+    /// Output scan set with the refined poses, written in the convention of
+    /// the input set. Scans that could not be registered are left out (and
+    /// reported).
+    pub out_set: PathBuf,
+    /// Final pairing distance d [default: 2 x the largest sampling distance].
+    #[arg(long)]
+    pub distance: Option<f64>,
+    /// Pairing distance of the coarsest level, halved per level down to d
+    /// [default: 8 d]. Raise it when the initial poses are far off.
+    #[arg(long)]
+    pub start_distance: Option<f64>,
+    /// Error metric.
+    #[arg(long, value_enum, default_value_t = MetricArg::Point)]
+    pub metric: MetricArg,
+    /// Index (0-based, in set order) of the scan that stays fixed.
+    #[arg(long, default_value_t = 0)]
+    pub anchor: usize,
+    /// Register every scan to the anchor alone instead of to the growing
+    /// model of all registered scans.
+    #[arg(long)]
+    pub anchor_only: bool,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct ZipperArgs {
+    /// Scan set with registered poses (.conf or .aln).
+    pub set: PathBuf,
+    /// Output mesh; the format follows the extension.
+    pub output: PathBuf,
+    /// Redundancy tolerance d as a multiple of the sampling distance s.
+    #[arg(long, default_value_t = 3.0)]
+    pub distance_factor: f64,
+    /// Skip consensus geometry (vertices stay where their scan put them).
+    #[arg(long)]
+    pub no_consensus: bool,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn load(set_path: &std::path::Path) -> Result<(ScanSet, Vec<ScanMesh>)> {
+    let set = ScanSet::read(set_path)?;
+    let scans = load_set(&set, set_path, &MeshOptions::default())?;
+    Ok((set, scans))
+}
+
+pub fn cmd_scan(a: ScanArgs) -> Result<()> {
+    let (positions, faces) = crate::commands::load_mesh(&a.mesh)?;
+    let opts = SynthOptions { views: a.views, resolution: a.resolution, noise: a.noise, seed: a.seed, max_angle_deg: a.max_angle };
+    let scans = synthesize(&positions, &faces, &opts).with_context(|| format!("scanning {}", a.mesh.display()))?;
+    std::fs::create_dir_all(&a.out_dir).with_context(|| format!("{}: creating the output directory", a.out_dir.display()))?;
+    let mut set = ScanSet::new(&a.out_dir);
+    let comments = [format!("mint scan of {}", a.mesh.display())];
+    let mut samples = 0;
+    for sc in &scans {
+        let file = format!("{}.ply", sc.name);
+        sc.image.write_ply(&a.out_dir.join(&file), &comments)?;
+        samples += sc.image.points.len();
+        if let Ok(m) = ScanMesh::from_range_image(&sc.name, &sc.image, &MeshOptions::default()) {
+            let mpath = a.out_dir.join(format!("{}.mesh.ply", sc.name));
+            let mut w = mint_io::MeshWriter::create(&mpath, mint_io::Format::Ply, Default::default())?;
+            for p in &m.positions {
+                w.write_vertex(*p)?;
+            }
+            for f in &m.faces {
+                w.write_face(*f)?;
+            }
+            w.finish()?;
+        }
+        set.entries.push(ScanEntry { file, path: PathBuf::new(), pose: sc.pose, line: 0 });
+    }
+    set.write(&a.out_dir.join("scans.conf"), SetFormat::Conf)?;
+    if a.perturb_deg > 0.0 || a.perturb_frac > 0.0 {
+        let (lo, hi) = mint_range::scan_mesh::bbox(faces.iter().flatten().map(|&i| positions[i as usize]));
+        let c = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
+        let diag = mint_range::geom::dist(lo, hi);
+        let mut rng = mint_mesh::SplitMix64::new(a.seed ^ 0x5eed);
+        let mut p = set.clone();
+        for e in p.entries.iter_mut().skip(1) {
+            e.pose = perturb(&e.pose, c, a.perturb_deg, a.perturb_frac * diag, &mut rng);
+        }
+        p.write(&a.out_dir.join("scans-perturbed.conf"), SetFormat::Conf)?;
+    }
+    eprintln!(
+        "scanned {} from {} views: {} samples -> {} (scans.conf{})",
+        a.mesh.display(),
+        scans.len(),
+        samples,
+        a.out_dir.display(),
+        if a.perturb_deg > 0.0 || a.perturb_frac > 0.0 { ", scans-perturbed.conf" } else { "" }
+    );
+    Ok(())
+}
+
+pub fn cmd_align(a: AlignArgs) -> Result<()> {
+    let t = std::time::Instant::now();
+    let (set, scans) = load(&a.set)?;
+    let opts = AlignOptions {
+        distance: a.distance,
+        start_distance: a.start_distance,
+        metric: match a.metric {
+            MetricArg::Point => Metric::PointToPoint,
+            MetricArg::Plane => Metric::PointToPlane,
+        },
+        strategy: if a.anchor_only { Strategy::Anchor } else { Strategy::Growing },
+        anchor: a.anchor,
+        ..Default::default()
+    };
+    let initial: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
+    let r = align(&scans, &initial, &opts)?;
+    let mut out = set.clone();
+    out.entries.clear();
+    for (i, e) in set.entries.iter().enumerate() {
+        if !matches!(r.reports[i].status, Status::Failed(_)) {
+            out.entries.push(ScanEntry { pose: r.poses[i], ..e.clone() });
+        }
+    }
+    if out.entries.is_empty() {
+        bail!("{}: no scan could be registered", a.set.display());
+    }
+    out.write(&a.out_set, SetFormat::from_path(&a.set))?;
+    let secs = t.elapsed().as_secs_f64();
+    if a.json {
+        let v = serde_json::json!({ "set": a.set.display().to_string(), "out_set": a.out_set.display().to_string(), "distance": r.distance, "start_distance": r.start_distance, "seconds": secs, "scans": r.reports });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        eprintln!("aligned {} scans of {} (d = {:.4e}, start {:.4e}) in {secs:.2}s -> {}", scans.len(), a.set.display(), r.distance, r.start_distance, a.out_set.display());
+        for s in &r.reports {
+            match &s.status {
+                Status::Failed(why) => eprintln!("  {:<24} FAILED, left out: {why}", s.name),
+                st => eprintln!("  {:<24} {:<10} rms {:.4e}  pairs {:>7}  iterations {:>4}  moved {:.3} deg, {:.4e}", s.name, format!("{st:?}"), s.rms, s.pairs, s.iterations, s.moved_deg, s.moved),
+            }
+        }
+    }
+    Ok(())
+}
+
+pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
+    let t = std::time::Instant::now();
+    let (set, scans) = load(&a.set)?;
+    let poses: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
+    let opts = ZipperOptions { distance_factor: a.distance_factor, consensus: !a.no_consensus, ..Default::default() };
+    let (pos, faces, rep) = zipper(&scans, &poses, &opts)?;
+    let format = mint_io::Format::from_path(&a.output)?;
+    let mut w = mint_io::MeshWriter::create(&a.output, format, Default::default())?;
+    for p in &pos {
+        w.write_vertex(*p)?;
+    }
+    for f in &faces {
+        w.write_face(*f)?;
+    }
+    w.finish()?;
+    let secs = t.elapsed().as_secs_f64();
+    let check = mint_mesh::check(&pos, &faces);
+    if a.json {
+        let v = serde_json::json!({ "set": a.set.display().to_string(), "output": a.output.display().to_string(), "seconds": secs, "zipper": rep, "check": check, "peak_heap_bytes": crate::alloc::peak_heap() });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        eprintln!("zippered {} scans of {} in {secs:.2}s -> {}: {} vertices, {} faces", rep.scans, a.set.display(), a.output.display(), rep.vertices, rep.faces);
+        eprintln!("  redundant {} , trimmed {}, stitched {}, holes filled {}, small-triangle vertices {}", rep.redundant, rep.trimmed, rep.stitched, rep.holes_filled, rep.small_triangle_vertices);
+        eprintln!(
+            "  2-manifold: {} (non-manifold edges {}, vertices {}), boundary loops {}, components {}",
+            check.non_manifold_edges == 0 && check.non_manifold_vertices == 0,
+            check.non_manifold_edges,
+            check.non_manifold_vertices,
+            check.boundary_loops,
+            check.components
+        );
+        if let Some(c) = &rep.consensus {
+            eprintln!("  consensus: {} vertices moved, mean {:.3e}, max {:.3e}, {:.2} scans each", c.moved, c.mean_move, c.max_move, c.mean_scans);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,319 @@
+//! File-to-file drivers of the contour commands, the only part of this crate
+//! that touches files: [`reconstruct_file`] (`mint contours`),
+//! [`slice_file`] (`mint slice`) and [`optimize_file`] (`mint optimize`).
+//! Each returns a [`RunStats`] (time, counts, the parameters used and the
+//! method's own counters), which the CLI writes as the `--stats` JSON file.
+//!
+//! Output goes through [`SpillSink`]: vertices stream into a
+//! [`mint_io::MeshWriter`] (a temporary file beside the target), faces into
+//! an anonymous spill file, appended after the last vertex at
+//! [`SpillSink::finish`], which renames the output into place. An error or
+//! a cancellation drops both, so no partial output is ever left.
+//!
+//! Memory: reconstruction streams sections (the marching-cubes method reads
+//! the profile twice: once for the bounding box and the section offsets,
+//! once to reconstruct); slicing streams the mesh's faces and holds the
+//! segments of all planes; the optimizer holds the whole mesh.
+
+use crate::angle::{AngleOptions, AngleReconstructor, AngleStats};
+use crate::error::ContourError;
+use crate::mc::{McOptions, McReconstructor, McStats, StackSummary};
+use crate::optimize::{optimize, OptimizeStats};
+use crate::profile::{ProfileOptions, ProfileReader, ProfileWriter};
+use crate::slice::{SliceStats, Slicer};
+use mint_core::{MeshSink, SinkError};
+use mint_io::{AtomicFile, Format, MeshReader, MeshWriter, ReadOptions, TriangleChunk, WriteOptions};
+use serde::Serialize;
+use std::io::{BufReader, BufWriter, Read, Seek, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// A [`MeshSink`] that accepts faces before later vertices: vertices go to
+/// the output file, faces to a spill file until [`finish`](SpillSink::finish).
+pub struct SpillSink {
+    writer: MeshWriter,
+    faces: BufWriter<std::fs::File>,
+    spill_name: PathBuf,
+    vertices: u64,
+    face_count: u64,
+}
+
+impl SpillSink {
+    /// Starts writing `output` (format by extension); the face spill file
+    /// lives, nameless, in the output's directory.
+    pub fn create(output: &Path, write: WriteOptions) -> Result<SpillSink, ContourError> {
+        let format = Format::from_path(output)?;
+        let writer = MeshWriter::create(output, format, write)?;
+        let dir = output.parent().filter(|p| !p.as_os_str().is_empty()).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+        let spill_name = dir.join("(face spill)");
+        let file = tempfile::tempfile_in(&dir).map_err(|e| ContourError::io(&spill_name, "cannot create the face spill file", e))?;
+        Ok(SpillSink { writer, faces: BufWriter::with_capacity(1 << 20, file), spill_name, vertices: 0, face_count: 0 })
+    }
+
+    /// Appends the faces after the vertices and renames the output into place.
+    pub fn finish(self) -> Result<mint_io::WriteSummary, ContourError> {
+        let SpillSink { mut writer, faces, spill_name, face_count, .. } = self;
+        let mut file = faces.into_inner().map_err(|e| ContourError::io(&spill_name, "cannot write the face spill file", e.into_error()))?;
+        file.rewind().map_err(|e| ContourError::io(&spill_name, "cannot rewind the face spill file", e))?;
+        let mut rd = BufReader::with_capacity(1 << 20, file);
+        let mut b = [0u8; 12];
+        for _ in 0..face_count {
+            rd.read_exact(&mut b).map_err(|e| ContourError::io(&spill_name, "cannot read the face spill file", e))?;
+            writer.write_face([0, 1, 2].map(|k| u32::from_le_bytes(b[4 * k..4 * k + 4].try_into().unwrap())))?;
+        }
+        Ok(writer.finish()?)
+    }
+}
+
+impl MeshSink for SpillSink {
+    fn vertex(&mut self, p: [f64; 3]) -> Result<(), SinkError> {
+        self.vertices += 1;
+        Ok(self.writer.write_vertex(p)?)
+    }
+    fn face(&mut self, f: [u32; 3]) -> Result<(), SinkError> {
+        debug_assert!(f.iter().all(|&i| (i as u64) < self.vertices), "a face before its vertices");
+        let mut b = [0u8; 12];
+        for k in 0..3 {
+            b[4 * k..4 * k + 4].copy_from_slice(&f[k].to_le_bytes());
+        }
+        self.face_count += 1;
+        Ok(self.faces.write_all(&b)?)
+    }
+}
+
+/// The reconstruction method of `mint contours`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Method {
+    /// Cross-section triangulation with the angle criterion.
+    Angle(AngleOptions),
+    /// Marching cubes on the contours.
+    Mc(McOptions),
+}
+
+/// Method-specific counters.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum MethodStats {
+    Angle(AngleStats),
+    Mc(McStats),
+    Slice(SliceStats),
+    Optimize(OptimizeStats),
+}
+
+/// The status file of a run (`--stats FILE.json`).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct RunStats {
+    /// `contours`, `slice` or `optimize`.
+    pub command: String,
+    pub input: String,
+    pub output: String,
+    /// The parameters used, defaults included.
+    pub parameters: std::collections::BTreeMap<String, Value>,
+    pub seconds: f64,
+    /// Output size (for `slice`: sections written and contour vertices).
+    pub vertices: u64,
+    pub faces: u64,
+    /// Input size: contour vertices and sections, or mesh vertices and faces.
+    pub input_vertices: u64,
+    pub input_faces_or_sections: u64,
+    /// What the method counted.
+    pub details: MethodStats,
+}
+
+/// A parameter value in [`RunStats::parameters`].
+#[derive(Debug, Clone, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum Value {
+    Bool(bool),
+    Int(u64),
+    Float(f64),
+    Text(String),
+}
+
+fn params(list: &[(&str, Value)]) -> std::collections::BTreeMap<String, Value> {
+    list.iter().map(|(k, v)| (k.to_string(), v.clone())).collect()
+}
+
+fn open_profile(path: &Path, opts: ProfileOptions) -> Result<ProfileReader<BufReader<std::fs::File>>, ContourError> {
+    let f = std::fs::File::open(path).map_err(|e| ContourError::io(path, "cannot open for reading", e))?;
+    Ok(ProfileReader::new(BufReader::with_capacity(1 << 20, f), path, opts))
+}
+
+/// `mint contours`: reconstructs the profile `input` into the mesh `output`.
+/// `cancelled` is polled once per section.
+pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: WriteOptions, cancelled: &dyn Fn() -> bool) -> Result<RunStats, ContourError> {
+    let t = Instant::now();
+    // Refuse an unknown output format before reading anything.
+    Format::from_extension(output).ok_or_else(|| ContourError::input(output, "unknown output format: use .ply, .obj, .stl, .off, .mesh, .raw, .wrl or .3ds"))?;
+    let open = matches!(method, Method::Angle(AngleOptions { open: true, .. }));
+    let popts = ProfileOptions { check_intersections: !open, ..ProfileOptions::default() };
+    let check = || if cancelled() { Err(ContourError::Cancelled) } else { Ok(()) };
+    let (details, sections, in_vertices, parameters) = match method {
+        Method::Mc(o) => {
+            // Pass 1: bounding box and offsets (validates the whole file first).
+            let mut r = open_profile(input, popts)?;
+            let mut summary = None;
+            while let Some(s) = r.next_section()? {
+                let sm = summary.get_or_insert_with(|| StackSummary::new(r.frame().unwrap()));
+                sm.add(&s);
+                check()?;
+            }
+            let summary = summary.expect("a valid profile has a section");
+            // Pass 2: reconstruct while streaming.
+            let mut sink = SpillSink::create(output, write)?;
+            let mut mc = McReconstructor::new(&summary, o, input)?;
+            let mut r = open_profile(input, popts)?;
+            while let Some(s) = r.next_section()? {
+                mc.push(&s, &mut sink)?;
+                check()?;
+            }
+            let st = mc.finish(&mut sink)?;
+            sink.finish()?;
+            let p = params(&[("method", Value::Text("mc".into())), ("cubes", Value::Int(o.cubes as u64)), ("caps", Value::Bool(o.caps))]);
+            (MethodStats::Mc(st), summary.offsets.len() as u64, summary.vertices, p)
+        }
+        Method::Angle(o) => {
+            let mut sink = SpillSink::create(output, write)?;
+            let mut a = AngleReconstructor::new(o);
+            let mut r = open_profile(input, popts)?;
+            let mut n = 0u64;
+            while let Some(s) = r.next_section()? {
+                a.push(&s, &mut sink)?;
+                n += 1;
+                check()?;
+            }
+            let st = a.finish(&mut sink)?;
+            sink.finish()?;
+            let p = params(&[
+                ("method", Value::Text("angle".into())),
+                ("threshold", Value::Float(o.threshold)),
+                ("open", Value::Bool(o.open)),
+                ("caps", Value::Bool(o.caps)),
+            ]);
+            (MethodStats::Angle(st), n, r.stats().vertices, p)
+        }
+    };
+    let (vertices, faces) = match &details {
+        MethodStats::Mc(s) => (s.vertices, s.faces),
+        MethodStats::Angle(s) => (s.vertices, s.faces),
+        _ => unreachable!(),
+    };
+    Ok(RunStats {
+        command: "contours".into(),
+        input: input.display().to_string(),
+        output: output.display().to_string(),
+        parameters,
+        seconds: t.elapsed().as_secs_f64(),
+        vertices,
+        faces,
+        input_vertices: in_vertices,
+        input_faces_or_sections: sections,
+        details,
+    })
+}
+
+/// `mint slice`: cuts the mesh `input` by `sections` planes across `axis`
+/// (0, 1, 2 for x, y, z) into the profile `output`.
+pub fn slice_file(input: &Path, output: &Path, sections: u32, axis: usize, cancelled: &dyn Fn() -> bool) -> Result<RunStats, ContourError> {
+    let t = Instant::now();
+    if sections == 0 {
+        return Err(ContourError::input(output, "--sections must be at least 1"));
+    }
+    let mut reader = MeshReader::open(input, ReadOptions::default())?;
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for i in 0..reader.vertex_count() {
+        let c = reader.vertex(i)[axis];
+        if c.is_finite() {
+            lo = lo.min(c);
+            hi = hi.max(c);
+        }
+    }
+    if !(lo < hi) {
+        return Err(ContourError::input(input, "the mesh has no extent along the slicing axis"));
+    }
+    let mut slicer = Slicer::new(axis, lo, hi, sections);
+    let mut chunk = TriangleChunk::new();
+    let mut faces = 0u64;
+    while reader.next_chunk(&mut chunk)? {
+        for (ids, p) in chunk.indices.iter().zip(&chunk.positions) {
+            slicer.add(*ids, *p);
+        }
+        faces += chunk.len() as u64;
+        if cancelled() {
+            return Err(ContourError::Cancelled);
+        }
+    }
+    let mut st = SliceStats::default();
+    let levels = slicer.finish(&mut st);
+    if levels.is_empty() {
+        return Err(ContourError::input(input, "no plane met the mesh: nothing to write"));
+    }
+    let file = AtomicFile::create(output)?;
+    let name = ["x", "y", "z"][axis];
+    let comments = vec![
+        format!("sliced from {} by mint: {} planes along {name} from {lo} to {hi}", input.display(), sections),
+        format!("{} sections kept, {} open chains closed, {} contours dropped", st.sections, st.chains_closed, st.contours_dropped),
+    ];
+    let io = |e| ContourError::io(output, "cannot write", e);
+    let mut w = ProfileWriter::new(BufWriter::with_capacity(1 << 20, file), &comments).map_err(io)?;
+    for (_, contours) in &levels {
+        w.section(contours).map_err(io)?;
+    }
+    let file = w.finish().map_err(io)?.into_inner().map_err(|e| io(e.into_error()))?;
+    file.commit()?;
+    Ok(RunStats {
+        command: "slice".into(),
+        input: input.display().to_string(),
+        output: output.display().to_string(),
+        parameters: params(&[("sections", Value::Int(sections as u64)), ("axis", Value::Text(name.into()))]),
+        seconds: t.elapsed().as_secs_f64(),
+        vertices: st.vertices,
+        faces: 0,
+        input_vertices: reader.vertex_count() as u64,
+        input_faces_or_sections: faces,
+        details: MethodStats::Slice(st),
+    })
+}
+
+/// Reads a whole mesh: positions and faces.
+pub fn load_mesh(path: &Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>), ContourError> {
+    let mut reader = MeshReader::open(path, ReadOptions { resolve_positions: true, ..Default::default() })?;
+    let positions: Vec<[f64; 3]> = (0..reader.vertex_count()).map(|i| reader.vertex(i)).collect();
+    let mut faces = Vec::new();
+    let mut chunk = TriangleChunk::new();
+    while reader.next_chunk(&mut chunk)? {
+        faces.extend_from_slice(&chunk.indices);
+    }
+    Ok((positions, faces))
+}
+
+/// `mint optimize`: the normal optimizer from `input` to `output`.
+pub fn optimize_file(input: &Path, output: &Path, angle_deg: f64, write: WriteOptions) -> Result<RunStats, ContourError> {
+    let t = Instant::now();
+    if !(angle_deg >= 0.0 && angle_deg <= 180.0) {
+        return Err(ContourError::input(input, format!("--angle {angle_deg} is not between 0 and 180 degrees")));
+    }
+    let format = Format::from_path(output)?;
+    let (positions, faces) = load_mesh(input)?;
+    let (mesh, st) = optimize(&positions, &faces, angle_deg);
+    let mut w = MeshWriter::create(output, format, write)?;
+    for p in &mesh.positions {
+        w.write_vertex(*p)?;
+    }
+    for f in &mesh.faces {
+        w.write_face(*f)?;
+    }
+    w.finish()?;
+    Ok(RunStats {
+        command: "optimize".into(),
+        input: input.display().to_string(),
+        output: output.display().to_string(),
+        parameters: params(&[("angle", Value::Float(angle_deg))]),
+        seconds: t.elapsed().as_secs_f64(),
+        vertices: mesh.positions.len() as u64,
+        faces: mesh.faces.len() as u64,
+        input_vertices: positions.len() as u64,
+        input_faces_or_sections: faces.len() as u64,
+        details: MethodStats::Optimize(st),
+    })
+}

@@ -1,0 +1,13 @@
+//! The integration suite: polygon triangulation on random simple polygons
+//! (`triangulation`), analytic stacks reconstructed by both methods
+//! (`stacks`), holes and branching (`branching`), exact degenerate
+//! placements and windows (`mc_grid`), the optimizer (`optimizer`), profile
+//! files and the file drivers (`files`), and real data (`real_data`).
+pub mod util;
+mod branching;
+mod files;
+mod mc_grid;
+mod optimizer;
+mod real_data;
+mod stacks;
+mod triangulation;

@@ -1,0 +1,2 @@
+//! mint-contour integration tests, built into one binary (see `suite/`).
+mod suite;

@@ -1,0 +1,534 @@
+//! Constrained ICP (`mint align`): registers scans to each other, after
+//! Turk and Levoy 1994, §4.
+//!
+//! Sources: P. Besl and N. McKay, "A Method for Registration of 3-D
+//! Shapes", IEEE PAMI 14(2), 1992 (the iteration); B. K. P. Horn,
+//! "Closed-form solution of absolute orientation using unit quaternions",
+//! JOSA A 4(4), 1987 (the best rigid motion: the eigenvector of the largest
+//! eigenvalue of a 4×4 symmetric matrix built from the weighted
+//! cross-covariance; solved with nalgebra's symmetric eigen-decomposition);
+//! Y. Chen and G. Medioni, "Object modelling by registration of multiple
+//! range images", 1992 (the point-to-plane option, linearized in the
+//! rotation and solved as a 6×6 system); G. Turk and M. Levoy 1994, §4.1–4.4
+//! (the constraints).
+//!
+//! One iteration for a source scan against a set of target scans:
+//! 1. each sample vertex of the source (the current hierarchy level; not on
+//!    the source's boundary, confidence > 0) is moved to the world by the
+//!    source's current pose, and its nearest point **on the surface** of
+//!    each target (a [`mint_mesh::TriangleBvh`] per scan, built once in the
+//!    scan's own frame) is looked for within the distance `d`
+//!    (`nearest_within`); the nearest over all targets wins;
+//! 2. the pair is dropped when the target point lies on a triangle with a
+//!    boundary corner (the boundary constraint: boundary matches drag
+//!    meshes apart);
+//! 3. the pair's weight is the product of the two confidences (source
+//!    vertex, mean of the target triangle's corners);
+//! 4. pairs farther apart than [`AlignOptions::reject`] × the median pair
+//!    distance are dropped (mint's addition);
+//! 5. the weighted best rigid motion (Horn, or point-to-plane) moves the
+//!    source, extrapolated along the last two steps when they agree (Besl
+//!    and McKay's acceleration, simplified to a geometric-series jump);
+//!    repeat until it moves less than [`AlignOptions::tolerance`] times the
+//!    sampling distance, or [`AlignOptions::max_iterations`].
+//!
+//! The hierarchy: levels of the source's samples (every 8th, 4th, 2nd row
+//! and column, then all; [`crate::ScanMesh::levels`]), from the coarsest,
+//! with `d` halving from [`AlignOptions::start_distance`] down to
+//! [`AlignOptions::distance`]. The targets stay at full resolution: the
+//! closest point is on their surface anyway.
+//!
+//! Which targets: with [`Strategy::Growing`] (the default) the anchor scan
+//! is fixed and the others join one at a time, each time the one with the
+//! most pairs against the scans already registered, and registers against
+//! all of them; then [`AlignOptions::refine_passes`] passes re-register
+//! every scan against all others at the two finest levels. With
+//! [`Strategy::Anchor`] every scan registers against the anchor alone. A
+//! scan with fewer than [`AlignOptions::min_pairs`] pairs is reported as
+//! failed and left out; the run continues.
+
+use crate::error::RangeError;
+use crate::geom::{add, cross, dist, dot, normalize, scale, sub, tri_normal, Rigid, V3};
+
+use crate::scan_mesh::ScanMesh;
+use mint_mesh::TriangleBvh;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// The error metric minimized at each iteration.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Metric {
+    /// Σ w·|R·b + t − a|², solved in closed form by Horn's quaternion method.
+    PointToPoint,
+    /// Σ w·((R·b + t − a)·n_a)², linearized in the rotation (Chen–Medioni).
+    PointToPlane,
+}
+
+/// Which scans each scan registers against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Strategy {
+    /// To the growing model of all scans registered so far, then refined
+    /// against all others.
+    Growing,
+    /// Every scan to the anchor scan only.
+    Anchor,
+}
+
+/// Options of [`align`]; every field has a documented default.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AlignOptions {
+    /// Final pairing distance d. Default `None`: 2·s with s the largest
+    /// sampling distance of the scans (Turk and Levoy: "twice the spacing").
+    pub distance: Option<f64>,
+    /// Pairing distance of the coarsest level; halved per level down to
+    /// `distance`. Default `None`: 8·`distance` (four levels). Raise it when
+    /// the initial poses are off by more than about half of it.
+    pub start_distance: Option<f64>,
+    /// Iterations per level at most. Default 50.
+    pub max_iterations: usize,
+    /// Convergence: an iteration moving the source's bounding box corners
+    /// by less than this fraction of its sampling distance ends the level.
+    /// Default 1e-3.
+    pub tolerance: f64,
+    /// Default [`Metric::PointToPoint`].
+    pub metric: Metric,
+    /// Default [`Strategy::Growing`].
+    pub strategy: Strategy,
+    /// The scan that stays fixed. Default 0 (the first of the set).
+    pub anchor: usize,
+    /// Fewest pairs for a registration to count. Default 100.
+    pub min_pairs: usize,
+    /// Passes re-registering every scan against all others at the final
+    /// distance (growing model only). Default 3.
+    pub refine_passes: usize,
+    /// Robust rejection (mint's addition, after Zhang, "Iterative point
+    /// matching for registration of free-form curves and surfaces", IJCV
+    /// 1994): at each iteration pairs farther apart than `reject` times the
+    /// median pair distance are dropped. Large distances at the coarse
+    /// levels otherwise match surfaces one scan saw to different surfaces
+    /// of the other and drag it off. Default 3; `f64::INFINITY` turns it off.
+    pub reject: f64,
+    /// Extrapolate when successive steps point the same way (see
+    /// [`align`]'s loop). Default true.
+    pub accelerate: bool,
+}
+
+impl Default for AlignOptions {
+    fn default() -> Self {
+        AlignOptions {
+            distance: None,
+            start_distance: None,
+            max_iterations: 50,
+            tolerance: 1e-3,
+            metric: Metric::PointToPoint,
+            strategy: Strategy::Growing,
+            anchor: 0,
+            min_pairs: 100,
+            refine_passes: 3,
+            reject: 3.0,
+            accelerate: true,
+        }
+    }
+}
+
+/// What happened to one scan.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub enum Status {
+    /// The fixed scan.
+    Anchor,
+    /// Registered.
+    Registered,
+    /// Not registered (the reason); left out of the output set.
+    Failed(String),
+}
+
+/// Per-scan registration report.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ScanReport {
+    pub name: String,
+    pub status: Status,
+    /// Pairs at the final distance in the last iteration.
+    pub pairs: usize,
+    /// RMS distance of those pairs (unweighted), model units.
+    pub rms: f64,
+    /// Iterations over all levels and passes.
+    pub iterations: usize,
+    /// How far registration moved the scan: rotation in degrees and the
+    /// largest displacement of its bounding-box corners.
+    pub moved_deg: f64,
+    pub moved: f64,
+}
+
+/// The result of [`align`]: a pose per scan (failed scans keep their
+/// initial pose) and a report per scan.
+#[derive(Debug, Clone)]
+pub struct AlignResult {
+    pub poses: Vec<Rigid>,
+    pub reports: Vec<ScanReport>,
+    /// The final and starting pairing distances used.
+    pub distance: f64,
+    pub start_distance: f64,
+}
+
+/// One correspondence, in world coordinates.
+#[derive(Debug, Clone, Copy)]
+struct Pair {
+    src: V3,
+    dst: V3,
+    normal: V3,
+    w: f64,
+}
+
+struct Targets<'a> {
+    scans: &'a [ScanMesh],
+    bvhs: Vec<TriangleBvh>,
+    face_normals: Vec<Vec<V3>>,
+}
+
+/// Registers `scans` from the `initial` poses; see the module docs.
+/// Errors: mismatched lengths, an anchor out of range, bad distances.
+pub fn align(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions) -> Result<AlignResult, RangeError> {
+    if scans.len() != initial.len() {
+        return Err(RangeError::option("initial", format!("{} poses for {} scans", initial.len(), scans.len())));
+    }
+    if opts.anchor >= scans.len() {
+        return Err(RangeError::option("anchor", format!("scan {} does not exist ({} scans)", opts.anchor, scans.len())));
+    }
+    let s_max = scans.iter().map(|s| s.sampling).fold(0.0, f64::max);
+    let d = opts.distance.unwrap_or(2.0 * s_max);
+    let d0 = opts.start_distance.unwrap_or(8.0 * d);
+    if !(d.is_finite() && d > 0.0 && d0.is_finite() && d0 >= d) {
+        return Err(RangeError::option("distance", format!("need 0 < distance ({d}) <= start distance ({d0})")));
+    }
+    let dists = distance_levels(d0, d);
+    let targets = Targets {
+        scans,
+        bvhs: scans
+            .iter()
+            .map(|s| TriangleBvh::new(&s.positions, &s.faces).map_err(|e| RangeError::Mesh { what: s.name.clone(), source: e }))
+            .collect::<Result<_, _>>()?,
+        face_normals: scans
+            .iter()
+            .map(|s| s.faces.iter().map(|f| normalize(tri_normal(s.positions[f[0] as usize], s.positions[f[1] as usize], s.positions[f[2] as usize]))).collect())
+            .collect(),
+    };
+    let mut poses = initial.to_vec();
+    let mut reports: Vec<ScanReport> = scans
+        .iter()
+        .map(|s| ScanReport { name: s.name.clone(), status: Status::Failed("not reached".into()), pairs: 0, rms: 0.0, iterations: 0, moved_deg: 0.0, moved: 0.0 })
+        .collect();
+    reports[opts.anchor].status = Status::Anchor;
+    let mut registered = vec![opts.anchor];
+    let mut pending: Vec<usize> = (0..scans.len()).filter(|&i| i != opts.anchor).collect();
+    match opts.strategy {
+        Strategy::Anchor => {
+            for &i in &pending {
+                register_one(&targets, i, &[opts.anchor], &mut poses, &dists, opts, &mut reports[i]);
+            }
+        }
+        Strategy::Growing => {
+            while !pending.is_empty() {
+                // The pending scan that overlaps the model most joins next.
+                let counts: Vec<usize> = pending.iter().map(|&i| pairs(&targets, i, 0, &registered, &poses, dists[0]).len()).collect();
+                let (k, &best) = counts.iter().enumerate().max_by_key(|&(k, &c)| (c, usize::MAX - k)).expect("pending is not empty");
+                if best < required(&scans[pending[k]], 0, opts.min_pairs) {
+                    for &i in &pending {
+                        reports[i].status = Status::Failed(format!(
+                            "no overlap: {} pairs within {:.4e} of the registered scans at the coarsest level (need {})",
+                            counts[pending.iter().position(|&j| j == i).unwrap()],
+                            dists[0],
+                            required(&scans[i], 0, opts.min_pairs)
+                        ));
+                    }
+                    break;
+                }
+                let i = pending.remove(k);
+                if register_one(&targets, i, &registered, &mut poses, &dists, opts, &mut reports[i]) {
+                    registered.push(i);
+                }
+            }
+            let fine = &dists[dists.len() - 1..];
+            for _ in 0..opts.refine_passes {
+                let all = registered.clone();
+                for &i in &all {
+                    if i == opts.anchor {
+                        continue;
+                    }
+                    let others: Vec<usize> = all.iter().copied().filter(|&j| j != i).collect();
+                    let keep = poses[i];
+                    let mut r = reports[i].clone();
+                    if !register_one(&targets, i, &others, &mut poses, fine, opts, &mut r) {
+                        poses[i] = keep;
+                        continue;
+                    }
+                    r.iterations += reports[i].iterations;
+                    reports[i] = r;
+                }
+            }
+        }
+    }
+    for (i, r) in reports.iter_mut().enumerate() {
+        let (deg, shift) = crate::geom::pose_error(&initial[i], &poses[i], &scans[i].bbox_corners());
+        r.moved_deg = deg;
+        r.moved = shift;
+    }
+    Ok(AlignResult { poses, reports, distance: d, start_distance: d0 })
+}
+
+/// Pairs needed at a hierarchy level: `min_pairs` scaled by the level's
+/// share of the samples, at least 6.
+fn required(scan: &ScanMesh, level: usize, min_pairs: usize) -> usize {
+    let finest = scan.levels.last().map_or(1, Vec::len).max(1);
+    (min_pairs * scan.levels[level].len() / finest).max(6)
+}
+
+/// `d0, d0/2, ...` down to `d` (the last one is exactly `d`).
+fn distance_levels(d0: f64, d: f64) -> Vec<f64> {
+    let mut v = vec![d0];
+    while *v.last().unwrap() > d * 1.0001 {
+        let next = (v.last().unwrap() * 0.5).max(d);
+        v.push(next);
+    }
+    v
+}
+
+/// Registers scan `i` against `targets_idx` through the distance levels;
+/// updates its pose and report; false (and the report says why) if too
+/// few pairs remain.
+fn register_one(t: &Targets, i: usize, targets_idx: &[usize], poses: &mut [Rigid], dists: &[f64], opts: &AlignOptions, report: &mut ScanReport) -> bool {
+    let scan = &t.scans[i];
+    let corners = scan.bbox_corners();
+    let nl = scan.levels.len();
+    let k = dists.len();
+    let mut iterations = 0;
+    let (lo, hi) = crate::scan_mesh::bbox(corners.iter().copied());
+    let centre_local = scale(add(lo, hi), 0.5);
+    let radius = 0.5 * dist(lo, hi);
+    for (j, &d) in dists.iter().enumerate() {
+        let level = (nl + j).saturating_sub(k).min(nl - 1);
+        let mut prev: Option<[f64; 6]> = None;
+        for _ in 0..opts.max_iterations {
+            let p = trimmed(pairs(t, i, level, targets_idx, poses, d), opts.reject);
+            let need = required(scan, level, opts.min_pairs);
+            if p.len() < need {
+                report.status = Status::Failed(format!("no overlap: {} pairs within {d:.4e} (need {need})", p.len()));
+                report.pairs = p.len();
+                report.iterations = iterations;
+                return false;
+            }
+            let delta = match opts.metric {
+                Metric::PointToPoint => horn(&p),
+                Metric::PointToPlane => point_to_plane(&p),
+            };
+            iterations += 1;
+            let Some(mut delta) = delta else { break };
+            // The step as a 6-vector about the scan's centre (rotation
+            // vector × radius, translation of the centre).
+            let c = poses[i].apply(centre_local);
+            let step = motion_vector(&delta, c, radius);
+            // Acceleration (after Besl and McKay, §IV.C): when two steps
+            // point the same way and shrink by a factor ρ, ICP is crawling
+            // along a shallow valley; jump ahead by the rest of the
+            // geometric series, ρ/(1 − ρ) steps, at most 25.
+            if let Some(pv) = prev.filter(|_| opts.accelerate) {
+                let (n0, n1) = (norm6(pv), norm6(step));
+                let cos = dot6(pv, step) / (n0 * n1).max(f64::MIN_POSITIVE);
+                let rho = n1 / n0.max(f64::MIN_POSITIVE);
+                if cos > 10f64.to_radians().cos() && rho < 1.0 {
+                    let alpha = (rho / (1.0 - rho)).min(25.0);
+                    let extra = motion_from_vector(step.map(|x| x * alpha), c, radius);
+                    delta = extra.after(&delta);
+                }
+            }
+            prev = Some(step);
+            poses[i] = delta.after(&poses[i]).orthonormalized();
+            let moved = corners
+                .iter()
+                .map(|&cn| {
+                    let w = poses[i].apply(cn);
+                    dist(w, delta.inverse().apply(w))
+                })
+                .fold(0.0, f64::max);
+            if moved < opts.tolerance * scan.sampling {
+                break;
+            }
+        }
+    }
+    // Final statistics at the finest level and distance.
+    let p = pairs(t, i, nl - 1, targets_idx, poses, *dists.last().unwrap());
+    if p.len() < opts.min_pairs {
+        report.status = Status::Failed(format!("no overlap: {} pairs within {:.4e} after registration (need {})", p.len(), dists.last().unwrap(), opts.min_pairs));
+        report.pairs = p.len();
+        report.iterations = iterations;
+        return false;
+    }
+    report.status = Status::Registered;
+    report.pairs = p.len();
+    report.rms = (p.iter().map(|q| dot(sub(q.src, q.dst), sub(q.src, q.dst))).sum::<f64>() / p.len() as f64).sqrt();
+    report.iterations = iterations;
+    true
+}
+
+/// A motion as `[ω·radius, t]` about the point `c`: `p ↦ R(ω)(p − c) + c + t`.
+fn motion_vector(m: &Rigid, c: V3, radius: f64) -> [f64; 6] {
+    let q = m.quat();
+    let s = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+    let angle = 2.0 * s.atan2(q[3]);
+    let w = if s > 0.0 { scale([q[0], q[1], q[2]], angle / s) } else { [0.0; 3] };
+    let t = sub(m.apply(c), c);
+    [w[0] * radius, w[1] * radius, w[2] * radius, t[0], t[1], t[2]]
+}
+
+/// The inverse of [`motion_vector`].
+fn motion_from_vector(v: [f64; 6], c: V3, radius: f64) -> Rigid {
+    let rot = Rigid::from_rotation_vector([v[0] / radius, v[1] / radius, v[2] / radius], [0.0; 3]);
+    Rigid { r: rot.r, t: add(sub(c, rot.rotate(c)), [v[3], v[4], v[5]]) }
+}
+
+fn dot6(a: [f64; 6], b: [f64; 6]) -> f64 {
+    (0..6).map(|k| a[k] * b[k]).sum()
+}
+
+fn norm6(a: [f64; 6]) -> f64 {
+    dot6(a, a).sqrt()
+}
+
+/// Drops pairs farther apart than `reject` × the median pair distance.
+fn trimmed(mut p: Vec<Pair>, reject: f64) -> Vec<Pair> {
+    if !reject.is_finite() || p.is_empty() {
+        return p;
+    }
+    let mut d: Vec<f64> = p.iter().map(|q| dist(q.src, q.dst)).collect();
+    let limit = reject * crate::range_image::median(&mut d);
+    p.retain(|q| dist(q.src, q.dst) <= limit);
+    p
+}
+
+/// The pairs of scan `i`'s level-`level` samples with the targets.
+fn pairs(t: &Targets, i: usize, level: usize, targets_idx: &[usize], poses: &[Rigid], d: f64) -> Vec<Pair> {
+    let scan = &t.scans[i];
+    let pose = poses[i];
+    let tinfo: Vec<(usize, Rigid, V3, V3)> = targets_idx
+        .iter()
+        .map(|&j| {
+            let (lo, hi) = t.bvhs[j].bounds();
+            let corners: Vec<V3> = (0..8).map(|k| [if k & 1 == 0 { lo[0] } else { hi[0] }, if k & 2 == 0 { lo[1] } else { hi[1] }, if k & 4 == 0 { lo[2] } else { hi[2] }]).collect();
+            let (wlo, whi) = crate::scan_mesh::bbox(corners.iter().map(|&c| poses[j].apply(c)));
+            (j, poses[j].inverse(), wlo, whi)
+        })
+        .collect();
+    scan.levels[level]
+        .par_iter()
+        .filter_map(|&v| {
+            let v = v as usize;
+            if scan.boundary[v] || scan.confidence[v] <= 0.0 {
+                return None;
+            }
+            let w = pose.apply(scan.positions[v]);
+            let mut best: Option<(f64, usize, V3, u32)> = None;
+            for &(j, inv, lo, hi) in &tinfo {
+                if (0..3).any(|k| w[k] < lo[k] - d || w[k] > hi[k] + d) {
+                    continue;
+                }
+                let limit = best.map_or(d, |b| b.0);
+                if let Some((dd, cp, f)) = t.bvhs[j].nearest_within(inv.apply(w), limit) {
+                    best = Some((dd, j, cp, f));
+                }
+            }
+            let (_, j, cp, f) = best?;
+            let ts = &t.scans[j];
+            if ts.face_on_boundary[f as usize] {
+                return None;
+            }
+            let wt = scan.confidence[v] * ts.face_confidence[f as usize];
+            if wt <= 0.0 {
+                return None;
+            }
+            Some(Pair { src: w, dst: poses[j].apply(cp), normal: poses[j].rotate(t.face_normals[j][f as usize]), w: wt })
+        })
+        .collect()
+}
+
+/// Horn's weighted closed form: the motion taking `src` onto `dst`.
+fn horn(p: &[Pair]) -> Option<Rigid> {
+    let wsum: f64 = p.iter().map(|q| q.w).sum();
+    if wsum <= 0.0 {
+        return None;
+    }
+    let cs = scale(p.iter().fold([0.0; 3], |a, q| add(a, scale(q.src, q.w))), 1.0 / wsum);
+    let cd = scale(p.iter().fold([0.0; 3], |a, q| add(a, scale(q.dst, q.w))), 1.0 / wsum);
+    let mut s = [[0.0; 3]; 3];
+    for q in p {
+        let b = sub(q.src, cs);
+        let a = sub(q.dst, cd);
+        for r in 0..3 {
+            for c in 0..3 {
+                s[r][c] += q.w * b[r] * a[c];
+            }
+        }
+    }
+    let (sxx, sxy, sxz) = (s[0][0], s[0][1], s[0][2]);
+    let (syx, syy, syz) = (s[1][0], s[1][1], s[1][2]);
+    let (szx, szy, szz) = (s[2][0], s[2][1], s[2][2]);
+    let n = nalgebra::Matrix4::new(
+        sxx + syy + szz, syz - szy, szx - sxz, sxy - syx,
+        syz - szy, sxx - syy - szz, sxy + syx, szx + sxz,
+        szx - sxz, sxy + syx, -sxx + syy - szz, syz + szy,
+        sxy - syx, szx + sxz, syz + szy, -sxx - syy + szz,
+    );
+    let eig = nalgebra::SymmetricEigen::new(n);
+    let (k, _) = eig.eigenvalues.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1))?;
+    let v = eig.eigenvectors.column(k);
+    // Horn's quaternion is (w, x, y, z).
+    let rot = Rigid::from_quat([v[1], v[2], v[3], v[0]], [0.0; 3]);
+    let t = sub(cd, rot.rotate(cs));
+    Some(Rigid { r: rot.r, t })
+}
+
+/// Point-to-plane, linearized: solve for a small rotation vector ω and a
+/// translation about the source centroid, then make the rotation exact.
+fn point_to_plane(p: &[Pair]) -> Option<Rigid> {
+    let wsum: f64 = p.iter().map(|q| q.w).sum();
+    if wsum <= 0.0 {
+        return None;
+    }
+    let c = scale(p.iter().fold([0.0; 3], |a, q| add(a, scale(q.src, q.w))), 1.0 / wsum);
+    let mut ata = nalgebra::Matrix6::<f64>::zeros();
+    let mut atb = nalgebra::Vector6::<f64>::zeros();
+    for q in p {
+        let b = sub(q.src, c);
+        let n = q.normal;
+        let j = cross(b, n);
+        let row = nalgebra::Vector6::new(j[0], j[1], j[2], n[0], n[1], n[2]);
+        let r = dot(sub(q.src, q.dst), n);
+        ata += q.w * row * row.transpose();
+        atb -= q.w * r * row;
+    }
+    let x = ata.cholesky()?.solve(&atb);
+    let rot = Rigid::from_rotation_vector([x[0], x[1], x[2]], [0.0; 3]);
+    // p ↦ R(p − c) + c + t
+    let t = add(sub(c, rot.rotate(c)), [x[3], x[4], x[5]]);
+    Some(Rigid { r: rot.r, t })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn horn_recovers_a_known_motion_exactly() {
+        let truth = Rigid::from_quat([0.1, -0.3, 0.2, 0.9], [0.5, -1.0, 2.0]);
+        let pts: Vec<V3> = (0..20).map(|i| [(i as f64 * 0.7).sin(), (i as f64 * 1.3).cos(), i as f64 * 0.1]).collect();
+        let pairs: Vec<Pair> = pts.iter().enumerate().map(|(i, &p)| Pair { src: p, dst: truth.apply(p), normal: [0.0, 0.0, 1.0], w: 1.0 + i as f64 }).collect();
+        let m = horn(&pairs).unwrap();
+        let (deg, shift) = crate::geom::pose_error(&m, &truth, &pts);
+        assert!(deg < 1e-9 && shift < 1e-12, "{deg} {shift}");
+    }
+
+    #[test]
+    fn distance_levels_halve_down_to_the_final_distance() {
+        assert_eq!(distance_levels(8.0, 1.0), vec![8.0, 4.0, 2.0, 1.0]);
+        assert_eq!(distance_levels(5.0, 1.0), vec![5.0, 2.5, 1.25, 1.0]);
+        assert_eq!(distance_levels(1.0, 1.0), vec![1.0]);
+    }
+}

@@ -1,0 +1,42 @@
+//! mint-range: merging range scans into one mesh, after Turk and Levoy,
+//! "Zippered Polygon Meshes from Range Images" (SIGGRAPH 1994). (The
+//! grid-based merge of Rocchini et al., `--method grid`, is not written
+//! yet.)
+//!
+//! Data flows through the modules in this order:
+//! - [`scanset`]: a [`ScanSet`] (Stanford `.conf` or MeshLab `.aln`) names
+//!   the scans and their poses ([`Rigid`], scan frame → world);
+//! - [`range_image`]: a [`RangeImage`] (PLY `range_grid`) is triangulated
+//!   without bridging depth discontinuities;
+//! - [`scan_mesh`]: a [`ScanMesh`] adds normals, boundary, confidence and
+//!   the registration hierarchy;
+//! - [`synth`]: `mint scan` — range images ray-cast from a mesh, with true
+//!   (and perturbed) poses, through the [`raycast`] BVH;
+//! - [`icp`]: `mint align` — constrained ICP (closest points on surfaces
+//!   within d, no boundary pairs, weighted Horn quaternion, hierarchy with d
+//!   halving, anchor or growing model);
+//! - [`zipper`]: `mint zipper` — redundancy removal, trimming, stitching
+//!   along the seams, small-triangle removal ([`mesh_ops`]), then
+//!   [`consensus`] geometry.
+//!
+//! Everything works in memory on borrowed or owned arrays; only
+//! [`scanset`], [`range_image`] and [`scan_mesh::load_scan`] touch files,
+//! through mint-io's atomic writers.
+
+pub mod consensus;
+pub mod error;
+pub mod geom;
+pub mod icp;
+pub mod mesh_ops;
+pub mod range_image;
+pub mod raycast;
+pub mod scan_mesh;
+pub mod scanset;
+pub mod synth;
+pub mod zipper;
+
+pub use error::RangeError;
+pub use geom::Rigid;
+pub use range_image::RangeImage;
+pub use scan_mesh::{load_scan, load_set, MeshOptions, ScanMesh};
+pub use scanset::{ScanEntry, ScanSet, SetFormat};
