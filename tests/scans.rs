@@ -112,6 +112,24 @@ fn real_meshes_resample_at_three_sizes_manifold_and_watertight_when_closed() {
 }
 
 #[test]
+fn single_view_range_scans_resample_without_error_and_never_non_manifold() {
+    let Some(data) = mint_testkit::shared_data() else { return };
+    let d = tempfile::tempdir().unwrap();
+    for f in ["bun000", "top2", "chin"] {
+        let input = data.join("stanford_bunny_range_scans").join(format!("{f}.ply"));
+        for n in [10_000u64, 100_000, 1_000_000] {
+            let out = d.path().join("o.ply");
+            let (s, m) = run(&input, &out, cells(n));
+            assert!(s.output_faces > 0, "{f} at {n}");
+            let r = mint_mesh::check(&m.positions, &m.faces);
+            assert_eq!((r.non_manifold_edges, r.non_manifold_vertices, r.inconsistently_oriented_edges), (0, 0, 0), "{f} at {n}: {r:?}");
+        }
+        // The temporary mesh of the range image is gone.
+        assert!(std::fs::read_dir(d.path()).unwrap().all(|e| !e.unwrap().file_name().to_string_lossy().starts_with(".mint-range-")));
+    }
+}
+
+#[test]
 fn a_hole_wider_than_max_hole_stays_open_with_one_loop_and_close_all_closes_it() {
     let d = tempfile::tempdir().unwrap();
     // A sphere of radius 1 on a grid of cell h; one hole 10 cells across.

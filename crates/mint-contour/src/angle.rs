@@ -26,13 +26,17 @@
 //!   split along chords between its vertices, each chord separating the
 //!   partners' centroids; each part forms a tube with one partner, and the
 //!   chord edge is shared by two tubes in opposite directions;
-//! - anything else (k ≥ 2 facing m ≥ 2): the best-overlapping pairs form
-//!   tubes, the rest are left unmatched (counted in
-//!   [`AngleStats::complex_groups`]).
+//! - anything else (k ≥ 2 facing m ≥ 2), or a split that found no chord:
+//!   the best-overlapping pairs form tubes, the rest are left unmatched
+//!   (counted in [`AngleStats::complex_groups`] and
+//!   [`AngleStats::unsplit_groups`]).
 //!
 //! With `caps`, every contour end is closed by a smallest-inner-angle
 //! triangulation of its section's region: the first and last sections, and
-//! contours that appear or vanish inside the stack. A ring turning
+//! contours that appear or vanish inside the stack. A contour with no
+//! partner on either side (it exists in one section only) has no thickness
+//! and is left out ([`AngleStats::isolated`]); so is every contour of a
+//! one-section stack. A ring turning
 //! `P_i → P_i+1` below `Q_j → Q_j+1` gives the triangles `(P_i, P_i+1, Q_j)`
 //! and `(P_i, Q_j+1, Q_j)`, which face out of the solid; so closed stacks
 //! with caps are watertight and consistently oriented.
@@ -51,8 +55,9 @@
 //! The march is a heuristic: contours that differ a lot in shape between
 //! sections can give triangles that cross other triangles; splitting needs
 //! a chord inside the contour that separates the partners, and when none is
-//! found the group's contours are capped (with `caps`) instead of joined
-//! ([`AngleStats::unsplit_groups`]). The marching-cubes method has none of
+//! found the group is joined one to one by overlap instead
+//! ([`AngleStats::unsplit_groups`]), and the capped leftovers may cross the
+//! tube beside them. The marching-cubes method has none of
 //! these limits.
 
 use crate::error::ContourError;
@@ -88,13 +93,16 @@ pub struct AngleStats {
     /// Contours split to pair with several contours of the next or previous
     /// section (branches and merges).
     pub splits: u64,
-    /// Branching groups whose split failed; their contours were capped (or
-    /// left open) instead.
+    /// Branching groups whose split failed; they were joined one to one by
+    /// overlap instead, and the contours left over capped (or left open).
     pub unsplit_groups: u64,
     /// Groups of several contours facing several, joined pairwise by overlap.
     pub complex_groups: u64,
     /// Caps triangulated (regions, each with its holes).
     pub caps: u64,
+    /// Contours with no partner in either neighbouring section: they have
+    /// no thickness and are left out (no faces).
+    pub isolated: u64,
     /// Ears forced while triangulating caps (0 on valid input).
     pub forced_ears: u64,
     pub vertices: u64,
@@ -137,39 +145,47 @@ impl AngleReconstructor {
     }
 
     /// Adds the next section: sends its vertices, joins it to the previous
-    /// one and caps what ends or starts.
+    /// one and closes the previous one's contour ends.
     pub fn push(&mut self, section: &Section, sink: &mut dyn MeshSink) -> Result<(), ContourError> {
         let cur = self.prepare(section, sink)?;
         let mut cur_has_below = vec![false; cur.rings.len()];
-        match self.prev.take() {
-            None => {}
-            Some(prev) => {
-                let mut prev_has_above = vec![false; prev.rings.len()];
-                self.join(&prev, &cur, &mut prev_has_above, &mut cur_has_below, sink)?;
-                if self.opts.caps && !self.opts.open {
-                    let ends: Vec<usize> = (0..prev.rings.len()).filter(|&i| !prev_has_above[i]).collect();
-                    self.cap(&prev, &ends, true, sink)?;
-                }
-            }
-        }
-        if self.opts.caps && !self.opts.open {
-            let starts: Vec<usize> = (0..cur.rings.len()).filter(|&i| !cur_has_below[i]).collect();
-            self.cap(&cur, &starts, false, sink)?;
+        if let Some(prev) = self.prev.take() {
+            let mut prev_has_above = vec![false; prev.rings.len()];
+            self.join(&prev, &cur, &mut prev_has_above, &mut cur_has_below, sink)?;
+            let below = std::mem::take(&mut self.prev_has_below);
+            self.close_ends(&prev, &below, &prev_has_above, sink)?;
         }
         self.prev = Some(cur);
         self.prev_has_below = cur_has_below;
         Ok(())
     }
 
-    /// Caps the last section and returns the counters.
+    /// Closes the last section and returns the counters.
     pub fn finish(mut self, sink: &mut dyn MeshSink) -> Result<AngleStats, ContourError> {
         if let Some(prev) = self.prev.take() {
-            if self.opts.caps && !self.opts.open {
-                let all: Vec<usize> = (0..prev.rings.len()).collect();
-                self.cap(&prev, &all, true, sink)?;
-            }
+            let below = std::mem::take(&mut self.prev_has_below);
+            let above = vec![false; prev.rings.len()];
+            self.close_ends(&prev, &below, &above, sink)?;
         }
         Ok(self.stats)
+    }
+
+    /// Caps a section's contours once both neighbours are known: a bottom
+    /// cap where a contour has nothing below, a top cap where it has nothing
+    /// above. A contour with nothing on either side has no thickness: it is
+    /// left out ([`AngleStats::isolated`]) rather than covered by two
+    /// coincident caps.
+    fn close_ends(&mut self, s: &Prepared, below: &[bool], above: &[bool], sink: &mut dyn MeshSink) -> Result<(), ContourError> {
+        let n = s.rings.len();
+        let isolated = (0..n).filter(|&i| !below[i] && !above[i]).count();
+        self.stats.isolated += isolated as u64;
+        if !self.opts.caps || self.opts.open {
+            return Ok(());
+        }
+        let bottom: Vec<usize> = (0..n).filter(|&i| !below[i] && above[i]).collect();
+        let top: Vec<usize> = (0..n).filter(|&i| below[i] && !above[i]).collect();
+        self.cap(s, &bottom, false, sink)?;
+        self.cap(s, &top, true, sink)
     }
 
     /// Sends a section's vertices and builds its rings.
@@ -283,24 +299,46 @@ impl AngleReconstructor {
                                 has_below[j] = true;
                             }
                         }
-                        None => self.stats.unsplit_groups += 1,
+                        None => {
+                            // No chord: pair the best overlap, cap the rest.
+                            self.stats.unsplit_groups += 1;
+                            self.pair_by_overlap(&links, &ls, &us, lower, upper, has_above, has_below, sink)?;
+                        }
                     }
                 }
                 _ => {
                     // Several against several: best overlaps first, one to one.
                     self.stats.complex_groups += 1;
-                    let mut cand: Vec<&(usize, usize, f64)> = links.iter().filter(|l| ls.contains(&l.0) && us.contains(&l.1)).collect();
-                    cand.sort_by(|a, b| b.2.total_cmp(&a.2).then((a.0, a.1).cmp(&(b.0, b.1))));
-                    for &&(i, j, _) in &cand {
-                        if has_above[i] || has_below[j] {
-                            continue;
-                        }
-                        self.tube(&lower.rings[i].ids, &lower.rings[i].uv, &upper.rings[j].ids, &upper.rings[j].uv, sink)?;
-                        has_above[i] = true;
-                        has_below[j] = true;
-                    }
+                    self.pair_by_overlap(&links, &ls, &us, lower, upper, has_above, has_below, sink)?;
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// Joins the group's contours one to one, best overlap first; the rest
+    /// stay unmatched (and are capped).
+    #[allow(clippy::too_many_arguments)]
+    fn pair_by_overlap(
+        &mut self,
+        links: &[(usize, usize, f64)],
+        ls: &[usize],
+        us: &[usize],
+        lower: &Prepared,
+        upper: &Prepared,
+        has_above: &mut [bool],
+        has_below: &mut [bool],
+        sink: &mut dyn MeshSink,
+    ) -> Result<(), ContourError> {
+        let mut cand: Vec<&(usize, usize, f64)> = links.iter().filter(|l| ls.contains(&l.0) && us.contains(&l.1)).collect();
+        cand.sort_by(|a, b| b.2.total_cmp(&a.2).then((a.0, a.1).cmp(&(b.0, b.1))));
+        for &&(i, j, _) in &cand {
+            if has_above[i] || has_below[j] {
+                continue;
+            }
+            self.tube(&lower.rings[i].ids, &lower.rings[i].uv, &upper.rings[j].ids, &upper.rings[j].uv, sink)?;
+            has_above[i] = true;
+            has_below[j] = true;
         }
         Ok(())
     }

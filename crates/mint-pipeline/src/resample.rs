@@ -180,6 +180,9 @@ pub enum PipelineError {
     /// A CSG scene whose result is unbounded (e.g. a lone half-space).
     #[error("{path}: the scene is unbounded (intersect half-spaces with a bounded solid)")]
     Unbounded { path: PathBuf },
+    /// A range image could not be turned into a mesh.
+    #[error("{path}: {message}")]
+    Range { path: PathBuf, message: String },
     /// The user interrupted the run; temporary files were removed.
     #[error("interrupted; no output written")]
     Cancelled,
@@ -198,10 +201,31 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
         None => output.parent().filter(|p| !p.as_os_str().is_empty()).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")),
     };
     let out_format = Format::from_path(output)?;
-    let mut reader = MeshReader::open(
-        input,
-        ReadOptions { chunk_triangles: CHUNK_TRIANGLES, spill_dir: Some(tmp_root.clone()), resolve_positions: false },
-    )?;
+    let read_opts = ReadOptions { chunk_triangles: CHUNK_TRIANGLES, spill_dir: Some(tmp_root.clone()), resolve_positions: false };
+    let mut reader = MeshReader::open(input, read_opts.clone())?;
+    // A PLY range image (a grid of samples, no faces) is triangulated first,
+    // as one scan is (mint-range: shorter diagonal, no bridging of depth
+    // jumps), into a temporary mesh removed when the run ends.
+    let _range_mesh;
+    if reader.range_grid().is_some() && reader.info().face_count.unwrap_or(0) == 0 {
+        let scan = mint_range::load_scan(input, &mint_range::MeshOptions::default())
+            .map_err(|e| PipelineError::Range { path: input.to_path_buf(), message: e.to_string() })?;
+        let tmp = tempfile::Builder::new().prefix(".mint-range-").suffix(".ply").tempfile_in(&tmp_root).map_err(|source| PipelineError::Temp {
+            path: tmp_root.clone(),
+            op: "creating the range-image mesh",
+            source,
+        })?;
+        let mut w = MeshWriter::create(tmp.path(), Format::Ply, WriteOptions { double: true, ..Default::default() })?;
+        for p in &scan.positions {
+            w.write_vertex(*p)?;
+        }
+        for f in &scan.faces {
+            w.write_face(*f)?;
+        }
+        w.finish()?;
+        reader = MeshReader::open(tmp.path(), read_opts)?;
+        _range_mesh = tmp;
+    }
     let mut summary = ResampleSummary {
         input: input.display().to_string(),
         output: output.display().to_string(),

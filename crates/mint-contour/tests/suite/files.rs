@@ -114,3 +114,4 @@ fn a_cancelled_run_leaves_nothing() {
 }
 
 
+
