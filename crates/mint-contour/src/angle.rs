@@ -769,6 +769,29 @@ mod tests {
     }
 
     #[test]
+    fn open_polylines_march_end_to_end() {
+        // Two open arcs (5 and 7 points), the upper one listed backwards: it
+        // is reversed to pair the ends, and 5 + 7 - 2 triangles join them.
+        let arc = |z: f64, n: usize, rev: bool| -> String {
+            let mut v: Vec<String> = (0..n).map(|k| {
+                let a = std::f64::consts::PI * k as f64 / (n - 1) as f64;
+                format!("{} {} {z} ", a.cos(), 0.5 * a.sin())
+            }).collect();
+            if rev {
+                v.reverse();
+            }
+            v.concat()
+        };
+        let text = format!("pro\nsection {}\nsection {}\n", arc(0.0, 5, false), arc(1.0, 7, true));
+        let s = read_all(text.as_bytes(), Path::new("t.pro"), ProfileOptions { check_intersections: false, ..Default::default() }).unwrap().1;
+        let mut m = TriMesh::default();
+        let st = reconstruct(&s, AngleOptions { open: true, ..Default::default() }, &mut m).unwrap();
+        assert_eq!((st.tubes, st.faces), (1, 10));
+        let r = mint_mesh::check(&m.positions, &m.faces);
+        assert_eq!((r.boundary_loops, r.non_manifold_edges, r.inconsistently_oriented_edges, r.degenerate_faces), (1, 0, 0, 0));
+    }
+
+    #[test]
     fn a_branch_splits_the_single_contour() {
         let circle = |cx: f64, z: f64, r: f64, n: usize| -> String {
             (0..n).map(|k| {

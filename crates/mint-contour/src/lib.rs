@@ -1,14 +1,40 @@
 //! mint-contour: surfaces from stacks of planar contours, after M. Dangl,
 //! "Three-Dimensional Object Reconstruction from Layered Spatial Data"
 //! (PRIP-TR-50, TU Vienna, 1998), and the normal-angle mesh optimizer.
-pub mod geom2d;
-pub mod triangulate;
+//!
+//! Data flows through it in this order:
+//! - [`profile`]: the `.pro` format; [`ProfileReader`](profile::ProfileReader)
+//!   streams validated [`Section`](profile::Section)s (planar, parallel,
+//!   ordered, simple and disjoint contours, else a [`ProfileError`] naming
+//!   the line) in a right-handed [`StackFrame`](profile::StackFrame);
+//! - [`mc`]: marching cubes over the stack: contour crossings with grid
+//!   lines become mint-core intercepts, reconstructed window by window with
+//!   `mint_core::reconstruct::reconstruct_slab` (watertight with caps);
+//! - [`angle`]: the angle-criterion strips between consecutive sections,
+//!   with branching by splitting contours and caps by [`triangulate`];
+//! - [`triangulate`]: smallest-inner-angle-first ear clipping, holes joined
+//!   by bridges; also used by [`optimize`];
+//! - [`optimize`]: the normal optimizer (regions of near-coplanar faces
+//!   re-triangulated from their boundaries);
+//! - [`slice`](mod@slice): a mesh cut by parallel planes into contours (test data);
+//! - [`run`]: the file-to-file drivers of `mint slice`, `mint contours` and
+//!   `mint optimize`, with their status counters ([`run::RunStats`]); the
+//!   only module that touches files.
+//!
+//! Meshes leave the algorithms through [`mint_core::MeshSink`]; the
+//! reconstructions send faces as soon as their vertices are out, so file
+//! output goes through [`run::SpillSink`]. Planar topology decisions are
+//! exact ([`geom2d`] wraps Shewchuk's `orient2d`); errors are
+//! [`ContourError`]. Design notes: `crates/mint-contour/README.md`.
+
+pub mod angle;
 pub mod error;
+pub mod geom2d;
+pub mod mc;
+pub mod optimize;
 pub mod profile;
+pub mod run;
+pub mod slice;
+pub mod triangulate;
 
 pub use error::{ContourError, ProfileError, ProfileErrorKind};
-pub mod mc;
-pub mod angle;
-pub mod slice;
-pub mod optimize;
-pub mod run;

@@ -29,7 +29,7 @@
 //!    [`COLLINEAR_TOLERANCE`] of their distance) and every such region is
 //!    free. Vertices on the mesh boundary or on non-manifold edges are kept.
 //! 4. **Re-triangulation** of each free region's loops with
-//!    [`triangulate`](crate::triangulate::triangulate), no new vertices. A
+//!    [`crate::triangulate::triangulate`], no new vertices. A
 //!    region whose polygon is no longer simple after the drops, whose
 //!    triangulation needs a forced ear, or whose new diagonal duplicates an
 //!    edge of the output is made non-free and stages 3 and 4 run again.

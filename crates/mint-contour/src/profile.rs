@@ -822,7 +822,7 @@ mod tests {
     fn writer_output_reads_back_exactly() {
         let c1 = vec![[0.1, 0.2, 1e-7], [1.0 / 3.0, 0.0, 1e-7], [0.0, 2e20, 1e-7]];
         let mut w = ProfileWriter::new(Vec::new(), &["made in a test".into()]).unwrap();
-        w.section(&[c1.clone()]).unwrap();
+        w.section(std::slice::from_ref(&c1)).unwrap();
         let text = w.finish().unwrap();
         let s = read(std::str::from_utf8(&text).unwrap()).unwrap();
         assert_eq!(s[0].contours[0].points, c1);

@@ -290,7 +290,7 @@ pub fn load_mesh(path: &Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>), ContourE
 /// `mint optimize`: the normal optimizer from `input` to `output`.
 pub fn optimize_file(input: &Path, output: &Path, angle_deg: f64, write: WriteOptions) -> Result<RunStats, ContourError> {
     let t = Instant::now();
-    if !(angle_deg >= 0.0 && angle_deg <= 180.0) {
+    if !(0.0..=180.0).contains(&angle_deg) {
         return Err(ContourError::input(input, format!("--angle {angle_deg} is not between 0 and 180 degrees")));
     }
     let format = Format::from_path(output)?;
