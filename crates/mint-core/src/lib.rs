@@ -11,6 +11,7 @@
 //! - [`primitives`]: analytic solids that intersect grid lines exactly (for CSG);
 //! - [`holes`]: which hole-capping cells stay open under `--max-hole`;
 //! - [`signs`], [`robust`]: sign rules for dirty scans and the state-first reconstruction;
+//! - [`rng`]: SplitMix64, the seeded generator shared by samplers and generators;
 //! - [`sink`]: the [`MeshSink`] trait through which meshes leave algorithms.
 
 pub mod discretize;
@@ -21,6 +22,7 @@ pub mod mc_table;
 pub mod predicates;
 pub mod primitives;
 pub mod reconstruct;
+pub mod rng;
 pub mod robust;
 pub mod signs;
 pub mod sink;
