@@ -185,7 +185,7 @@ fn five_million_faces_resample_under_a_256_mib_heap_limit() {
 
 /// By hand: `cargo test --release --test tests twenty_million -- --ignored`
 #[test]
-#[ignore = "about a minute and 1.5 GB of disk; run by hand"]
+#[ignore = "writes 380 MB of temporary files; run by hand: cargo test --release --test tests twenty_million -- --ignored"]
 fn twenty_million_faces_resample_under_a_256_mib_heap_limit() {
     resample_under_limit(20_000_000);
 }
