@@ -313,14 +313,14 @@ pub fn crossing_to_intercept(c: &crate::Crossing, nb: u32) -> Intercept {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::grid::GridSize;
     use crate::TriMesh;
     use std::collections::HashMap;
 
-    /// A UV sphere as a triangle soup (outward).
-    fn sphere(c: [f64; 3], r: f64, n_lat: usize, n_lon: usize) -> Vec<[[f64; 3]; 3]> {
+    /// A UV sphere as a triangle soup (outward); shared with `robust`'s tests.
+    pub(crate) fn sphere(c: [f64; 3], r: f64, n_lat: usize, n_lon: usize) -> Vec<[[f64; 3]; 3]> {
         let p = |i: usize, j: usize| {
             let th = std::f64::consts::PI * i as f64 / n_lat as f64;
             let ph = 2.0 * std::f64::consts::PI * j as f64 / n_lon as f64;

@@ -583,30 +583,10 @@ fn combine_s(prepared: &[Vec<Prepared>], s_finals: &[Vec<Vec<Intercept>>], p: us
 mod tests {
     use crate::grid::{Grid, GridSize};
     use crate::reconstruct::resample_in_core_with;
+    use crate::reconstruct::tests::sphere;
     use crate::signs::SignRule;
     use crate::TriMesh;
     use std::collections::HashMap;
-
-    fn sphere(c: [f64; 3], r: f64, n_lat: usize, n_lon: usize) -> Vec<[[f64; 3]; 3]> {
-        let p = |i: usize, j: usize| {
-            let th = std::f64::consts::PI * i as f64 / n_lat as f64;
-            let ph = 2.0 * std::f64::consts::PI * j as f64 / n_lon as f64;
-            [c[0] + r * th.sin() * ph.cos(), c[1] + r * th.sin() * ph.sin(), c[2] + r * th.cos()]
-        };
-        let mut t = Vec::new();
-        for i in 0..n_lat {
-            for j in 0..n_lon {
-                let (a, b, cc, d) = (p(i, j), p(i + 1, j), p(i + 1, j + 1), p(i, j + 1));
-                if i != 0 {
-                    t.push([a, b, d]);
-                }
-                if i != n_lat - 1 {
-                    t.push([b, cc, d]);
-                }
-            }
-        }
-        t
-    }
 
     fn same(a: &TriMesh, b: &TriMesh, ctx: &str) {
         assert_eq!(a.positions.len(), b.positions.len(), "{ctx}: vertex count");

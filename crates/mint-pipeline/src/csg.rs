@@ -17,15 +17,15 @@
 
 use crate::progress::{Phase, Progress};
 use crate::resample::{bounds, check_cancel, discretize_all, plan_slabs, reconstruct_ordered, Done, PipelineError, ResampleOptions, ResampleSummary, BYTES_PER_RECORD_IN_SLAB};
+use crate::output::OrderedOutput;
 use crate::scene::{Operand, Scene};
 use mint_core::grid::Grid;
 use mint_core::primitives::Primitive;
 use mint_core::robust::{census_plane, reconstruct_slab_solids, BoolOp, Expr};
 use mint_core::signs::{LineCensus, RepairStats, SignRule};
 use mint_core::{FilterStats, Intercept};
-use mint_io::{Format, MeshReader, MeshWriter, ReadOptions};
+use mint_io::{Format, MeshReader, ReadOptions};
 use mint_store::ShardStore;
-use std::io::{BufReader, BufWriter, Read, Seek, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -195,39 +195,20 @@ pub fn csg(scene: &Scene, scene_name: &str, output: &Path, opts: &ResampleOption
         let (res, rep) = reconstruct_slab_solids(&grid, k0, operands, &rules, &scene.expr, None);
         Ok((res, FilterStats::default(), rep))
     };
-    let mut writer = MeshWriter::create(output, out_format, opts.write.clone())?;
-    let spill_name = tmp_root.join("(face spill)");
-    let temp = |op: &'static str| {
-        let p = spill_name.clone();
-        move |source: std::io::Error| PipelineError::Temp { path: p, op, source }
-    };
-    let mut faces_out = BufWriter::with_capacity(1 << 20, tempfile::tempfile_in(&tmp_root).map_err(temp("creating the face spill file"))?);
-    let mut vertex_offset = 0u64;
-    let mut face_count = 0u64;
+    let mut out = OrderedOutput::create(output, out_format, opts.write.clone(), &tmp_root)?;
     let mut repair = RepairStats::default();
     progress.start(Phase::Reconstruct, ns as u64);
     reconstruct_ordered(&slabs, threads, &compute, progress, &mut |res, _f, rep, layers| {
         repair += rep;
-        for v in &res.vertices {
-            writer.write_vertex(*v)?;
-        }
-        for f in &res.faces {
-            let mut b = [0u8; 12];
-            for (k, x) in f.iter().enumerate() {
-                b[4 * k..4 * k + 4].copy_from_slice(&((*x as u64 + vertex_offset) as u32).to_le_bytes());
-            }
-            faces_out.write_all(&b).map_err(temp("writing the face spill file"))?;
-        }
-        vertex_offset += res.vertices.len() as u64;
-        face_count += res.faces.len() as u64;
+        out.push(&res)?;
         summary.active_cells += res.stats.active_cells;
         progress.advance(layers);
         Ok(())
     })?;
     progress.finish();
     drop(sources);
-    summary.output_vertices = vertex_offset;
-    summary.output_faces = face_count;
+    summary.output_vertices = out.vertices;
+    summary.output_faces = out.faces;
     summary.inconsistent_lines = repair.inconsistent_lines;
     summary.synthesized_vertices = repair.synthesized_vertices;
     summary.merged_edges = repair.merged_edges;
@@ -237,15 +218,7 @@ pub fn csg(scene: &Scene, scene_name: &str, output: &Path, opts: &ResampleOption
 
     // 5. Faces after vertices; rename into place.
     let t = Instant::now();
-    let mut spill = faces_out.into_inner().map_err(|e| PipelineError::Temp { path: spill_name.clone(), op: "writing the face spill file", source: e.into_error() })?;
-    spill.rewind().map_err(temp("rewinding the face spill file"))?;
-    let mut rd = BufReader::with_capacity(1 << 20, spill);
-    let mut b = [0u8; 12];
-    for _ in 0..face_count {
-        rd.read_exact(&mut b).map_err(temp("reading the face spill file"))?;
-        writer.write_face([0, 1, 2].map(|k| u32::from_le_bytes(b[4 * k..4 * k + 4].try_into().unwrap())))?;
-    }
-    writer.finish()?;
+    out.finish(progress)?;
     summary.seconds_write = t.elapsed().as_secs_f64();
     summary.seconds_total = t_start.elapsed().as_secs_f64();
     Ok(summary)

@@ -9,6 +9,7 @@
 //!   ([`scene`] parses the scene files), on the same machinery.
 
 pub mod csg;
+mod output;
 pub mod progress;
 pub mod resample;
 pub mod scene;

@@ -32,9 +32,9 @@ use mint_core::robust::{census_plane, reconstruct_slab_solids, Expr};
 use mint_core::signs::{LineCensus, RepairStats, SignRule};
 use mint_core::{discretize_triangle, FilterStats, Intercept};
 use mint_io::{Format, MeshReader, MeshWriter, ReadOptions, TriangleChunk, WriteOptions};
+use crate::output::OrderedOutput;
 use mint_store::{ShardStore, StoreError};
 use serde::Serialize;
-use std::io::{BufReader, BufWriter, Read, Seek, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Condvar, Mutex};
@@ -306,39 +306,14 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
 
     // 4. Reconstruct slabs in parallel, write in order.
     let t = Instant::now();
-    let mut writer = MeshWriter::create(output, out_format, opts.write.clone())?;
-    let face_spill_path = tmp_root.join("(face spill)");
-    let face_spill = tempfile::tempfile_in(&tmp_root).map_err(|source| PipelineError::Temp {
-        path: face_spill_path.clone(),
-        op: "creating the face spill file",
-        source,
-    })?;
-    let mut faces_out = BufWriter::with_capacity(1 << 20, face_spill);
+    let mut out = OrderedOutput::create(output, out_format, opts.write.clone(), &tmp_root)?;
     progress.start(Phase::Reconstruct, ns as u64);
     let mut removed = FilterStats::default();
     let mut repair = RepairStats::default();
-    let mut vertex_offset: u64 = 0;
-    let mut face_count: u64 = 0;
     let mut emit = |res: SlabResult, filter: FilterStats, rep: RepairStats, layers: u64| -> Result<(), PipelineError> {
         removed += filter;
         repair += rep;
-        for v in &res.vertices {
-            writer.write_vertex(*v)?;
-        }
-        for f in &res.faces {
-            let g = f.map(|i| (i as u64 + vertex_offset) as u32);
-            let mut b = [0u8; 12];
-            for (k, x) in g.iter().enumerate() {
-                b[4 * k..4 * k + 4].copy_from_slice(&x.to_le_bytes());
-            }
-            faces_out.write_all(&b).map_err(|source| PipelineError::Temp {
-                path: face_spill_path.clone(),
-                op: "writing the face spill file",
-                source,
-            })?;
-        }
-        vertex_offset += res.vertices.len() as u64;
-        face_count += res.faces.len() as u64;
+        out.push(&res)?;
         summary.active_cells += res.stats.active_cells;
         summary.non_canonical_cells += res.stats.non_canonical_cells;
         let room = opts.max_listed.saturating_sub(summary.non_canonical_list.len());
@@ -415,33 +390,14 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
     summary.synthesized_vertices = repair.synthesized_vertices;
     summary.merged_edges = repair.merged_edges;
     summary.dropped_intercepts = repair.dropped_intercepts;
-    summary.output_vertices = vertex_offset;
-    summary.output_faces = face_count;
+    summary.output_vertices = out.vertices;
+    summary.output_faces = out.faces;
     summary.seconds_reconstruct = t.elapsed().as_secs_f64();
     check_cancel(progress)?;
 
     // 5. Faces after vertices, then rename into place.
     let t = Instant::now();
-    let mut spill = faces_out.into_inner().map_err(|e| PipelineError::Temp {
-        path: face_spill_path.clone(),
-        op: "writing the face spill file",
-        source: e.into_error(),
-    })?;
-    spill.rewind().map_err(|source| PipelineError::Temp { path: face_spill_path.clone(), op: "rewinding the face spill file", source })?;
-    let mut rd = BufReader::with_capacity(1 << 20, spill);
-    progress.start(Phase::Write, face_count);
-    let mut b = [0u8; 12];
-    for i in 0..face_count {
-        rd.read_exact(&mut b).map_err(|source| PipelineError::Temp { path: face_spill_path.clone(), op: "reading the face spill file", source })?;
-        let f = [0, 1, 2].map(|k| u32::from_le_bytes(b[4 * k..4 * k + 4].try_into().unwrap()));
-        writer.write_face(f)?;
-        if i % (1 << 16) == 0 {
-            progress.advance(1 << 16);
-            check_cancel(progress)?;
-        }
-    }
-    writer.finish()?;
-    progress.finish();
+    out.finish(progress)?;
     summary.seconds_write = t.elapsed().as_secs_f64();
     summary.seconds_total = t_start.elapsed().as_secs_f64();
     Ok(summary)
