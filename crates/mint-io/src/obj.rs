@@ -23,7 +23,7 @@ use crate::ply::read::not_finite;
 use crate::positions::{Emit, Positions, Reject};
 use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
 use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
-use crate::writer::{write_coord, FormatWriter, OutFile, WriteOptions};
+use crate::writer::{write_point, FormatWriter, OutFile, WriteOptions};
 use crate::Format;
 
 /// The kind of an OBJ line we care about.
@@ -258,14 +258,7 @@ impl ObjWriter {
 
 impl FormatWriter for ObjWriter {
     fn vertex(&mut self, p: [f64; 3]) -> Result<(), Error> {
-        let t = self.out.text();
-        t.extend_from_slice(b"v ");
-        write_coord(t, p[0], self.double);
-        t.push(b' ');
-        write_coord(t, p[1], self.double);
-        t.push(b' ');
-        write_coord(t, p[2], self.double);
-        t.push(b'\n');
+        write_point(self.out.text(), b"v ", p, self.double, b"\n");
         self.out.maybe_flush()
     }
 

@@ -25,7 +25,7 @@ use crate::ply::read::not_finite;
 use crate::positions::{Emit, Positions, Reject};
 use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
 use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
-use crate::writer::{write_coord, FormatWriter, OutFile, WriteOptions};
+use crate::writer::{write_point, FormatWriter, OutFile, WriteOptions};
 use crate::Format;
 
 /// The next line with content, `#` comments removed: (start, content).
@@ -292,13 +292,7 @@ impl OffWriter {
 
 impl FormatWriter for OffWriter {
     fn vertex(&mut self, p: [f64; 3]) -> Result<(), Error> {
-        let t = self.out.text();
-        write_coord(t, p[0], self.double);
-        t.push(b' ');
-        write_coord(t, p[1], self.double);
-        t.push(b' ');
-        write_coord(t, p[2], self.double);
-        t.push(b'\n');
+        write_point(self.out.text(), b"", p, self.double, b"\n");
         self.out.maybe_flush()
     }
 

@@ -280,3 +280,16 @@ pub(crate) fn write_coord(out: &mut Vec<u8>, c: f64, double: bool) {
         (false, false) => write!(out, "{:e}", c as f32),
     };
 }
+
+/// Appends `prefix`, the three coordinates separated by spaces, and
+/// `suffix`: one vertex line of a text format.
+#[inline]
+pub(crate) fn write_point(out: &mut Vec<u8>, prefix: &[u8], p: [f64; 3], double: bool, suffix: &[u8]) {
+    out.extend_from_slice(prefix);
+    write_coord(out, p[0], double);
+    out.push(b' ');
+    write_coord(out, p[1], double);
+    out.push(b' ');
+    write_coord(out, p[2], double);
+    out.extend_from_slice(suffix);
+}
