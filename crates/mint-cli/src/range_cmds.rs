@@ -45,7 +45,13 @@ pub struct ScanArgs {
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MetricArg {
-    /// Point to point, Horn's closed-form quaternion (Turk and Levoy's choice).
+    /// Point to plane on the coarse levels (fast into the basin), then
+    /// point to point by Horn's method on the last level (unbiased by
+    /// noisy normals).
+    PlaneThenPoint,
+    /// Point to point, Horn's closed-form quaternion (Turk and Levoy's
+    /// choice) at every level. Crawls when scans must slide along each
+    /// other: from a few degrees off it can stop short by tenths of a degree.
     Point,
     /// Point to plane (Chen and Medioni), linearized.
     Plane,
@@ -67,7 +73,7 @@ pub struct AlignArgs {
     #[arg(long)]
     pub start_distance: Option<f64>,
     /// Error metric.
-    #[arg(long, value_enum, default_value_t = MetricArg::Point)]
+    #[arg(long, value_enum, default_value_t = MetricArg::PlaneThenPoint)]
     pub metric: MetricArg,
     /// Index (0-based, in set order) of the scan that stays fixed.
     #[arg(long, default_value_t = 0)]
@@ -76,6 +82,11 @@ pub struct AlignArgs {
     /// model of all registered scans.
     #[arg(long)]
     pub anchor_only: bool,
+    /// Pair one way only (source samples to target surfaces), as Turk and
+    /// Levoy did. By default pairs go both ways, which cancels the bias of
+    /// vertex-to-chord distances on curved surfaces.
+    #[arg(long)]
+    pub one_way: bool,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -159,11 +170,13 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
         distance: a.distance,
         start_distance: a.start_distance,
         metric: match a.metric {
+            MetricArg::PlaneThenPoint => Metric::PlaneThenPoint,
             MetricArg::Point => Metric::PointToPoint,
             MetricArg::Plane => Metric::PointToPlane,
         },
         strategy: if a.anchor_only { Strategy::Anchor } else { Strategy::Growing },
         anchor: a.anchor,
+        symmetric: !a.one_way,
         ..Default::default()
     };
     let initial: Vec<_> = set.entries.iter().map(|e| e.pose).collect();

@@ -18,10 +18,14 @@ pub struct Scene {
 pub const SIGMA: f64 = 0.001;
 
 pub fn scene() -> Scene {
+    scene_with(60_000, 0.25, 160)
+}
+
+pub fn scene_with(faces: u64, amplitude: f64, resolution: u32) -> Scene {
     let mut truth = mint_core::TriMesh::default();
-    let opts = mint_gen::ScanOptions { holes: 0, flips: 0, patches: 0, slivers: 0, noise_amplitude: 0.25, ..Default::default() };
-    mint_gen::scan_like(60_000, 3, &opts, &mut truth).unwrap();
-    let scans = synthesize(&truth.positions, &truth.faces, &SynthOptions { views: 8, resolution: 160, noise: SIGMA, seed: 5, ..Default::default() }).unwrap();
+    let opts = mint_gen::ScanOptions { holes: 0, flips: 0, patches: 0, slivers: 0, noise_amplitude: amplitude, ..Default::default() };
+    mint_gen::scan_like(faces, 3, &opts, &mut truth).unwrap();
+    let scans = synthesize(&truth.positions, &truth.faces, &SynthOptions { views: 8, resolution, noise: SIGMA, seed: 5, ..Default::default() }).unwrap();
     let meshes = scans.iter().map(|s| ScanMesh::from_range_image(&s.name, &s.image, &MeshOptions::default()).unwrap()).collect();
     let (lo, hi) = mint_range::scan_mesh::bbox(truth.positions.iter().copied());
     let center = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));

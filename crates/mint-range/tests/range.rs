@@ -7,29 +7,29 @@ mod common;
 use common::*;
 use mint_range::icp::{align, AlignOptions, Metric, Status};
 
+/// The acceptance test of registration: eight noisy views, every one but
+/// the anchor moved by up to 5° and 5% of the diagonal, three different
+/// perturbations; `mint align`'s defaults (point-to-plane to converge,
+/// Horn's point-to-point to finish, symmetric pairs, Anderson
+/// acceleration) bring every view within 0.2° and 0.1% of the diagonal.
 #[test]
-#[ignore = "known failure: view_01 ends 0.99° off (translation 0.007%); the bumpy sphere's rotation is weakly constrained and ICP converges short of the truth"]
 fn icp_recovers_perturbed_poses_of_eight_noisy_views() {
     let s = scene();
-    let initial = perturbed(&s, 5.0, 0.05, 11);
-    // The perturbation is real: at least one view is off by > 3° or > 3%.
-    let worst = s.scans.iter().zip(&initial).map(|(sc, p)| pose_errors(&sc.pose, p, s.center)).fold((0.0f64, 0.0f64), |a, e| (a.0.max(e.0), a.1.max(e.1)));
-    assert!(worst.0 > 3.0 || worst.1 > 0.03 * s.diag, "{worst:?}");
-    // Point-to-point (Horn, the default) must meet 0.2° and 0.1%;
-    // point-to-plane is an option and measured here against 0.5° and 0.1%
-    // (on this nearly spherical shape its rotation wanders more).
-    for (metric, max_deg) in [(Metric::PointToPoint, 0.2), (Metric::PointToPlane, 0.5)] {
-        let r = align(&s.meshes, &initial, &AlignOptions { metric, start_distance: Some(0.12 * s.diag), ..Default::default() }).unwrap();
+    for seed in [11, 1, 3] {
+        let initial = perturbed(&s, 5.0, 0.05, seed);
+        // The perturbation is real: at least one view is off by > 3° or > 3%.
+        let worst = s.scans.iter().zip(&initial).map(|(sc, p)| pose_errors(&sc.pose, p, s.center)).fold((0.0f64, 0.0f64), |a, e| (a.0.max(e.0), a.1.max(e.1)));
+        assert!(worst.0 > 3.0 || worst.1 > 0.03 * s.diag, "{worst:?}");
+        let r = align(&s.meshes, &initial, &AlignOptions { start_distance: Some(0.12 * s.diag), ..Default::default() }).unwrap();
         for (i, sc) in s.scans.iter().enumerate() {
             let (deg, shift) = pose_errors(&sc.pose, &r.poses[i], s.center);
-            eprintln!("{metric:?} {}: {:?} pairs {} rms {:.5} it {} err {deg:.4}° {:.5}%", sc.name, r.reports[i].status, r.reports[i].pairs, r.reports[i].rms, r.reports[i].iterations, 100.0 * shift / s.diag);
+            eprintln!("seed {seed} {}: {:?} pairs {} rms {:.5} it {} err {deg:.4}° {:.5}%", sc.name, r.reports[i].status, r.reports[i].pairs, r.reports[i].rms, r.reports[i].iterations, 100.0 * shift / s.diag);
             assert!(matches!(r.reports[i].status, Status::Registered | Status::Anchor));
-            assert!(deg < max_deg, "{metric:?} {}: {deg}°", sc.name);
-            assert!(shift < 0.001 * s.diag, "{metric:?} {}: {} of the diagonal", sc.name, shift / s.diag);
+            assert!(deg < 0.2, "seed {seed} {}: {deg}°", sc.name);
+            assert!(shift < 0.001 * s.diag, "seed {seed} {}: {} of the diagonal", sc.name, shift / s.diag);
         }
     }
 }
-
 
 /// Zippers the eight views at their true poses; returns the scene, the
 /// result without and with consensus geometry.
