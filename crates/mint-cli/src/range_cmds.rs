@@ -87,6 +87,19 @@ pub struct AlignArgs {
     /// vertex-to-chord distances on curved surfaces.
     #[arg(long)]
     pub one_way: bool,
+    /// Convergence: a level ends when an iteration moves the scan's
+    /// bounding-box corners by less than this fraction of its sampling
+    /// distance.
+    #[arg(long, default_value_t = AlignOptions::default().tolerance)]
+    pub tolerance: f64,
+    /// Samples paired per iteration at most, in each direction (a regular
+    /// thinning of the scan's samples).
+    #[arg(long, default_value_t = AlignOptions::default().max_samples)]
+    pub max_samples: usize,
+    /// Passes re-registering every scan against all others at the final
+    /// distance, after the growing model is complete.
+    #[arg(long, default_value_t = AlignOptions::default().refine_passes)]
+    pub refine_passes: usize,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -177,6 +190,9 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
         strategy: if a.anchor_only { Strategy::Anchor } else { Strategy::Growing },
         anchor: a.anchor,
         symmetric: !a.one_way,
+        tolerance: a.tolerance,
+        max_samples: a.max_samples,
+        refine_passes: a.refine_passes,
         ..Default::default()
     };
     let initial: Vec<_> = set.entries.iter().map(|e| e.pose).collect();

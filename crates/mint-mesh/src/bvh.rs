@@ -226,6 +226,21 @@ impl TriangleBvh {
             .map(|(d2, q, t)| (d2.sqrt(), q, self.ids[t]))
     }
 
+    /// Like [`nearest_within`](Self::nearest_within), starting from the
+    /// triangle found by the previous query through the same `hint` (and
+    /// updating it): when successive query points are close, as the
+    /// samples of a scan row are, that triangle's distance prunes most of
+    /// the tree at once. The distance found is the same as without the
+    /// hint; among equally near triangles which one wins may differ, so a
+    /// deterministic caller passes hints along a fixed order of queries.
+    pub fn nearest_within_hinted(&self, p: [f64; 3], max_dist: f64, hint: &mut Option<u32>) -> Option<(f64, [f64; 3], u32)> {
+        let r = self.search(p, max_dist * max_dist, hint.map(|t| t as usize));
+        if let Some((_, _, t)) = r {
+            *hint = Some(t as u32);
+        }
+        r.map(|(d2, q, t)| (d2.sqrt(), q, self.ids[t]))
+    }
+
     /// The nearest point as `(squared distance, point, internal triangle)`,
     /// starting from the bound `best_d2` and, if given, the internal
     /// triangle `hint` (a good guess, e.g. the answer for a nearby point,

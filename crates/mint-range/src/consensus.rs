@@ -20,7 +20,7 @@ use crate::raycast::RayBvh;
 use crate::scan_mesh::{vertex_normals, ScanMesh};
 use rayon::prelude::*;
 use serde::Serialize;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// Options of [`consensus`]; every field has a documented default.
 #[derive(Debug, Clone, PartialEq)]
@@ -63,7 +63,7 @@ pub fn consensus(positions: &mut [V3], faces: &[[u32; 3]], scans: &[ScanMesh], p
     let own = vertex_normals(positions, faces);
     // Scan vertices and normals in the world, hashed by cells of `radius`.
     let ckey = |p: V3| [0, 1, 2].map(|k| (p[k] / radius).floor() as i64);
-    let mut grid: HashMap<[i64; 3], Vec<(V3, V3, f64)>> = HashMap::new();
+    let mut grid: HashMap<[i64; 3], Vec<(V3, V3, f64)>> = HashMap::default();
     for (m, pose) in scans.iter().zip(poses) {
         for i in 0..m.positions.len() {
             if m.confidence[i] > 0.0 {

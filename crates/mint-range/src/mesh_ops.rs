@@ -10,7 +10,7 @@
 //! reverse of the half-edges it closes.
 
 use crate::geom::{dist, dot, normalize, tri_normal, V3};
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// Drops unused vertices; returns the old → new map (`u32::MAX` for dropped).
 pub fn compact(positions: &mut Vec<V3>, faces: &mut [[u32; 3]]) -> Vec<u32> {
@@ -37,8 +37,8 @@ pub fn compact(positions: &mut Vec<V3>, faces: &mut [[u32; 3]]) -> Vec<u32> {
 /// Returns `(faces dropped, vertices split off)`.
 pub fn make_manifold(positions: &mut Vec<V3>, faces: &mut Vec<[u32; 3]>) -> (usize, usize) {
     let before = faces.len();
-    let mut half: HashMap<(u32, u32), u32> = HashMap::with_capacity(faces.len() * 3);
-    let mut undirected: HashMap<(u32, u32), u8> = HashMap::with_capacity(faces.len() * 3);
+    let mut half: HashMap<(u32, u32), u32> = HashMap::with_capacity_and_hasher(faces.len() * 3, Default::default());
+    let mut undirected: HashMap<(u32, u32), u8> = HashMap::with_capacity_and_hasher(faces.len() * 3, Default::default());
     let mut kept = Vec::with_capacity(faces.len());
     for f in faces.iter() {
         if f[0] == f[1] || f[1] == f[2] || f[0] == f[2] {
@@ -79,7 +79,7 @@ pub fn make_manifold(positions: &mut Vec<V3>, faces: &mut Vec<[u32; 3]>) -> (usi
             }
             i
         }
-        let mut by_other: HashMap<u32, usize> = HashMap::new();
+        let mut by_other: HashMap<u32, usize> = HashMap::default();
         for (ci, &(fi, k)) in cs.iter().enumerate() {
             let f = faces[fi as usize];
             for other in [f[(k + 1) % 3], f[(k + 2) % 3]] {
@@ -93,7 +93,7 @@ pub fn make_manifold(positions: &mut Vec<V3>, faces: &mut Vec<[u32; 3]>) -> (usi
         }
         let roots: Vec<usize> = (0..cs.len()).map(|i| find(&mut parent, i)).collect();
         let mut first_root = None;
-        let mut new_id: HashMap<usize, u32> = HashMap::new();
+        let mut new_id: HashMap<usize, u32> = HashMap::default();
         for (ci, &(fi, k)) in cs.iter().enumerate() {
             let r = roots[ci];
             if first_root.is_none() {
@@ -129,7 +129,7 @@ pub fn remove_small_components(faces: &mut Vec<[u32; 3]>, min_faces: usize) -> u
         }
         i
     }
-    let mut by_edge: HashMap<(u32, u32), u32> = HashMap::with_capacity(faces.len() * 3 / 2);
+    let mut by_edge: HashMap<(u32, u32), u32> = HashMap::with_capacity_and_hasher(faces.len() * 3 / 2, Default::default());
     for (i, f) in faces.iter().enumerate() {
         for k in 0..3 {
             let e = key(f[k], f[(k + 1) % 3]);
@@ -145,7 +145,7 @@ pub fn remove_small_components(faces: &mut Vec<[u32; 3]>, min_faces: usize) -> u
         }
     }
     let roots: Vec<u32> = (0..faces.len() as u32).map(|i| find(&mut parent, i)).collect();
-    let mut size: HashMap<u32, usize> = HashMap::new();
+    let mut size: HashMap<u32, usize> = HashMap::default();
     for &r in &roots {
         *size.entry(r).or_insert(0) += 1;
     }
@@ -161,13 +161,13 @@ pub fn remove_small_components(faces: &mut Vec<[u32; 3]>, min_faces: usize) -> u
 /// Boundary loops of a 2-manifold mesh, each as its vertices in the order
 /// of the boundary half-edges (the mesh on their left).
 pub fn boundary_loops(faces: &[[u32; 3]]) -> Vec<Vec<u32>> {
-    let mut half: HashMap<(u32, u32), ()> = HashMap::with_capacity(faces.len() * 3);
+    let mut half: HashMap<(u32, u32), ()> = HashMap::with_capacity_and_hasher(faces.len() * 3, Default::default());
     for f in faces {
         for k in 0..3 {
             half.insert((f[k], f[(k + 1) % 3]), ());
         }
     }
-    let mut next: HashMap<u32, u32> = HashMap::new();
+    let mut next: HashMap<u32, u32> = HashMap::default();
     for &(a, b) in half.keys() {
         if !half.contains_key(&(b, a)) {
             next.insert(a, b);
@@ -175,7 +175,7 @@ pub fn boundary_loops(faces: &[[u32; 3]]) -> Vec<Vec<u32>> {
     }
     let mut starts: Vec<u32> = next.keys().copied().collect();
     starts.sort_unstable();
-    let mut seen: HashMap<u32, ()> = HashMap::new();
+    let mut seen: HashMap<u32, ()> = HashMap::default();
     let mut loops = Vec::new();
     for s in starts {
         if seen.contains_key(&s) {
@@ -203,7 +203,7 @@ pub fn boundary_loops(faces: &[[u32; 3]]) -> Vec<Vec<u32>> {
 /// repeatedly the ear whose new edge is shortest among those that do not
 /// already exist. Returns the number of loops filled.
 pub fn fill_small_holes(positions: &[V3], faces: &mut Vec<[u32; 3]>, max_edges: usize) -> usize {
-    let mut undirected: HashMap<(u32, u32), u8> = HashMap::with_capacity(faces.len() * 3);
+    let mut undirected: HashMap<(u32, u32), u8> = HashMap::with_capacity_and_hasher(faces.len() * 3, Default::default());
     for f in faces.iter() {
         for k in 0..3 {
             *undirected.entry(key(f[k], f[(k + 1) % 3])).or_insert(0) += 1;
@@ -268,7 +268,7 @@ pub fn remove_small_triangles(positions: &[V3], faces: &mut Vec<[u32; 3]>, min_a
                 vf[v as usize].push(i as u32);
             }
         }
-        let mut half: HashMap<(u32, u32), u32> = HashMap::with_capacity(faces.len() * 3);
+        let mut half: HashMap<(u32, u32), u32> = HashMap::with_capacity_and_hasher(faces.len() * 3, Default::default());
         for (i, f) in faces.iter().enumerate() {
             for k in 0..3 {
                 half.insert((f[k], f[(k + 1) % 3]), i as u32);

@@ -52,7 +52,7 @@ use crate::mesh_ops::{compact, fill_small_holes, key, make_manifold, remove_smal
 use crate::scan_mesh::ScanMesh;
 use mint_mesh::TriangleBvh;
 use serde::Serialize;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 /// Options of [`zipper`]; every field has a documented default.
 #[derive(Debug, Clone, PartialEq)]
@@ -164,7 +164,7 @@ struct Topo {
 
 impl Topo {
     fn new(w: &Work) -> Topo {
-        let mut edge_faces = HashMap::with_capacity(w.faces.len() * 3 / 2);
+        let mut edge_faces = HashMap::with_capacity_and_hasher(w.faces.len() * 3 / 2, Default::default());
         for (i, f) in w.faces.iter().enumerate() {
             if !w.alive[i] {
                 continue;
@@ -274,40 +274,56 @@ fn zip_pair(m: &mut Work, s: &mut Work, d: f64, stitch_r: f64, report: &mut Zipp
     };
     let mut tm = Topo::new(m);
     let mut ts = Topo::new(s);
-    // 1. Redundancy removal: with the confidence rule, then without.
+    let mut nm = Nearest::new(m);
+    let mut ns = Nearest::new(s);
+    // 1. Redundancy removal: with the confidence rule, then without. A
+    //    face that fails the test keeps failing while the rule stays (the
+    //    other mesh only loses faces), so each pass looks only at faces
+    //    around the last pass's deletions.
     for use_conf in [true, false] {
+        let mut cand_s = boundary_faces(s, &ts);
+        let mut cand_m = boundary_faces(m, &tm);
         loop {
-            let a = eat(s, &mut ts, m, &tm, &bm, d, use_conf);
-            let b = eat(m, &mut tm, s, &ts, &bs, d, use_conf);
-            report.redundant += a + b;
-            if a + b == 0 {
+            let cut_s = eat(s, &mut ts, &mut ns, &cand_s, m, &tm, &bm, d, use_conf);
+            let cut_m = eat(m, &mut tm, &mut nm, &cand_m, s, &ts, &bs, d, use_conf);
+            report.redundant += cut_s.len() + cut_m.len();
+            if cut_s.is_empty() && cut_m.is_empty() {
                 break;
             }
+            cand_s = ns.faces_around(s, &cut_s);
+            cand_m = nm.faces_around(m, &cut_m);
         }
     }
     // 2. Trimming: S retreats until it meets M instead of overlapping it.
+    //    Only where the centroid lies over M: its nearest point is inside a
+    //    live triangle of M, not on that triangle's edges. M does not
+    //    change here, so again only faces around deletions are looked at
+    //    again.
+    let mut cand = boundary_faces(s, &ts);
     loop {
-        let mut cut = Vec::new();
-        for (fi, f) in s.faces.iter().enumerate() {
-            if !s.alive[fi] || !f.iter().any(|&v| ts.on_boundary(v)) {
-                continue;
-            }
-            let c = scale(add(add(s.pos[f[0] as usize], s.pos[f[1] as usize]), s.pos[f[2] as usize]), 1.0 / 3.0);
-            // Only where the centroid lies over M: its nearest point is
-            // inside a live triangle of M, not on that triangle's edges.
-            if let Some((_, cp, mf)) = bm.nearest_within(c, d) {
-                if m.alive[mf as usize] && strictly_inside(cp, m.faces[mf as usize].map(|v| m.pos[v as usize])) {
-                    cut.push(fi as u32);
-                }
-            }
-        }
+        let cut: Vec<u32> = {
+            use rayon::prelude::*;
+            let (sr, tsr, mr) = (&*s, &ts, &*m);
+            cand.par_iter()
+                .copied()
+                .filter(|&fi| {
+                    let f = sr.faces[fi as usize];
+                    if !sr.alive[fi as usize] || !f.iter().any(|&v| tsr.on_boundary(v)) {
+                        return false;
+                    }
+                    let c = scale(add(add(sr.pos[f[0] as usize], sr.pos[f[1] as usize]), sr.pos[f[2] as usize]), 1.0 / 3.0);
+                    bm.nearest_within(c, d).is_some_and(|(_, cp, mf)| mr.alive[mf as usize] && strictly_inside(cp, mr.faces[mf as usize].map(|v| mr.pos[v as usize])))
+                })
+                .collect()
+        };
         if cut.is_empty() {
             break;
         }
         report.trimmed += cut.len();
-        for f in cut {
+        for &f in &cut {
             ts.remove(s, f);
         }
+        cand = ns.faces_around(s, &cut);
     }
     // 3. Stitching, on the union.
     append(m, s);
@@ -343,31 +359,99 @@ fn append(m: &mut Work, s: &Work) {
     }
 }
 
-/// One pass of redundancy removal of `x`'s boundary triangles against `y`;
-/// returns how many were deleted.
-fn eat(x: &mut Work, tx: &mut Topo, y: &Work, ty: &Topo, by: &TriangleBvh, d: f64, use_conf: bool) -> usize {
-    let mut cut = Vec::new();
-    let mut memo: HashMap<u32, Option<f64>> = HashMap::new();
-    let mut near = |v: u32| -> Option<f64> {
-        *memo.entry(v).or_insert_with(|| {
-            let (_, _, f) = by.nearest_within(x.pos[v as usize], d)?;
-            if !y.alive[f as usize] {
-                return None;
+/// The faces of `w` with a live boundary corner, in index order.
+fn boundary_faces(w: &Work, t: &Topo) -> Vec<u32> {
+    (0..w.faces.len() as u32).filter(|&f| w.alive[f as usize] && w.faces[f as usize].iter().any(|&v| t.on_boundary(v))).collect()
+}
+
+/// Per vertex of one mesh: its faces (for the worklists) and, computed
+/// once per pair of meshes, the nearest face of the other mesh within `d`
+/// (the tree does not change while the pair is zippered; whether that face
+/// is still alive is checked at each use).
+struct Nearest {
+    face_start: Vec<u32>,
+    face_list: Vec<u32>,
+    /// `UNKNOWN`, `NONE`, or a face of the other mesh.
+    near: Vec<u32>,
+}
+
+const UNKNOWN: u32 = u32::MAX;
+const NONE: u32 = u32::MAX - 1;
+
+impl Nearest {
+    fn new(w: &Work) -> Nearest {
+        let mut face_start = vec![0u32; w.pos.len() + 1];
+        for f in &w.faces {
+            for &v in f {
+                face_start[v as usize + 1] += 1;
             }
-            let t = y.faces[f as usize];
-            if t.iter().any(|&w| ty.on_boundary(w)) {
-                return None;
-            }
-            Some(t.iter().map(|&w| y.conf[w as usize]).sum::<f64>() / 3.0)
-        })
-    };
-    for (fi, f) in x.faces.iter().enumerate() {
-        if !x.alive[fi] || !f.iter().any(|&v| tx.on_boundary(v)) {
-            continue;
         }
+        for i in 0..w.pos.len() {
+            face_start[i + 1] += face_start[i];
+        }
+        let mut fill = face_start.clone();
+        let mut face_list = vec![0u32; face_start[w.pos.len()] as usize];
+        for (fi, f) in w.faces.iter().enumerate() {
+            for &v in f {
+                face_list[fill[v as usize] as usize] = fi as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        Nearest { face_start, face_list, near: vec![UNKNOWN; w.pos.len()] }
+    }
+
+    /// Live faces sharing a vertex with the faces `cut`, sorted, unique.
+    fn faces_around(&self, w: &Work, cut: &[u32]) -> Vec<u32> {
+        let mut out: Vec<u32> = cut
+            .iter()
+            .flat_map(|&f| w.faces[f as usize])
+            .flat_map(|v| &self.face_list[self.face_start[v as usize] as usize..self.face_start[v as usize + 1] as usize])
+            .copied()
+            .filter(|&f| w.alive[f as usize])
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
+    /// Fills in the nearest faces of the corners of `faces` not yet known.
+    fn resolve(&mut self, x: &Work, faces: &[u32], by: &TriangleBvh, d: f64) {
+        use rayon::prelude::*;
+        let mut todo: Vec<u32> = faces.iter().flat_map(|&f| x.faces[f as usize]).filter(|&v| self.near[v as usize] == UNKNOWN).collect();
+        todo.sort_unstable();
+        todo.dedup();
+        let found: Vec<u32> = todo.par_iter().map(|&v| by.nearest_within(x.pos[v as usize], d).map_or(NONE, |(_, _, f)| f)).collect();
+        for (v, f) in todo.into_iter().zip(found) {
+            self.near[v as usize] = f;
+        }
+    }
+}
+
+/// One pass of redundancy removal of `x`'s boundary triangles (among
+/// `candidates`) against `y`; returns the deleted faces.
+#[allow(clippy::too_many_arguments)]
+fn eat(x: &mut Work, tx: &mut Topo, nx: &mut Nearest, candidates: &[u32], y: &Work, ty: &Topo, by: &TriangleBvh, d: f64, use_conf: bool) -> Vec<u32> {
+    let candidates: Vec<u32> = candidates.iter().copied().filter(|&f| x.alive[f as usize] && x.faces[f as usize].iter().any(|&v| tx.on_boundary(v))).collect();
+    nx.resolve(x, &candidates, by, d);
+    // The mean confidence of the nearest face of y, if it is alive and has
+    // no boundary corner.
+    let near = |v: u32| -> Option<f64> {
+        let f = nx.near[v as usize];
+        if f == NONE || !y.alive[f as usize] {
+            return None;
+        }
+        let t = y.faces[f as usize];
+        if t.iter().any(|&w| ty.on_boundary(w)) {
+            return None;
+        }
+        Some(t.iter().map(|&w| y.conf[w as usize]).sum::<f64>() / 3.0)
+    };
+    let mut cut = Vec::new();
+    for &fi in &candidates {
+        let f = x.faces[fi as usize];
         let mut lower = 0;
         let mut all = true;
-        for &v in f {
+        for &v in &f {
             match near(v) {
                 Some(c) => {
                     if x.conf[v as usize] < c {
@@ -381,21 +465,21 @@ fn eat(x: &mut Work, tx: &mut Topo, y: &Work, ty: &Topo, by: &TriangleBvh, d: f6
             }
         }
         if all && (!use_conf || lower >= 2) {
-            cut.push(fi as u32);
+            cut.push(fi);
         }
     }
     for &f in &cut {
         tx.remove(x, f);
     }
-    cut.len()
+    cut
 }
 
 /// Stitches boundaries of `w` that come from different scans; returns the
 /// number of triangles added.
 fn stitch(w: &mut Work, r: f64) -> usize {
     // Directed half-edges of live faces; boundary half-edges have no twin.
-    let mut half: HashMap<(u32, u32), u32> = HashMap::new();
-    let mut undirected: HashMap<(u32, u32), u8> = HashMap::new();
+    let mut half: HashMap<(u32, u32), u32> = HashMap::default();
+    let mut undirected: HashMap<(u32, u32), u8> = HashMap::default();
     for (i, f) in w.faces.iter().enumerate() {
         if !w.alive[i] {
             continue;
@@ -406,9 +490,9 @@ fn stitch(w: &mut Work, r: f64) -> usize {
         }
     }
     // next/prev along boundaries, only at vertices with one boundary fan.
-    let mut next: HashMap<u32, u32> = HashMap::new();
-    let mut prev: HashMap<u32, u32> = HashMap::new();
-    let mut multi: HashMap<u32, ()> = HashMap::new();
+    let mut next: HashMap<u32, u32> = HashMap::default();
+    let mut prev: HashMap<u32, u32> = HashMap::default();
+    let mut multi: HashMap<u32, ()> = HashMap::default();
     for &(a, b) in half.keys() {
         if half.contains_key(&(b, a)) {
             continue;
@@ -427,7 +511,7 @@ fn stitch(w: &mut Work, r: f64) -> usize {
     // Nearest boundary vertex of the other part within r, through a hash grid.
     let cell = r.max(f64::MIN_POSITIVE);
     let ckey = |p: V3| [0, 1, 2].map(|k| (p[k] / cell).floor() as i64);
-    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::default();
     for &v in next.keys() {
         grid.entry(ckey(w.pos[v as usize])).or_default().push(v);
     }
@@ -455,7 +539,7 @@ fn stitch(w: &mut Work, r: f64) -> usize {
         }
         best.map(|b| b.1)
     };
-    let mut matched: HashMap<u32, u32> = HashMap::new();
+    let mut matched: HashMap<u32, u32> = HashMap::default();
     let mut starts: Vec<u32> = next.keys().copied().collect();
     starts.sort_unstable();
     for &v in next.keys() {
@@ -469,7 +553,7 @@ fn stitch(w: &mut Work, r: f64) -> usize {
         let run_start = prev.get(&a).is_none_or(|p| !matched.contains_key(p));
         (!run_start, a)
     });
-    let mut used: HashMap<(u32, u32), ()> = HashMap::new();
+    let mut used: HashMap<(u32, u32), ()> = HashMap::default();
     let mut added = 0;
     let mut new_faces = Vec::new();
     for a0 in starts {
