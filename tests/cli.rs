@@ -223,3 +223,33 @@ fn bad_scenes_fail_with_the_line_and_key_and_no_output() {
         assert!(leftovers(&out, &[]).is_empty(), "{name} left files");
     }
 }
+
+/// `mint scan` of a torus from 8 views, then `mint zipper --method grid`:
+/// closed, one component, genus 1 (the hole through the torus survives);
+/// the default zippering gives a 2-manifold. A set naming a missing scan
+/// fails with one line naming the set file and line, and writes nothing.
+#[test]
+fn scanned_torus_merges_on_the_grid_into_a_closed_genus_one_surface() {
+    let d = tempfile::tempdir().unwrap();
+    let torus = d.path().join("torus.ply");
+    ok(&["gen", "torus", p(&torus), "--faces", "40000"]);
+    let scans = d.path().join("scans");
+    ok(&["scan", p(&torus), p(&scans), "--views", "8", "--noise", "0.002"]);
+    let grid_out = d.path().join("grid.ply");
+    let j: serde_json::Value = serde_json::from_str(&ok(&["zipper", p(&scans.join("scans.conf")), p(&grid_out), "--method", "grid", "--cells", "200000", "--json"])).unwrap();
+    let c = &j["check"];
+    assert_eq!((c["watertight"].as_bool(), c["components"].as_u64(), c["genus_total"].as_i64()), (Some(true), Some(1), Some(1)), "{j}");
+    let zip_out = d.path().join("zip.ply");
+    let j: serde_json::Value = serde_json::from_str(&ok(&["zipper", p(&scans.join("scans.conf")), p(&zip_out), "--json"])).unwrap();
+    assert_eq!((j["check"]["non_manifold_edges"].as_u64(), j["check"]["non_manifold_vertices"].as_u64()), (Some(0), Some(0)), "{j}");
+    // A missing scan.
+    let bad = d.path().join("bad.conf");
+    std::fs::write(&bad, "camera 0 0 0 0 0 0 1\nbmesh nothere.ply 0 0 0 0 0 0 1\n").unwrap();
+    let out = d.path().join("never.ply");
+    let o = run(&["zipper", p(&bad), p(&out), "--method", "grid"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains(&format!("{}:2:", bad.display())) && err.contains("nothere.ply"), "{err}");
+    assert!(!out.exists());
+}

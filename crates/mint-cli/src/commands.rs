@@ -127,20 +127,28 @@ Example:\n  mint scan bunny.ply scans/ --views 8 --noise 0.0005 --perturb-deg 5 
     #[command(long_about = "Register range scans to each other with constrained ICP (Turk and Levoy 1994).\n\n\
 Reads a scan set (Stanford .conf or MeshLab .aln; scans are PLY range images or meshes) with \
 rough initial poses. Each scan's vertices are paired with the nearest points on the surfaces of \
-the other scans within a distance d, pairs on a mesh boundary are dropped, and the weighted best \
-rigid motion (Horn's quaternion) is applied until convergence, over a hierarchy of subsampled \
-scans with d halving per level. Scans join a growing model, the best-overlapping first; a scan \
+the other scans within a distance d (and their vertices with its surface: --one-way turns that \
+off), pairs on a mesh boundary are dropped, and the weighted best rigid motion is applied until \
+convergence, over a hierarchy of subsampled scans with d halving per level: point-to-plane on \
+the coarse levels, Horn's point-to-point quaternion on the last (--metric). Scans join a growing model, the best-overlapping first; a scan \
 that cannot be registered is reported and left out of OUT_SET.\n\n\
 Example:\n  mint align bun.conf bun-aligned.conf")]
     Align(crate::range_cmds::AlignArgs),
-    /// Merge registered range scans into one mesh by zippering, then consensus geometry.
-    #[command(long_about = "Merge registered range scans into one mesh (Turk and Levoy 1994).\n\n\
-Scans are added one at a time: overlapping boundary triangles are removed (the more confident \
-surface stays), the meshes are trimmed to meet and stitched along their seams, small triangles \
-are removed, and finally every vertex moves along its normal to the confidence-weighted average \
-of the scans there (consensus geometry). The result is a 2-manifold; its boundary loops are \
-where no scan saw the surface.\n\n\
-Example:\n  mint zipper bun-aligned.conf bunny.ply")]
+    /// Merge registered range scans into one mesh: zippering + consensus, or on a grid.
+    #[command(long_about = "Merge registered range scans into one mesh.\n\n\
+--method zipper (default; Turk and Levoy 1994): scans are added one at a time: overlapping \
+boundary triangles are removed (the more confident surface stays), the meshes are trimmed to \
+meet and stitched along their seams, small triangles are removed, and finally every vertex \
+moves along its normal to the confidence-weighted average of the scans there (consensus \
+geometry). The result is a 2-manifold at the scans' resolution; its boundary loops are where no \
+scan saw the surface.\n\n\
+--method grid (after Rocchini et al.'s Marching Intersections merge): every scan is cut by the \
+lines of one grid (--cells / --cell-size); each crossing votes a signed distance to the grid \
+nodes near it along its line, crossings of different scans on the same cell edge are merged by \
+confidence, and the resampler rebuilds the surface. The result is always closed (watertight, \
+2-manifold, oriented); unseen regions are closed where the surrounding inside and outside \
+meet.\n\n\
+Examples:\n  mint zipper bun-aligned.conf bunny.ply\n  mint zipper bun-aligned.conf bunny-closed.ply --method grid --cells 2000000")]
     Zipper(crate::range_cmds::ZipperArgs),
 }
 

@@ -7,6 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use mint_range::icp::{align, AlignOptions, Metric, Status, Strategy};
 use mint_range::synth::{perturb, synthesize, SynthOptions};
+use mint_range::grid_merge::{grid_merge, GridMergeOptions};
 use mint_range::zipper::{zipper, ZipperOptions};
 use mint_range::{load_set, MeshOptions, ScanEntry, ScanMesh, ScanSet, SetFormat};
 use std::path::PathBuf;
@@ -105,6 +106,14 @@ pub struct AlignArgs {
     pub json: bool,
 }
 
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MergeMethod {
+    /// Zippering and consensus geometry (Turk and Levoy).
+    Zipper,
+    /// Signed-distance voting on the grid lines and MI reconstruction.
+    Grid,
+}
+
 #[derive(Args, Debug)]
 pub struct ZipperArgs {
     /// Scan set with registered poses (.conf or .aln).
@@ -117,6 +126,19 @@ pub struct ZipperArgs {
     /// Skip consensus geometry (vertices stay where their scan put them).
     #[arg(long)]
     pub no_consensus: bool,
+    /// How to merge.
+    #[arg(long, value_enum, default_value_t = MergeMethod::Zipper)]
+    pub method: MergeMethod,
+    /// Grid method: about this many cubic cells over the scans' bounding box.
+    #[arg(long, conflicts_with = "cell_size", default_value_t = 1_000_000)]
+    pub cells: u64,
+    /// Grid method: cell edge length in scan units (instead of --cells).
+    #[arg(long)]
+    pub cell_size: Option<f64>,
+    /// Grid method: half-width of a crossing's vote along its grid line, in
+    /// scan units [default: the larger of 1.5 cells and 3 sampling distances].
+    #[arg(long)]
+    pub band: Option<f64>,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -228,8 +250,22 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
     let t = std::time::Instant::now();
     let (set, scans) = load(&a.set)?;
     let poses: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
-    let opts = ZipperOptions { distance_factor: a.distance_factor, consensus: !a.no_consensus, ..Default::default() };
-    let (pos, faces, rep) = zipper(&scans, &poses, &opts)?;
+    let (pos, faces, report) = match a.method {
+        MergeMethod::Zipper => {
+            let opts = ZipperOptions { distance_factor: a.distance_factor, consensus: !a.no_consensus, ..Default::default() };
+            let (p, f, r) = zipper(&scans, &poses, &opts)?;
+            (p, f, MergeReport::Zipper(r))
+        }
+        MergeMethod::Grid => {
+            let size = match a.cell_size {
+                Some(h) => mint_core::GridSize::CellSize(h),
+                None => mint_core::GridSize::Cells(a.cells),
+            };
+            let opts = GridMergeOptions { size, band: a.band, ..Default::default() };
+            let (p, f, r) = grid_merge(&scans, &poses, &opts)?;
+            (p, f, MergeReport::Grid(r))
+        }
+    };
     let format = mint_io::Format::from_path(&a.output)?;
     let mut w = mint_io::MeshWriter::create(&a.output, format, Default::default())?;
     for p in &pos {
@@ -242,22 +278,47 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
     let secs = t.elapsed().as_secs_f64();
     let check = mint_mesh::check(&pos, &faces);
     if a.json {
-        let v = serde_json::json!({ "set": a.set.display().to_string(), "output": a.output.display().to_string(), "seconds": secs, "zipper": rep, "check": check, "peak_heap_bytes": crate::alloc::peak_heap() });
+        let key = match report {
+            MergeReport::Zipper(_) => "zipper",
+            MergeReport::Grid(_) => "grid",
+        };
+        let v = serde_json::json!({ "set": a.set.display().to_string(), "output": a.output.display().to_string(), "seconds": secs, key: report, "check": check, "peak_heap_bytes": crate::alloc::peak_heap() });
         println!("{}", serde_json::to_string_pretty(&v)?);
-    } else {
-        eprintln!("zippered {} scans of {} in {secs:.2}s -> {}: {} vertices, {} faces", rep.scans, a.set.display(), a.output.display(), rep.vertices, rep.faces);
-        eprintln!("  redundant {} , trimmed {}, stitched {}, holes filled {}, small-triangle vertices {}", rep.redundant, rep.trimmed, rep.stitched, rep.holes_filled, rep.small_triangle_vertices);
-        eprintln!(
-            "  2-manifold: {} (non-manifold edges {}, vertices {}), boundary loops {}, components {}",
-            check.non_manifold_edges == 0 && check.non_manifold_vertices == 0,
-            check.non_manifold_edges,
-            check.non_manifold_vertices,
-            check.boundary_loops,
-            check.components
-        );
+        return Ok(());
+    }
+    match &report {
+        MergeReport::Zipper(rep) => {
+            eprintln!("zippered {} scans of {} in {secs:.2}s -> {}: {} vertices, {} faces", rep.scans, a.set.display(), a.output.display(), rep.vertices, rep.faces);
+            eprintln!("  redundant {} , trimmed {}, stitched {}, holes filled {}, small-triangle vertices {}", rep.redundant, rep.trimmed, rep.stitched, rep.holes_filled, rep.small_triangle_vertices);
+        }
+        MergeReport::Grid(rep) => {
+            eprintln!("merged {} scans of {} on a {}x{}x{} grid (cell {:.4e}) in {secs:.2}s -> {}: {} vertices, {} faces", rep.scans, a.set.display(), rep.dims[0], rep.dims[1], rep.dims[2], rep.cell, a.output.display(), rep.vertices, rep.faces);
+            eprintln!(
+                "  {} crossings; nodes voted {}, filled {}; vertices from crossings {} ({} merged across scans), interpolated {}, midpoints {}",
+                rep.crossings, rep.voted_nodes, rep.filled_nodes, rep.vertices_from_crossings, rep.vertices_merged, rep.vertices_interpolated, rep.vertices_midpoint
+            );
+        }
+    }
+    eprintln!(
+        "  2-manifold: {} (non-manifold edges {}, vertices {}), boundary loops {}, components {}",
+        check.non_manifold_edges == 0 && check.non_manifold_vertices == 0,
+        check.non_manifold_edges,
+        check.non_manifold_vertices,
+        check.boundary_loops,
+        check.components
+    );
+    if let MergeReport::Zipper(rep) = &report {
         if let Some(c) = &rep.consensus {
             eprintln!("  consensus: {} vertices moved, mean {:.3e}, max {:.3e}, {:.2} scans each", c.moved, c.mean_move, c.max_move, c.mean_scans);
         }
     }
     Ok(())
+}
+
+/// The report of either merge method.
+#[derive(serde::Serialize)]
+#[serde(untagged)]
+enum MergeReport {
+    Zipper(mint_range::zipper::ZipperReport),
+    Grid(mint_range::grid_merge::GridMergeReport),
 }

@@ -1,7 +1,7 @@
 //! mint-range: merging range scans into one mesh, after Turk and Levoy,
-//! "Zippered Polygon Meshes from Range Images" (SIGGRAPH 1994). (The
-//! grid-based merge of Rocchini et al., `--method grid`, is not written
-//! yet.)
+//! "Zippered Polygon Meshes from Range Images" (SIGGRAPH 1994), or on the
+//! Marching Intersections grid after Rocchini et al. ([`grid_merge`],
+//! `mint zipper --method grid`).
 //!
 //! Data flows through the modules in this order:
 //! - [`scanset`]: a [`ScanSet`] (Stanford `.conf` or MeshLab `.aln`) names
@@ -17,7 +17,11 @@
 //!   halving, anchor or growing model);
 //! - [`zipper`]: `mint zipper` — redundancy removal, trimming, stitching
 //!   along the seams, small-triangle removal ([`mesh_ops`]), then
-//!   [`consensus`] geometry.
+//!   [`consensus`] geometry;
+//! - [`grid_merge`]: `mint zipper --method grid` — every posed scan
+//!   discretized on one grid, crossings voted as signed distances along
+//!   the grid lines, same-edge crossings merged by confidence, then the
+//!   resampler's reconstruction: a closed 2-manifold.
 //!
 //! Everything works in memory on borrowed or owned arrays; only
 //! [`scanset`], [`range_image`] and [`scan_mesh::load_scan`] touch files,
@@ -26,6 +30,7 @@
 pub mod consensus;
 pub mod error;
 pub mod geom;
+pub mod grid_merge;
 pub mod icp;
 pub mod mesh_ops;
 pub mod range_image;

@@ -1,6 +1,6 @@
 //! Integration tests of mint-range on a synthetic scene with ground truth
-//! (fast, in CI) and on the Stanford bunny's range scans (`#[ignore]`d where
-//! slow; skipped with a message when ../shared/data is absent).
+//! and on the Stanford bunny's range scans (skipped with a message when
+//! ../shared/data is absent). All run in CI, in about 20 seconds.
 
 mod common;
 
@@ -118,7 +118,6 @@ fn the_bunny_conf_loads_and_bad_sets_say_what_is_wrong() {
 /// The bunny's ten scans from their .conf poses, each but the anchor moved
 /// by up to 3° and 3 mm: ICP brings them back; reports the errors per scan.
 #[test]
-#[ignore = "real data, about a minute: cargo test --release -p mint-range -- --ignored"]
 fn bunny_icp_recovers_the_conf_alignment() {
     let Some(d) = data_dir() else { return };
     let set_path = d.join("stanford_bunny_range_scans/bun.conf");
@@ -145,7 +144,6 @@ fn bunny_icp_recovers_the_conf_alignment() {
 /// Zippering the bunny from its .conf poses: a 2-manifold whose mean
 /// distance to bun_zipper.ply is under 0.2% of its bounding-box diagonal.
 #[test]
-#[ignore = "real data, tens of seconds: cargo test --release -p mint-range -- --ignored"]
 fn bunny_zippers_close_to_the_stanford_reconstruction() {
     let Some(d) = data_dir() else { return };
     let set_path = d.join("stanford_bunny_range_scans/bun.conf");
@@ -158,6 +156,67 @@ fn bunny_zippers_close_to_the_stanford_reconstruction() {
     let c = mint_mesh::check(&pos, &faces);
     eprintln!("{c:?}");
     assert_eq!((c.non_manifold_edges, c.non_manifold_vertices, c.inconsistently_oriented_edges), (0, 0, 0));
+    let (rp, rf) = read_bun_zipper(&d);
+    let dist = mint_mesh::distance((&pos, &faces), (&rp, &rf), 500_000, 1);
+    eprintln!("to bun_zipper: mean {:.4e} ({:.4}% of diag), rms {:.4e}, max {:.4e}", dist.mean, 100.0 * dist.mean_rel, dist.rms, dist.max);
+    assert!(dist.mean_rel < 0.002, "{}", dist.mean_rel);
+}
+
+/// The grid merge of the eight views at their true poses: a closed,
+/// oriented 2-manifold of the truth's genus, within one cell diagonal of
+/// the truth both ways (every point of the output near the truth, and
+/// every point of the truth near the output), at two grid sizes.
+#[test]
+fn grid_merge_is_watertight_and_within_a_cell_diagonal_of_the_truth() {
+    use mint_range::grid_merge::{grid_merge, GridMergeOptions};
+    let s = scene();
+    let poses: Vec<_> = s.scans.iter().map(|x| x.pose).collect();
+    for cells in [50_000u64, 400_000] {
+        let (pos, faces, rep) = grid_merge(&s.meshes, &poses, &GridMergeOptions { size: mint_core::GridSize::Cells(cells), ..Default::default() }).unwrap();
+        let c = mint_mesh::check(&pos, &faces);
+        let cell_diag = rep.cell * 3f64.sqrt();
+        let to_truth = mint_mesh::distance((&pos, &faces), (&s.truth.positions, &s.truth.faces), 200_000, 1);
+        let from_truth = mint_mesh::distance((&s.truth.positions, &s.truth.faces), (&pos, &faces), 200_000, 1);
+        eprintln!("{cells} cells: {rep:?}\n  {c:?}\n  to truth mean {:.5} max {:.5}; from truth mean {:.5} max {:.5}; cell diagonal {cell_diag:.5}", to_truth.mean, to_truth.max, from_truth.mean, from_truth.max);
+        assert_eq!((c.boundary_edges, c.non_manifold_edges, c.non_manifold_vertices, c.inconsistently_oriented_edges), (0, 0, 0, 0));
+        assert_eq!(c.components, 1);
+        assert!(c.watertight && c.genera == vec![0] && c.signed_volume > 0.0, "{c:?}");
+        assert!(to_truth.max <= cell_diag, "output to truth: max {} > cell diagonal {cell_diag}", to_truth.max);
+        assert!(from_truth.max <= cell_diag, "truth to output: max {} > cell diagonal {cell_diag}", from_truth.max);
+        assert!(rep.vertices_merged > 0, "overlapping views share cell edges");
+    }
+}
+
+/// The grid merge of the bunny's scans from their .conf poses at 2M cells
+/// (cell 1.1 mm): one closed, oriented 2-manifold of genus 0; every part of
+/// bun_zipper.ply is reproduced within 0.2% of its diagonal on average.
+/// The other way the mean is larger (about 0.3%) and only reported:
+/// bun_zipper.ply is open at the base, which no scan saw, and the merge
+/// closes it with caps that have no counterpart there. (At 1M cells,
+/// 1.45 mm, a thin part at the back of the head comes out as a second
+/// component: detail below a cell is not kept.)
+#[test]
+fn bunny_grid_merge_is_closed_and_close_to_the_stanford_reconstruction() {
+    use mint_range::grid_merge::{grid_merge, GridMergeOptions};
+    let Some(d) = data_dir() else { return };
+    let set_path = d.join("stanford_bunny_range_scans/bun.conf");
+    let set = mint_range::ScanSet::read(&set_path).unwrap();
+    let scans = mint_range::load_set(&set, &set_path, &mint_range::MeshOptions::default()).unwrap();
+    let poses: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
+    let (pos, faces, rep) = grid_merge(&scans, &poses, &GridMergeOptions { size: mint_core::GridSize::Cells(2_000_000), ..Default::default() }).unwrap();
+    eprintln!("{rep:?}");
+    let c = mint_mesh::check(&pos, &faces);
+    assert!(c.watertight && c.components == 1 && c.genera == vec![0] && c.signed_volume > 0.0 && c.inconsistently_oriented_edges == 0, "{c:?}");
+    let (rp, rf) = read_bun_zipper(&d);
+    let to = mint_mesh::distance((&pos, &faces), (&rp, &rf), 300_000, 1);
+    let from = mint_mesh::distance((&rp, &rf), (&pos, &faces), 300_000, 1);
+    eprintln!("to bun_zipper: mean {:.4}% of diag; from it: mean {:.4}%", 100.0 * to.mean_rel, 100.0 * from.mean_rel);
+    assert!(from.mean_rel < 0.002, "{}", from.mean_rel);
+    assert!(from.max <= 2.0 * rep.cell * 3f64.sqrt(), "bun_zipper to the merge: max {} vs two cell diagonals", from.max);
+}
+
+/// The Stanford reconstruction, positions and faces.
+fn read_bun_zipper(d: &std::path::Path) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
     let mut r = mint_io::MeshReader::open(&d.join("stanford_bunny_zipper_mesh/bun_zipper.ply"), Default::default()).unwrap();
     let rp: Vec<[f64; 3]> = (0..r.vertex_count()).map(|i| r.vertex(i)).collect();
     let mut rf = Vec::new();
@@ -165,7 +224,5 @@ fn bunny_zippers_close_to_the_stanford_reconstruction() {
     while r.next_chunk(&mut ch).unwrap() {
         rf.extend_from_slice(&ch.indices);
     }
-    let dist = mint_mesh::distance((&pos, &faces), (&rp, &rf), 500_000, 1);
-    eprintln!("to bun_zipper: mean {:.4e} ({:.4}% of diag), rms {:.4e}, max {:.4e}", dist.mean, 100.0 * dist.mean_rel, dist.rms, dist.max);
-    assert!(dist.mean_rel < 0.002, "{}", dist.mean_rel);
+    (rp, rf)
 }
