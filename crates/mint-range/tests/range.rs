@@ -5,7 +5,7 @@
 mod common;
 
 use common::*;
-use mint_range::icp::{align, AlignOptions, Metric, Status};
+use mint_range::icp::{align, AlignOptions, Status};
 
 /// The acceptance test of registration: eight noisy views, every one but
 /// the anchor moved by up to 5° and 5% of the diagonal, three different
@@ -98,6 +98,16 @@ fn data_dir() -> Option<std::path::PathBuf> {
     }
 }
 
+/// The data folder, the bunny's scan set and its scans (`None`, with a
+/// message, when the data is absent).
+fn bunny() -> Option<(std::path::PathBuf, mint_range::ScanSet, Vec<mint_range::ScanMesh>)> {
+    let d = data_dir()?;
+    let set_path = d.join("stanford_bunny_range_scans/bun.conf");
+    let set = mint_range::ScanSet::read(&set_path).unwrap();
+    let scans = mint_range::load_set(&set, &set_path, &mint_range::MeshOptions::default()).unwrap();
+    Some((d, set, scans))
+}
+
 #[test]
 fn the_bunny_conf_loads_and_bad_sets_say_what_is_wrong() {
     let Some(d) = data_dir() else { return };
@@ -119,10 +129,7 @@ fn the_bunny_conf_loads_and_bad_sets_say_what_is_wrong() {
 /// by up to 3° and 3 mm: ICP brings them back; reports the errors per scan.
 #[test]
 fn bunny_icp_recovers_the_conf_alignment() {
-    let Some(d) = data_dir() else { return };
-    let set_path = d.join("stanford_bunny_range_scans/bun.conf");
-    let set = mint_range::ScanSet::read(&set_path).unwrap();
-    let scans = mint_range::load_set(&set, &set_path, &mint_range::MeshOptions::default()).unwrap();
+    let Some((_, set, scans)) = bunny() else { return };
     let truth: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
     let center = [-0.017, 0.11, 0.0];
     let mut rng = mint_mesh::SplitMix64::new(3);
@@ -145,10 +152,7 @@ fn bunny_icp_recovers_the_conf_alignment() {
 /// distance to bun_zipper.ply is under 0.2% of its bounding-box diagonal.
 #[test]
 fn bunny_zippers_close_to_the_stanford_reconstruction() {
-    let Some(d) = data_dir() else { return };
-    let set_path = d.join("stanford_bunny_range_scans/bun.conf");
-    let set = mint_range::ScanSet::read(&set_path).unwrap();
-    let scans = mint_range::load_set(&set, &set_path, &mint_range::MeshOptions::default()).unwrap();
+    let Some((d, set, scans)) = bunny() else { return };
     let poses: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
     let t = std::time::Instant::now();
     let (pos, faces, rep) = mint_range::zipper::zipper(&scans, &poses, &Default::default()).unwrap();
@@ -198,10 +202,7 @@ fn grid_merge_is_watertight_and_within_a_cell_diagonal_of_the_truth() {
 #[test]
 fn bunny_grid_merge_is_closed_and_close_to_the_stanford_reconstruction() {
     use mint_range::grid_merge::{grid_merge, GridMergeOptions};
-    let Some(d) = data_dir() else { return };
-    let set_path = d.join("stanford_bunny_range_scans/bun.conf");
-    let set = mint_range::ScanSet::read(&set_path).unwrap();
-    let scans = mint_range::load_set(&set, &set_path, &mint_range::MeshOptions::default()).unwrap();
+    let Some((d, set, scans)) = bunny() else { return };
     let poses: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
     let (pos, faces, rep) = grid_merge(&scans, &poses, &GridMergeOptions { size: mint_core::GridSize::Cells(2_000_000), ..Default::default() }).unwrap();
     eprintln!("{rep:?}");
