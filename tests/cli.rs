@@ -224,7 +224,8 @@ fn bad_scenes_fail_with_the_line_and_key_and_no_output() {
     }
 }
 
-/// `mint scan` of a torus from 8 views, then `mint zipper --method grid`:
+/// `mint scan` of a torus from 8 views (as mint's binary depth grids),
+/// then `mint zipper --method grid`:
 /// closed, one component, genus 1 (the hole through the torus survives);
 /// the default zippering gives a 2-manifold. A set naming a missing scan
 /// fails with one line naming the set file and line, and writes nothing.
@@ -234,7 +235,8 @@ fn scanned_torus_merges_on_the_grid_into_a_closed_genus_one_surface() {
     let torus = d.path().join("torus.ply");
     ok(&["gen", "torus", p(&torus), "--faces", "40000"]);
     let scans = d.path().join("scans");
-    ok(&["scan", p(&torus), p(&scans), "--views", "8", "--noise", "0.002"]);
+    ok(&["scan", p(&torus), p(&scans), "--views", "8", "--noise", "0.002", "--image-format", "rgrid"]);
+    assert!(scans.join("view_03.rgrid").exists());
     let grid_out = d.path().join("grid.ply");
     let j: serde_json::Value = serde_json::from_str(&ok(&["zipper", p(&scans.join("scans.conf")), p(&grid_out), "--method", "grid", "--cells", "200000", "--json"])).unwrap();
     let c = &j["check"];

@@ -118,7 +118,8 @@ Example:\n  mint optimize marching-cubed.ply clean.ply --angle 5 --stats opt.jso
     /// (and, on request, perturbed) poses in a .conf.
     #[command(long_about = "Cast range images of a mesh from N viewpoints, as an orthographic range scanner would.\n\n\
 Writes, in OUT_DIR: view_NN.ply (a PLY range image: a grid of samples in the view's own frame, \
-the layout of the Stanford scans), view_NN.mesh.ply (its triangle mesh), and scans.conf (Stanford \
+the layout of the Stanford scans; with --image-format rgrid or rgrid-ascii, view_NN.rgrid, \
+mint's depth grid of docs/FORMATS.md), view_NN.mesh.ply (its triangle mesh), and scans.conf (Stanford \
 convention) with the true pose of every view. With --perturb-deg/--perturb-frac it also writes \
 scans-perturbed.conf, every view but the first moved at random: ground truth for `mint align`.\n\n\
 Example:\n  mint scan bunny.ply scans/ --views 8 --noise 0.0005 --perturb-deg 5 --perturb-frac 0.05")]

@@ -7,6 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use mint_range::icp::{align, AlignOptions, Metric, Status, Strategy};
 use mint_range::synth::{perturb, synthesize, SynthOptions};
+use mint_range::depth_grid::{write_depth_grid, GridEncoding};
 use mint_range::grid_merge::{grid_merge, GridMergeOptions};
 use mint_range::zipper::{zipper, ZipperOptions};
 use mint_range::{load_set, MeshOptions, ScanEntry, ScanMesh, ScanSet, SetFormat};
@@ -42,6 +43,19 @@ pub struct ScanArgs {
     /// ...and a random translation of up to this fraction of the bounding-box diagonal.
     #[arg(long, default_value_t = 0.0)]
     pub perturb_frac: f64,
+    /// File format of the range images.
+    #[arg(long, value_enum, default_value_t = ImageFormat::Ply)]
+    pub image_format: ImageFormat,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// PLY range image (the Stanford scans' layout): view_NN.ply.
+    Ply,
+    /// mint's depth grid, binary: view_NN.rgrid (docs/FORMATS.md).
+    Rgrid,
+    /// mint's depth grid, text: view_NN.rgrid.
+    RgridAscii,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -159,8 +173,19 @@ pub fn cmd_scan(a: ScanArgs) -> Result<()> {
     let comments = [format!("mint scan of {}", a.mesh.display())];
     let mut samples = 0;
     for sc in &scans {
-        let file = format!("{}.ply", sc.name);
-        sc.image.write_ply(&a.out_dir.join(&file), &comments)?;
+        let file = match a.image_format {
+            ImageFormat::Ply => {
+                let file = format!("{}.ply", sc.name);
+                sc.image.write_ply(&a.out_dir.join(&file), &comments)?;
+                file
+            }
+            ImageFormat::Rgrid | ImageFormat::RgridAscii => {
+                let file = format!("{}.rgrid", sc.name);
+                let enc = if a.image_format == ImageFormat::Rgrid { GridEncoding::BinaryLittleEndian } else { GridEncoding::Ascii };
+                write_depth_grid(&a.out_dir.join(&file), &sc.image, enc, &comments)?;
+                file
+            }
+        };
         samples += sc.image.points.len();
         if let Ok(m) = ScanMesh::from_range_image(&sc.name, &sc.image, &MeshOptions::default()) {
             let mpath = a.out_dir.join(format!("{}.mesh.ply", sc.name));

@@ -26,6 +26,10 @@ pub enum RangeError {
     /// file and the position in it).
     #[error(transparent)]
     Io(#[from] mint_io::Error),
+    /// A `.rgrid` range grid is malformed `at` a header line, a data row
+    /// and column, or a byte offset.
+    #[error("{}: {at}: {message}", .path.display())]
+    GridSyntax { path: PathBuf, at: String, message: String },
     /// A plain file operation failed.
     #[error("{}: {what}: {source}", .path.display())]
     File { path: PathBuf, what: &'static str, source: std::io::Error },

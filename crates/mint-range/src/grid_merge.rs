@@ -226,7 +226,7 @@ pub fn grid_merge(scans: &[ScanMesh], poses: &[Rigid], opts: &GridMergeOptions) 
     if lo[0] > hi[0] {
         return Err(RangeError::option("scans", "no scan has a triangle"));
     }
-    let grid = Grid::around(lo, hi, opts.size, [0.0; 3], None).map_err(|e| RangeError::option("size", e.to_string()))?;
+    let grid = Grid::around(lo, hi, opts.size, [0.0; 3], None)?;
     let dims = grid.local_dims();
     let lat = Lattice { n: dims.map(|d| d as u64 + 1) };
     if lat.len() > opts.max_nodes {

@@ -6,8 +6,9 @@
 //! Data flows through the modules in this order:
 //! - [`scanset`]: a [`ScanSet`] (Stanford `.conf` or MeshLab `.aln`) names
 //!   the scans and their poses ([`Rigid`], scan frame → world);
-//! - [`range_image`]: a [`RangeImage`] (PLY `range_grid`) is triangulated
-//!   without bridging depth discontinuities;
+//! - [`range_image`]: a [`RangeImage`] (PLY `range_grid`, or mint's own
+//!   `.rgrid` depth grid of [`depth_grid`]) is triangulated without
+//!   bridging depth discontinuities;
 //! - [`scan_mesh`]: a [`ScanMesh`] adds normals, boundary, confidence and
 //!   the registration hierarchy;
 //! - [`synth`]: `mint scan` — range images ray-cast from a mesh, with true
@@ -24,10 +25,11 @@
 //!   resampler's reconstruction: a closed 2-manifold.
 //!
 //! Everything works in memory on borrowed or owned arrays; only
-//! [`scanset`], [`range_image`] and [`scan_mesh::load_scan`] touch files,
+//! [`scanset`], [`range_image`], [`depth_grid`] and [`scan_mesh::load_scan`] touch files,
 //! through mint-io's atomic writers.
 
 pub mod consensus;
+pub mod depth_grid;
 pub mod error;
 pub mod geom;
 pub mod grid_merge;

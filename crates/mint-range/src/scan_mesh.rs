@@ -84,6 +84,10 @@ pub struct ScanMesh {
 /// file name.
 pub fn load_scan(path: &Path, opts: &MeshOptions) -> Result<ScanMesh, RangeError> {
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    if crate::depth_grid::is_depth_grid(path) {
+        let im = crate::depth_grid::read_depth_grid(path)?;
+        return ScanMesh::from_range_image(&name, &im, opts).map_err(|e| with_path(e, path));
+    }
     let mut reader = mint_io::MeshReader::open(path, mint_io::ReadOptions { resolve_positions: false, ..Default::default() })?;
     if reader.range_grid().is_some() {
         drop(reader);
