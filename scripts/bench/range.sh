@@ -1,67 +1,69 @@
 #!/usr/bin/env bash
-# Range-scan merging benchmarks (issue 7), one line per run:
-#   1. pairwise ICP, bun045 -> bun000, from the .conf pose of bun045 moved by
-#      a fixed 2° / 2 mm: mint align vs Open3D registration_icp (point to
-#      point, same max correspondence distance), time and final RMS;
-#   2. the whole bunny: mint align + mint zipper (with consensus) on the 10
-#      scans from bun.conf, total time and peak RSS (GNU time).
-# Open3D comes from PyPI into scripts/bench/.venv-range; if it cannot be
-# installed the Open3D line says so and the rest still runs.
+# Range-scan merging benchmarks (issue 7).
+#   1. Pairwise ICP on the bunny scans, around the ring bun000 -> bun045 ->
+#      bun090 -> bun180 -> bun270 -> bun315 -> bun000: the source scan starts
+#      from its bun.conf pose moved by 2° about a fixed axis and 2 mm; mint
+#      align and Open3D's registration_icp (point to point, max
+#      correspondence distance 1.5 mm, 200 iterations) run from the same
+#      start. Reported per pair: time, each tool's own RMS, and the common
+#      measure — the error of the final pose against bun.conf (rotation in
+#      degrees, displacement of the scan's centroid in mm).
+#   2. The whole bunny, 10 scans from bun.conf: mint align, then mint
+#      zipper (with consensus geometry), then mint zipper --method grid;
+#      time and peak RSS of each (GNU time), and the distance to
+#      bun_zipper.ply.
+# Open3D comes from PyPI into scripts/bench/.venv-range; it needs Debian's
+# libusb-1.0-0 at import, installed here with apt-get when missing (as root
+# or through sudo). If either cannot be installed the Open3D column says so
+# and the rest still runs.
 # Usage: scripts/bench/range.sh   (needs ../shared/data)
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 data="$root/../shared/data/stanford_bunny_range_scans"
 [ -f "$data/bun.conf" ] || { echo "skipped: $data is absent"; exit 0; }
-export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-/work/target-range}"
+export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$root/target}"
 (cd "$root" && cargo build --release -q)
 mint="$CARGO_TARGET_DIR/release/mint"
 tmp="$(mktemp -d)"; trap 'rm -rf "$tmp"' EXIT
 for f in "$data"/*.ply; do ln -s "$f" "$tmp/"; done
-# bun045 moved by 2° about y and 2 mm along x, relative to bun.conf.
-python3 - "$data/bun.conf" "$tmp" <<'PY'
-import math, sys
-conf, out = sys.argv[1], sys.argv[2]
-lines = [l.split() for l in open(conf) if l.startswith("bmesh")]
+cp "$data/bun.conf" "$tmp/bun.conf"
+
+venv="$here/.venv-range"
+if ! ldconfig -p 2>/dev/null | grep -q libusb-1.0; then
+  if [ "$(id -u)" = 0 ]; then apt-get install -y -q libusb-1.0-0 >/dev/null 2>&1 || true
+  elif command -v sudo >/dev/null; then sudo -n apt-get install -y -q libusb-1.0-0 >/dev/null 2>&1 || true; fi
+fi
+if [ ! -x "$venv/bin/python" ]; then python3 -m venv "$venv" >/dev/null 2>&1 && "$venv/bin/pip" -q install open3d >/dev/null 2>&1 || true; fi
+py=python3
+if "$venv/bin/python" -c "import open3d" >/dev/null 2>&1; then py="$venv/bin/python"; fi
+
+echo "== pairwise ICP (start: bun.conf pose moved by 2 deg and 2 mm) =="
+"$py" - "$mint" "$data" "$tmp" <<'PY'
+import json, math, subprocess, sys, time
+mint, data, tmp = sys.argv[1:4]
+try:
+    import numpy as np, open3d as o3d
+except Exception:
+    np = o3d = None
+conf = {l.split()[1]: [float(v) for v in l.split()[2:]] for l in open(f"{data}/bun.conf") if l.startswith("bmesh")}
+
 def qmul(a, b):
     ax, ay, az, aw = a; bx, by, bz, bw = b
     return [aw*bx+ax*bw+ay*bz-az*by, aw*by-ax*bz+ay*bw+az*bx, aw*bz+ax*by-ay*bx+az*bw, aw*bw-ax*bx-ay*by-az*bz]
-sets = {}
-for l in lines:
-    sets[l[1]] = [float(x) for x in l[2:]]
-t, q = sets["bun045.ply"][:3], sets["bun045.ply"][3:]
-h = math.radians(2.0) / 2
-# .conf rotates by the conjugate of q: perturbing the world rotation by D means q' = q * conj(D).
-d = [0.0, -math.sin(h), 0.0, math.cos(h)]
-q2 = qmul(q, d)
-t2 = [t[0] + 0.002, t[1], t[2]]
-a = sets["bun000.ply"]
-with open(f"{out}/pair.conf", "w") as f:
-    f.write("bmesh bun000.ply " + " ".join(map(str, a)) + "\n")
-    f.write("bmesh bun045.ply " + " ".join(map(str, t2 + q2)) + "\n")
-PY
-cp "$data/bun.conf" "$tmp/bun.conf"
-t0=$(date +%s.%N)
-"$mint" align "$tmp/pair.conf" "$tmp/pair-aligned.conf" --start-distance 0.008 --json > "$tmp/pair.json"
-t1=$(date +%s.%N)
-python3 - "$tmp/pair.json" "$t0" "$t1" <<'PY'
-import json, sys
-r = json.load(open(sys.argv[1])); s = r["scans"][1]
-print(f"pairwise ICP  mint align (Horn, 4 levels)      bun045->bun000  {float(sys.argv[3])-float(sys.argv[2]):.2f}s wall (incl. loading)  rms {s['rms']*1e3:.4f} mm  pairs {s['pairs']}  iterations {s['iterations']}")
-PY
-venv="$here/.venv-range"
-# Open3D needs libusb-1.0 at import (Debian: apt-get install libusb-1.0-0).
-if [ ! -x "$venv/bin/python" ]; then python3 -m venv "$venv" >/dev/null 2>&1 && "$venv/bin/pip" -q install open3d >/dev/null 2>&1 || true; fi
-if "$venv/bin/python" -c "import open3d" >/dev/null 2>&1; then
-  "$venv/bin/python" - "$data" "$tmp/pair.conf" <<'PY'
-import sys, time, numpy as np, open3d as o3d
-data, conf = sys.argv[1], sys.argv[2]
-def pose(vals):
-    t = np.array(vals[:3]); x, y, z, w = vals[3:]
-    R = np.array([[1-2*(y*y+z*z), 2*(x*y-z*w), 2*(x*z+y*w)], [2*(x*y+z*w), 1-2*(x*x+z*z), 2*(y*z-x*w)], [2*(x*z-y*w), 2*(y*z+x*w), 1-2*(x*x+y*y)]])
-    M = np.eye(4); M[:3, :3] = R.T; M[:3, 3] = t; return M
-P = {l.split()[1]: pose([float(v) for v in l.split()[2:]]) for l in open(conf)}
-def load(n):
+def mat(vals):
+    # 4x4 pose (scan frame -> world) of a .conf line, as mint reads it.
+    t = vals[:3]; x, y, z, w = vals[3:]
+    R = [[1-2*(y*y+z*z), 2*(x*y-z*w), 2*(x*z+y*w)], [2*(x*y+z*w), 1-2*(x*x+z*z), 2*(y*z-x*w)], [2*(x*z-y*w), 2*(y*z+x*w), 1-2*(x*x+y*y)]]
+    Rt = [[R[j][i] for j in range(3)] for i in range(3)]
+    return [Rt[0] + [t[0]], Rt[1] + [t[1]], Rt[2] + [t[2]], [0, 0, 0, 1]]
+def mul(A, B): return [[sum(A[i][k]*B[k][j] for k in range(4)) for j in range(4)] for i in range(4)]
+def inv(M):
+    R = [[M[j][i] for j in range(3)] for i in range(3)]; t = [M[i][3] for i in range(3)]
+    ti = [-sum(R[i][k]*t[k] for k in range(3)) for i in range(3)]
+    return [R[0] + [ti[0]], R[1] + [ti[1]], R[2] + [ti[2]], [0, 0, 0, 1]]
+def apply(M, p): return [sum(M[i][k]*p[k] for k in range(3)) + M[i][3] for i in range(3)]
+def load_pts(n):
     pts = []
     with open(f"{data}/{n}") as f:
         nv = 0
@@ -69,18 +71,63 @@ def load(n):
             if line.startswith("element vertex"): nv = int(line.split()[2])
             if line.startswith("end_header"): break
         for _ in range(nv): pts.append([float(v) for v in f.readline().split()[:3]])
-    pc = o3d.geometry.PointCloud(); pc.points = o3d.utility.Vector3dVector(np.array(pts)); return pc
-a, b = load("bun000.ply"), load("bun045.ply")
-t = time.time()
-r = o3d.pipelines.registration.registration_icp(b, a, 0.0015, P["bun045.ply"], o3d.pipelines.registration.TransformationEstimationPointToPoint(), o3d.pipelines.registration.ICPConvergenceCriteria(max_iteration=200))
-print(f"pairwise ICP  open3d registration_icp (p2p)     bun045->bun000  {time.time()-t:.2f}s (ICP only)  rms {r.inlier_rmse*1e3:.4f} mm  fitness {r.fitness:.3f}")
+    return pts
+def errors(truth, est, centroid):
+    D = mul(inv(truth), est)
+    tr = D[0][0] + D[1][1] + D[2][2]
+    deg = math.degrees(math.acos(max(-1, min(1, (tr - 1) / 2))))
+    a, b = apply(truth, centroid), apply(est, centroid)
+    return deg, 1e3 * math.dist(a, b)
+
+ring = ["bun000.ply", "bun045.ply", "bun090.ply", "bun180.ply", "bun270.ply", "bun315.ply", "bun000.ply"]
+h = math.radians(2.0) / 2
+axis = [0.6, -0.8, 0.0]
+d = [axis[0]*math.sin(h), axis[1]*math.sin(h), axis[2]*math.sin(h), math.cos(h)]
+print(f"{'pair':<24} {'tool':<8} {'time':>8} {'own RMS mm':>11} {'rot err':>9} {'trans err':>10}")
+for tgt, src in zip(ring[1:], ring[:-1]):
+    # src moves onto tgt: tgt is the anchor.
+    pts = load_pts(src)
+    centroid = [sum(p[k] for p in pts) / len(pts) for k in range(3)]
+    t, q = conf[src][:3], conf[src][3:]
+    start = [t[0] + 0.002, t[1], t[2]] + qmul(q, d)
+    with open(f"{tmp}/pair.conf", "w") as f:
+        f.write(f"bmesh {tgt} " + " ".join(map(str, conf[tgt])) + "\n")
+        f.write(f"bmesh {src} " + " ".join(map(str, start)) + "\n")
+    r = json.loads(subprocess.run([mint, "align", f"{tmp}/pair.conf", f"{tmp}/pair-out.conf", "--start-distance", "0.008", "--json"], capture_output=True, text=True, check=True).stdout)
+    out = {l.split()[1]: [float(v) for v in l.split()[2:]] for l in open(f"{tmp}/pair-out.conf") if l.startswith("bmesh")}
+    s = r["scans"][1]
+    e0 = errors(mat(conf[src]), mat(start), centroid)
+    e = errors(mat(conf[src]), mat(out[src]), centroid)
+    name = f"{src[:-4]}->{tgt[:-4]}"
+    print(f"{name:<24} {'start':<8} {'':>8} {'':>11} {e0[0]:8.3f}° {e0[1]:8.3f}mm")
+    print(f"{'':<24} {'mint':<8} {r['register_seconds']:7.2f}s {s['rms']*1e3:11.4f} {e[0]:8.3f}° {e[1]:8.3f}mm")
+    if o3d is None:
+        print(f"{'':<24} {'open3d':<8} not installed (pip install open3d in scripts/bench/.venv-range failed, or libusb-1.0-0 is missing)")
+        continue
+    a = o3d.geometry.PointCloud(); a.points = o3d.utility.Vector3dVector(np.array(load_pts(tgt)))
+    b = o3d.geometry.PointCloud(); b.points = o3d.utility.Vector3dVector(np.array(pts))
+    Ta = mat(conf[tgt])
+    init = np.array(mul(inv(Ta), mat(start)))
+    t0 = time.time()
+    res = o3d.pipelines.registration.registration_icp(b, a, 0.0015, init, o3d.pipelines.registration.TransformationEstimationPointToPoint(), o3d.pipelines.registration.ICPConvergenceCriteria(max_iteration=200))
+    dt = time.time() - t0
+    est = mul(Ta, res.transformation.tolist())
+    e = errors(mat(conf[src]), est, centroid)
+    print(f"{'':<24} {'open3d':<8} {dt:7.2f}s {res.inlier_rmse*1e3:11.4f} {e[0]:8.3f}° {e[1]:8.3f}mm")
+print("(mint: time of registration without loading, RMS point-to-surface; open3d: time of registration_icp, inlier RMSE point-to-nearest-point)")
 PY
-else
-  echo "pairwise ICP  open3d: not installed (pip install open3d failed in $venv)"
-fi
+
+echo "== the whole bunny, 10 scans from bun.conf =="
 /usr/bin/time -f "%e %M" -o "$tmp/t1" "$mint" align "$tmp/bun.conf" "$tmp/aligned.conf" > /dev/null 2> "$tmp/align.log"
 /usr/bin/time -f "%e %M" -o "$tmp/t2" "$mint" zipper "$tmp/aligned.conf" "$tmp/bunny.ply" 2> "$tmp/zip.log"
-read a_s a_kb < "$tmp/t1"; read z_s z_kb < "$tmp/t2"
-echo "whole bunny   10 scans: align ${a_s}s (peak RSS $((a_kb/1024)) MiB), zipper+consensus ${z_s}s (peak RSS $((z_kb/1024)) MiB), total $(python3 -c "print(round($a_s+$z_s,2))")s"
-grep -E "zippered|2-manifold|consensus" "$tmp/zip.log" | sed 's/^/  /'
-"$mint" distance "$tmp/bunny.ply" "$root/../shared/data/stanford_bunny_zipper_mesh/bun_zipper.ply" --samples 200000 | sed 's/^/  /'
+/usr/bin/time -f "%e %M" -o "$tmp/t3" "$mint" zipper "$tmp/aligned.conf" "$tmp/bunny-grid.ply" --method grid --cells 2000000 2> "$tmp/grid.log"
+read a_s a_kb < "$tmp/t1"; read z_s z_kb < "$tmp/t2"; read g_s g_kb < "$tmp/t3"
+cat "$tmp/t1" "$tmp/t2" >/dev/null
+echo "align ${a_s}s (peak RSS $((a_kb/1024)) MiB) + zipper with consensus ${z_s}s (peak RSS $((z_kb/1024)) MiB) = $(python3 -c "print(round($a_s+$z_s,2))")s; grid merge at 2M cells ${g_s}s (peak RSS $((g_kb/1024)) MiB)"
+sed 's/^/  /' "$tmp/zip.log" "$tmp/grid.log"
+ref="$root/../shared/data/stanford_bunny_zipper_mesh/bun_zipper.ply"
+for m in bunny bunny-grid; do
+  "$mint" distance "$tmp/$m.ply" "$ref" --samples 300000 | sed "s/^/  $m: /" | head -2
+  "$mint" distance "$ref" "$tmp/$m.ply" --samples 300000 | sed "s/^/  $m: /" | head -2
+done
+echo "cat of the 10 scans (the floor): $( { /usr/bin/time -f %e cat "$data"/*.ply > /dev/null; } 2>&1 )s"

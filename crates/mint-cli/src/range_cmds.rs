@@ -243,7 +243,9 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
         ..Default::default()
     };
     let initial: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
+    let t_register = std::time::Instant::now();
     let r = align(&scans, &initial, &opts)?;
+    let register_secs = t_register.elapsed().as_secs_f64();
     let mut out = set.clone();
     out.entries.clear();
     for (i, e) in set.entries.iter().enumerate() {
@@ -257,7 +259,7 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
     out.write(&a.out_set, SetFormat::from_path(&a.set))?;
     let secs = t.elapsed().as_secs_f64();
     if a.json {
-        let v = serde_json::json!({ "set": a.set.display().to_string(), "out_set": a.out_set.display().to_string(), "distance": r.distance, "start_distance": r.start_distance, "seconds": secs, "scans": r.reports });
+        let v = serde_json::json!({ "set": a.set.display().to_string(), "out_set": a.out_set.display().to_string(), "distance": r.distance, "start_distance": r.start_distance, "seconds": secs, "register_seconds": register_secs, "peak_heap_bytes": crate::alloc::peak_heap(), "scans": r.reports });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         eprintln!("aligned {} scans of {} (d = {:.4e}, start {:.4e}) in {secs:.2}s -> {}", scans.len(), a.set.display(), r.distance, r.start_distance, a.out_set.display());

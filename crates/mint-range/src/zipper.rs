@@ -236,7 +236,7 @@ pub fn zipper(scans: &[ScanMesh], poses: &[Rigid], opts: &ZipperOptions) -> Resu
     if opts.restitch {
         // A last pass over seams left open between any two scans, with
         // twice the radius.
-        report.stitched += stitch(&mut model, 2.0 * opts.stitch_factor * s);
+        report.stitched += stitch(&mut model, 2.0 * opts.stitch_factor * s, None);
     }
     let mut pos = model.pos;
     let mut faces: Vec<[u32; 3]> = model.faces.iter().zip(&model.alive).filter(|(_, &a)| a).map(|(f, _)| *f).collect();
@@ -325,9 +325,12 @@ fn zip_pair(m: &mut Work, s: &mut Work, d: f64, stitch_r: f64, report: &mut Zipp
         }
         cand = ns.faces_around(s, &cut);
     }
-    // 3. Stitching, on the union.
+    // 3. Stitching, on the union. Only edges between boundary vertices can
+    // matter to it, and the union's boundary is the two boundaries.
+    let mut on_boundary: Vec<bool> = (0..m.pos.len() as u32).map(|v| tm.on_boundary(v)).collect();
+    on_boundary.extend((0..s.pos.len() as u32).map(|v| ts.on_boundary(v)));
     append(m, s);
-    report.stitched += stitch(m, stitch_r);
+    report.stitched += stitch(m, stitch_r, Some(&on_boundary));
     // 4. The union is the new model.
     *m = std::mem::take(m).compacted();
     Ok(())
@@ -475,16 +478,22 @@ fn eat(x: &mut Work, tx: &mut Topo, nx: &mut Nearest, candidates: &[u32], y: &Wo
 }
 
 /// Stitches boundaries of `w` that come from different scans; returns the
-/// number of triangles added.
-fn stitch(w: &mut Work, r: f64) -> usize {
+/// number of triangles added. `boundary`, when given, marks every vertex
+/// on a boundary edge (others may be marked too): only edges between
+/// marked vertices are then indexed, which is all stitching looks at.
+fn stitch(w: &mut Work, r: f64, boundary: Option<&[bool]>) -> usize {
     // Directed half-edges of live faces; boundary half-edges have no twin.
     let mut half: HashMap<(u32, u32), u32> = HashMap::default();
     let mut undirected: HashMap<(u32, u32), u8> = HashMap::default();
+    let indexed = |a: u32, b: u32| boundary.is_none_or(|m| m[a as usize] && m[b as usize]);
     for (i, f) in w.faces.iter().enumerate() {
         if !w.alive[i] {
             continue;
         }
         for k in 0..3 {
+            if !indexed(f[k], f[(k + 1) % 3]) {
+                continue;
+            }
             half.insert((f[k], f[(k + 1) % 3]), i as u32);
             *undirected.entry(key(f[k], f[(k + 1) % 3])).or_insert(0) += 1;
         }
