@@ -227,7 +227,8 @@ fn bad_scenes_fail_with_the_line_and_key_and_no_output() {
 /// `mint scan` of a torus from 8 views (as mint's binary depth grids),
 /// then `mint zipper --method grid`:
 /// closed, one component, genus 1 (the hole through the torus survives);
-/// the default zippering gives a 2-manifold. A set naming a missing scan
+/// the default zippering gives a 2-manifold; both give the same bytes
+/// whatever the memory budget for scans (`--mem`). A set naming a missing scan
 /// fails with one line naming the set file and line, and writes nothing.
 #[test]
 fn scanned_torus_merges_on_the_grid_into_a_closed_genus_one_surface() {
@@ -244,6 +245,15 @@ fn scanned_torus_merges_on_the_grid_into_a_closed_genus_one_surface() {
     let zip_out = d.path().join("zip.ply");
     let j: serde_json::Value = serde_json::from_str(&ok(&["zipper", p(&scans.join("scans.conf")), p(&zip_out), "--json"])).unwrap();
     assert_eq!((j["check"]["non_manifold_edges"].as_u64(), j["check"]["non_manifold_vertices"].as_u64()), (Some(0), Some(0)), "{j}");
+    assert_eq!(j["scan_reads"].as_u64(), Some(8), "each scan read once when the budget holds them all");
+    // With no room for scans they are read again when needed; same bytes.
+    let small = d.path().join("zip-small.ply");
+    let j: serde_json::Value = serde_json::from_str(&ok(&["zipper", p(&scans.join("scans.conf")), p(&small), "--mem", "1", "--json"])).unwrap();
+    assert!(j["scan_reads"].as_u64().unwrap() > 8, "{j}");
+    assert_eq!(std::fs::read(&small).unwrap(), std::fs::read(&zip_out).unwrap(), "the output does not depend on --mem");
+    let grid_small = d.path().join("grid-small.ply");
+    ok(&["zipper", p(&scans.join("scans.conf")), p(&grid_small), "--method", "grid", "--cells", "200000", "--mem", "1"]);
+    assert_eq!(std::fs::read(&grid_small).unwrap(), std::fs::read(&grid_out).unwrap(), "the grid merge does not depend on --mem");
     // A missing scan.
     let bad = d.path().join("bad.conf");
     std::fs::write(&bad, "camera 0 0 0 0 0 0 1\nbmesh nothere.ply 0 0 0 0 0 0 1\n").unwrap();

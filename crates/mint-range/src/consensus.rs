@@ -5,19 +5,23 @@
 //!
 //! For a vertex V: the normal N is the confidence-weighted mean of the
 //! normals of all scan vertices within [`ConsensusOptions::radius`]·s of V
-//! (through a hash grid of all scan vertices in world coordinates; the
-//! merged mesh's own vertex normal where none is that close). The line
+//! (each scan's vertices looked up in a hash grid of the merged mesh's
+//! vertices; the merged mesh's own vertex normal where none is that
+//! close). The line
 //! `V + t·N`, `|t| ≤ reach·s`, is intersected with each scan (a
 //! [`RayBvh`] per scan, in the scan's own frame); each scan contributes its
 //! hit nearest to V, weighted by the confidence interpolated at the hit
 //! (barycentric weights of the triangle's corners). V moves to `V + t̄·N`
 //! with `t̄` the weighted mean. All new positions are computed from the old
-//! ones, then written (the result does not depend on vertex order).
+//! ones, then written (the result does not depend on vertex order). Scans
+//! are visited one at a time ([`ScanSource`]), so only one scan and its
+//! ray tree are in memory with the mesh.
 
 use crate::error::RangeError;
 use crate::geom::{add, dot, normalize, scale, Rigid, V3};
 use crate::raycast::RayBvh;
-use crate::scan_mesh::{vertex_normals, ScanMesh};
+use crate::scan_mesh::vertex_normals;
+use crate::source::ScanSource;
 use rayon::prelude::*;
 use serde::Serialize;
 use rustc_hash::FxHashMap as HashMap;
@@ -52,89 +56,106 @@ pub struct ConsensusReport {
 }
 
 /// Moves `positions` (a mesh with `faces`) to the consensus of the scans at
-/// their poses; see the module docs.
-pub fn consensus(positions: &mut [V3], faces: &[[u32; 3]], scans: &[ScanMesh], poses: &[Rigid], opts: &ConsensusOptions) -> Result<ConsensusReport, RangeError> {
+/// their poses; see the module docs. The scans are visited one at a time,
+/// twice (normals, then intersections).
+pub fn consensus<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u32; 3]], scans: &S, poses: &[Rigid], opts: &ConsensusOptions) -> Result<ConsensusReport, RangeError> {
     if !(opts.radius > 0.0 && opts.reach > 0.0 && opts.radius.is_finite() && opts.reach.is_finite()) {
         return Err(RangeError::option("consensus", "radius and reach must be positive"));
     }
-    let s = scans.iter().map(|m| m.sampling).fold(0.0, f64::max);
+    let s = scans.max_sampling();
     let radius = opts.radius * s;
     let reach = opts.reach * s;
     let own = vertex_normals(positions, faces);
-    // Scan vertices and normals in the world, hashed by cells of `radius`.
+    // 1. Normals: every scan vertex adds its weighted normal to the merged
+    // mesh's vertices within `radius` (found through a hash grid of the
+    // merged vertices, cells of `radius`), scan after scan.
     let ckey = |p: V3| [0, 1, 2].map(|k| (p[k] / radius).floor() as i64);
-    let mut grid: HashMap<[i64; 3], Vec<(V3, V3, f64)>> = HashMap::default();
-    for (m, pose) in scans.iter().zip(poses) {
-        for i in 0..m.positions.len() {
-            if m.confidence[i] > 0.0 {
-                let p = pose.apply(m.positions[i]);
-                grid.entry(ckey(p)).or_default().push((p, pose.rotate(m.normals[i]), m.confidence[i]));
-            }
-        }
+    let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::default();
+    for (i, &p) in positions.iter().enumerate() {
+        grid.entry(ckey(p)).or_default().push(i as u32);
     }
-    let trees: Vec<(RayBvh, Rigid)> = scans.iter().zip(poses).map(|(m, p)| (RayBvh::new(&m.positions, &m.faces), p.inverse())).collect();
-    let moves: Vec<Option<(f64, usize, V3)>> = positions
-        .par_iter()
-        .enumerate()
-        .map(|(i, &v)| {
-            let c = ckey(v);
-            let mut n = [0.0; 3];
+    let mut normal_sum = vec![[0.0; 3]; positions.len()];
+    for (k, pose) in poses.iter().enumerate() {
+        let m = scans.scan(k)?;
+        for i in 0..m.positions.len() {
+            if m.confidence[i] <= 0.0 {
+                continue;
+            }
+            let p = pose.apply(m.positions[i]);
+            let wn = scale(pose.rotate(m.normals[i]), m.confidence[i]);
+            let c = ckey(p);
             for dx in -1..=1 {
                 for dy in -1..=1 {
                     for dz in -1..=1 {
                         if let Some(list) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
-                            for &(p, nn, w) in list {
-                                if crate::geom::dist(p, v) <= radius {
-                                    n = add(n, scale(nn, w));
+                            for &v in list {
+                                if crate::geom::dist(p, positions[v as usize]) <= radius {
+                                    normal_sum[v as usize] = add(normal_sum[v as usize], wn);
                                 }
                             }
                         }
                     }
                 }
             }
-            let mut n = normalize(n);
-            if n == [0.0; 3] || dot(n, own[i]) < 0.0 && own[i] != [0.0; 3] {
-                n = own[i];
+        }
+    }
+    drop(grid);
+    let normals: Vec<V3> = normal_sum
+        .iter()
+        .zip(&own)
+        .map(|(&ns, &o)| {
+            let n = normalize(ns);
+            if n == [0.0; 3] || dot(n, o) < 0.0 && o != [0.0; 3] {
+                o
+            } else {
+                n
             }
-            if n == [0.0; 3] {
-                return None;
-            }
-            let (mut tw, mut ws, mut met) = (0.0, 0.0, 0);
-            for ((tree, inv), m) in trees.iter().zip(scans) {
-                let o = inv.apply(v);
-                let dir = inv.rotate(n);
-                let mut best: Option<(f64, f64)> = None;
-                tree.segment_hits(o, dir, -reach, reach, |h| {
-                    let f = m.faces[h.face as usize];
-                    let w: f64 = (0..3).map(|k| h.bary[k] * m.confidence[f[k] as usize]).sum();
-                    if best.is_none_or(|b| h.t.abs() < b.0.abs()) {
-                        best = Some((h.t, w));
-                    }
-                });
-                if let Some((t, w)) = best {
-                    if w > 0.0 {
-                        tw += t * w;
-                        ws += w;
-                        met += 1;
-                    }
-                }
-            }
-            if ws <= 0.0 {
-                return None;
-            }
-            Some((tw / ws, met, n))
         })
         .collect();
+    drop(normal_sum);
+    // 2. Intersections: each scan in turn adds, to every vertex whose
+    // normal line meets it within `reach`, its hit nearest to the vertex.
+    // Per vertex: (Σ t·w, Σ w, scans met).
+    let mut acc = vec![(0.0f64, 0.0f64, 0usize); positions.len()];
+    for (k, pose) in poses.iter().enumerate() {
+        let m = scans.scan(k)?;
+        let tree = RayBvh::new(&m.positions, &m.faces);
+        let inv = pose.inverse();
+        let pos: &[V3] = positions;
+        acc.par_iter_mut().enumerate().for_each(|(i, a)| {
+            let n = normals[i];
+            if n == [0.0; 3] {
+                return;
+            }
+            let mut best: Option<(f64, f64)> = None;
+            tree.segment_hits(inv.apply(pos[i]), inv.rotate(n), -reach, reach, |h| {
+                let f = m.faces[h.face as usize];
+                let w: f64 = (0..3).map(|c| h.bary[c] * m.confidence[f[c] as usize]).sum();
+                if best.is_none_or(|b| h.t.abs() < b.0.abs()) {
+                    best = Some((h.t, w));
+                }
+            });
+            if let Some((t, w)) = best {
+                if w > 0.0 {
+                    a.0 += t * w;
+                    a.1 += w;
+                    a.2 += 1;
+                }
+            }
+        });
+    }
     let mut r = ConsensusReport::default();
     let mut scans_met = 0;
-    for (p, m) in positions.iter_mut().zip(&moves) {
-        if let Some((t, met, n)) = *m {
-            *p = add(*p, scale(n, t));
-            r.moved += 1;
-            r.mean_move += t.abs();
-            r.max_move = r.max_move.max(t.abs());
-            scans_met += met;
+    for ((p, &(tw, ws, met)), &n) in positions.iter_mut().zip(&acc).zip(&normals) {
+        if ws <= 0.0 {
+            continue;
         }
+        let t = tw / ws;
+        *p = add(*p, scale(n, t));
+        r.moved += 1;
+        r.mean_move += t.abs();
+        r.max_move = r.max_move.max(t.abs());
+        scans_met += met;
     }
     if r.moved > 0 {
         r.mean_move /= r.moved as f64;

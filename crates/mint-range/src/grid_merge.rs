@@ -46,12 +46,13 @@
 //!    a closed, oriented 2-manifold.
 //!
 //! Memory: two `f32` and one byte per grid node, plus the crossings (a few
-//! per cell the surface passes through, per scan seeing it); the whole grid
-//! is held at once, bounded by [`GridMergeOptions::max_nodes`].
+//! per cell the surface passes through, per scan seeing it), plus one scan
+//! at a time from the [`ScanSource`]; the whole grid is held at once,
+//! bounded by [`GridMergeOptions::max_nodes`].
 
 use crate::error::RangeError;
 use crate::geom::{normalize, tri_normal, Rigid, V3};
-use crate::scan_mesh::ScanMesh;
+use crate::source::ScanSource;
 use mint_core::reconstruct::crossing_to_intercept;
 use mint_core::signs::SignRule;
 use mint_core::{discretize_triangle, Crossing, Grid, GridSize, Intercept, MARGIN};
@@ -202,7 +203,7 @@ fn clean_states(state: &mut [u8], lat: &Lattice, neighbours: &dyn Fn(u64) -> [u6
 
 /// Merges the scans at their poses into one closed mesh on a grid (see the
 /// module docs). Returns world `(positions, faces, report)`.
-pub fn grid_merge(scans: &[ScanMesh], poses: &[Rigid], opts: &GridMergeOptions) -> Result<(Vec<V3>, Vec<[u32; 3]>, GridMergeReport), RangeError> {
+pub fn grid_merge<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &GridMergeOptions) -> Result<(Vec<V3>, Vec<[u32; 3]>, GridMergeReport), RangeError> {
     if scans.is_empty() {
         return Err(RangeError::option("scans", "nothing to merge"));
     }
@@ -212,7 +213,8 @@ pub fn grid_merge(scans: &[ScanMesh], poses: &[Rigid], opts: &GridMergeOptions) 
     // 1. The grid around every posed scan vertex in use.
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for (s, pose) in scans.iter().zip(poses) {
+    for (i, pose) in poses.iter().enumerate() {
+        let s = scans.scan(i)?;
         for f in &s.faces {
             for &v in f {
                 let p = pose.apply(s.positions[v as usize]);
@@ -232,7 +234,7 @@ pub fn grid_merge(scans: &[ScanMesh], poses: &[Rigid], opts: &GridMergeOptions) 
     if lat.len() > opts.max_nodes {
         return Err(RangeError::option("size", format!("{} grid nodes exceed the limit of {} (about 9 bytes each); use fewer cells", lat.len(), opts.max_nodes)));
     }
-    let s_max = scans.iter().map(|s| s.sampling).fold(0.0, f64::max);
+    let s_max = scans.max_sampling();
     let band_world = opts.band.unwrap_or((1.5 * grid.cell).max(3.0 * s_max));
     if !(band_world.is_finite() && band_world > 0.0) {
         return Err(RangeError::option("band", format!("{band_world} is not a positive number")));
@@ -245,7 +247,8 @@ pub fn grid_merge(scans: &[ScanMesh], poses: &[Rigid], opts: &GridMergeOptions) 
     let mut sum_w = vec![0f32; nodes];
     let mut sum_wd = vec![0f32; nodes];
     let mut kept: Vec<EdgeCrossing> = Vec::new();
-    for (si, (s, pose)) in scans.iter().zip(poses).enumerate() {
+    for (si, pose) in poses.iter().enumerate() {
+        let s = scans.scan(si)?;
         for (fi, f) in s.faces.iter().enumerate() {
             let conf = s.face_confidence[fi];
             if conf <= 0.0 {

@@ -39,6 +39,7 @@ pub mod range_image;
 pub mod raycast;
 pub mod scan_mesh;
 pub mod scanset;
+pub mod source;
 pub mod synth;
 pub mod zipper;
 
@@ -47,3 +48,4 @@ pub use geom::Rigid;
 pub use range_image::RangeImage;
 pub use scan_mesh::{load_scan, load_set, MeshOptions, ScanMesh};
 pub use scanset::{ScanEntry, ScanSet, SetFormat};
+pub use source::{ScanFiles, ScanSource};

@@ -42,14 +42,17 @@
 //! result is a 2-manifold with boundary loops where no scan saw the
 //! surface.
 //!
-//! Memory: the model, one scan and two nearest-point trees at a time; the
-//! scans' own meshes are needed again only by consensus geometry.
+//! Memory: the model, one scan and two nearest-point trees at a time,
+//! plus what the [`ScanSource`] keeps (a set file's scans are loaded on
+//! demand within a budget, [`crate::source::ScanFiles`]); consensus
+//! geometry then visits the scans one at a time again.
 
 use crate::consensus::{consensus, ConsensusOptions, ConsensusReport};
 use crate::error::RangeError;
 use crate::geom::{add, dist, scale, Rigid, V3};
 use crate::mesh_ops::{compact, fill_small_holes, key, make_manifold, remove_small_components, remove_small_triangles};
 use crate::scan_mesh::ScanMesh;
+use crate::source::ScanSource;
 use mint_mesh::TriangleBvh;
 use serde::Serialize;
 use rustc_hash::FxHashMap as HashMap;
@@ -213,7 +216,7 @@ impl Topo {
 /// Zippers the scans at their poses into one mesh (see the module docs),
 /// then runs consensus geometry if asked. Returns `(positions, faces,
 /// report)`. Errors: mismatched lengths, no scans, bad options.
-pub fn zipper(scans: &[ScanMesh], poses: &[Rigid], opts: &ZipperOptions) -> Result<(Vec<V3>, Vec<[u32; 3]>, ZipperReport), RangeError> {
+pub fn zipper<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &ZipperOptions) -> Result<(Vec<V3>, Vec<[u32; 3]>, ZipperReport), RangeError> {
     if scans.is_empty() {
         return Err(RangeError::option("scans", "nothing to zipper"));
     }
@@ -225,12 +228,12 @@ pub fn zipper(scans: &[ScanMesh], poses: &[Rigid], opts: &ZipperOptions) -> Resu
             return Err(RangeError::option(name, format!("{v} is not a finite non-negative number")));
         }
     }
-    let s = scans.iter().map(|m| m.sampling).fold(0.0, f64::max);
+    let s = scans.max_sampling();
     let d = opts.distance_factor * s;
     let mut report = ZipperReport { scans: scans.len(), distance: d, ..Default::default() };
-    let mut model = Work::from_scan(&scans[0], &poses[0], 0);
-    for (k, (scan, pose)) in scans.iter().zip(poses).enumerate().skip(1) {
-        let mut sw = Work::from_scan(scan, pose, k as u32);
+    let mut model = Work::from_scan(&*scans.scan(0)?, &poses[0], 0);
+    for (k, pose) in poses.iter().enumerate().skip(1) {
+        let mut sw = Work::from_scan(&*scans.scan(k)?, pose, k as u32);
         zip_pair(&mut model, &mut sw, d, opts.stitch_factor * s, &mut report)?;
     }
     if opts.restitch {
