@@ -265,3 +265,45 @@ fn scanned_torus_merges_on_the_grid_into_a_closed_genus_one_surface() {
     assert!(err.contains(&format!("{}:2:", bad.display())) && err.contains("nothere.ply"), "{err}");
     assert!(!out.exists());
 }
+
+/// `mint align` on scanned views of a torus where one view is posed far
+/// away from the others: that scan is reported as not registered and left
+/// out of the output set; the others are written; the exit code is 0.
+/// A malformed pose fails with one line naming the set file and line.
+#[test]
+fn align_leaves_out_a_scan_with_no_overlap_and_goes_on() {
+    let d = tempfile::tempdir().unwrap();
+    let torus = d.path().join("torus.ply");
+    ok(&["gen", "torus", p(&torus), "--faces", "20000"]);
+    let scans = d.path().join("scans");
+    ok(&["scan", p(&torus), p(&scans), "--views", "6", "--resolution", "100"]);
+    let conf = std::fs::read_to_string(scans.join("scans.conf")).unwrap();
+    // Move view_03 by 50 units (the torus is about 3 across).
+    let moved: String = conf
+        .lines()
+        .map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            if w.len() == 9 && w[1] == "view_03.ply" {
+                let tx: f64 = w[2].parse().unwrap();
+                format!("bmesh view_03.ply {} {}\n", tx + 50.0, w[3..].join(" "))
+            } else {
+                format!("{l}\n")
+            }
+        })
+        .collect();
+    let bad_set = scans.join("far.conf");
+    std::fs::write(&bad_set, moved).unwrap();
+    let out = scans.join("aligned.conf");
+    let j: serde_json::Value = serde_json::from_str(&ok(&["align", p(&bad_set), p(&out), "--json"])).unwrap();
+    let statuses: Vec<String> = j["scans"].as_array().unwrap().iter().map(|s| s["status"].to_string()).collect();
+    assert_eq!(statuses.iter().filter(|s| s.contains("Failed")).count(), 1, "{statuses:?}");
+    assert!(statuses[3].contains("no overlap"), "{statuses:?}");
+    let written = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(written.lines().filter(|l| l.starts_with("bmesh")).count(), 5);
+    assert!(!written.contains("view_03.ply"));
+    // A malformed pose.
+    std::fs::write(&bad_set, "bmesh view_00.ply 0 0 zero 0 0 0 1\n").unwrap();
+    let o = run(&["align", p(&bad_set), p(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.lines().count() == 1 && err.contains(&format!("{}:1:", bad_set.display())), "{err}");
+}
