@@ -5,11 +5,11 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use mint_range::icp::{align, AlignOptions, Metric, Status, Strategy};
+use mint_range::icp::{align_with, AlignOptions, Metric, Status, Strategy};
 use mint_range::synth::{perturb, synthesize, SynthOptions};
 use mint_range::depth_grid::{write_depth_grid, GridEncoding};
-use mint_range::grid_merge::{grid_merge, GridMergeOptions};
-use mint_range::zipper::{zipper, ZipperOptions};
+use mint_range::grid_merge::{grid_merge_with, GridMergeOptions};
+use mint_range::zipper::{zipper_with, ZipperOptions};
 use mint_range::{load_set, MeshOptions, ScanEntry, ScanMesh, ScanSet, SetFormat};
 use std::path::PathBuf;
 
@@ -250,7 +250,7 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
     };
     let initial: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
     let t_register = std::time::Instant::now();
-    let r = align(&scans, &initial, &opts)?;
+    let r = align_with(&scans, &initial, &opts, &crate::progress::Bars::new(a.json))?;
     let register_secs = t_register.elapsed().as_secs_f64();
     let mut out = set.clone();
     out.entries.clear();
@@ -282,12 +282,13 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
 pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
     let t = std::time::Instant::now();
     let set = ScanSet::read(&a.set)?;
-    let scans = mint_range::ScanFiles::open(&set, &a.set, &MeshOptions::default(), a.mem as usize)?;
+    let bars = crate::progress::Bars::new(a.json);
+    let scans = mint_range::ScanFiles::open_with(&set, &a.set, &MeshOptions::default(), a.mem as usize, &bars)?;
     let poses: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
     let (pos, faces, report) = match a.method {
         MergeMethod::Zipper => {
             let opts = ZipperOptions { distance_factor: a.distance_factor, consensus: !a.no_consensus, ..Default::default() };
-            let (p, f, r) = zipper(&scans, &poses, &opts)?;
+            let (p, f, r) = zipper_with(&scans, &poses, &opts, &bars)?;
             (p, f, MergeReport::Zipper(r))
         }
         MergeMethod::Grid => {
@@ -296,7 +297,7 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
                 None => mint_core::GridSize::Cells(a.cells),
             };
             let opts = GridMergeOptions { size, band: a.band, ..Default::default() };
-            let (p, f, r) = grid_merge(&scans, &poses, &opts)?;
+            let (p, f, r) = grid_merge_with(&scans, &poses, &opts, &bars)?;
             (p, f, MergeReport::Grid(r))
         }
     };

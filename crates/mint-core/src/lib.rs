@@ -21,6 +21,7 @@ pub mod intercept;
 pub mod mc_table;
 pub mod predicates;
 pub mod primitives;
+pub mod progress;
 pub mod reconstruct;
 pub mod rng;
 pub mod robust;

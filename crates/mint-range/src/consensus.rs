@@ -22,6 +22,7 @@ use crate::geom::{add, dot, normalize, scale, Rigid, V3};
 use crate::raycast::RayBvh;
 use crate::scan_mesh::vertex_normals;
 use crate::source::ScanSource;
+use mint_core::progress::{NoProgress, Phase, Progress};
 use rayon::prelude::*;
 use serde::Serialize;
 use rustc_hash::FxHashMap as HashMap;
@@ -59,6 +60,13 @@ pub struct ConsensusReport {
 /// their poses; see the module docs. The scans are visited one at a time,
 /// twice (normals, then intersections).
 pub fn consensus<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u32; 3]], scans: &S, poses: &[Rigid], opts: &ConsensusOptions) -> Result<ConsensusReport, RangeError> {
+    consensus_with(positions, faces, scans, poses, opts, &NoProgress)
+}
+
+/// [`consensus`], reporting each scan visited ([`Phase::Consensus`], two
+/// passes) and stopping with [`RangeError::Cancelled`] when asked (the
+/// positions are then unchanged).
+pub fn consensus_with<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u32; 3]], scans: &S, poses: &[Rigid], opts: &ConsensusOptions, progress: &dyn Progress) -> Result<ConsensusReport, RangeError> {
     if !(opts.radius > 0.0 && opts.reach > 0.0 && opts.radius.is_finite() && opts.reach.is_finite()) {
         return Err(RangeError::option("consensus", "radius and reach must be positive"));
     }
@@ -75,7 +83,10 @@ pub fn consensus<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u32; 3]
         grid.entry(ckey(p)).or_default().push(i as u32);
     }
     let mut normal_sum = vec![[0.0; 3]; positions.len()];
+    progress.start(Phase::Consensus, 2 * poses.len() as u64);
+    let step = || crate::error::advance(progress);
     for (k, pose) in poses.iter().enumerate() {
+        step()?;
         let m = scans.scan(k)?;
         for i in 0..m.positions.len() {
             if m.confidence[i] <= 0.0 {
@@ -118,6 +129,7 @@ pub fn consensus<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u32; 3]
     // Per vertex: (Σ t·w, Σ w, scans met).
     let mut acc = vec![(0.0f64, 0.0f64, 0usize); positions.len()];
     for (k, pose) in poses.iter().enumerate() {
+        step()?;
         let m = scans.scan(k)?;
         let tree = RayBvh::new(&m.positions, &m.faces);
         let inv = pose.inverse();
@@ -144,6 +156,7 @@ pub fn consensus<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u32; 3]
             }
         });
     }
+    progress.finish();
     let mut r = ConsensusReport::default();
     let mut scans_met = 0;
     for ((p, &(tw, ws, met)), &n) in positions.iter_mut().zip(&acc).zip(&normals) {

@@ -43,6 +43,9 @@ pub enum RangeError {
     /// A mesh handed to the library is inconsistent (bad indices...).
     #[error("{what}: {source}")]
     Mesh { what: String, source: mint_mesh::MeshError },
+    /// The user asked to stop (Ctrl-C); nothing was written.
+    #[error("interrupted")]
+    Cancelled,
     /// The grid merge could not choose a grid.
     #[error("grid merge: {0}")]
     Grid(#[from] mint_core::GridError),
@@ -58,4 +61,14 @@ impl RangeError {
     pub(crate) fn option(name: &'static str, message: impl Into<String>) -> RangeError {
         RangeError::InvalidOption { name, message: message.into() }
     }
+}
+
+/// One unit of progress done; [`RangeError::Cancelled`] if the user asked
+/// to stop.
+pub(crate) fn advance(progress: &dyn mint_core::progress::Progress) -> Result<(), RangeError> {
+    progress.advance(1);
+    if progress.cancelled() {
+        return Err(RangeError::Cancelled);
+    }
+    Ok(())
 }

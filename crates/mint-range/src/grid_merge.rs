@@ -53,6 +53,7 @@
 use crate::error::RangeError;
 use crate::geom::{normalize, tri_normal, Rigid, V3};
 use crate::source::ScanSource;
+use mint_core::progress::{NoProgress, Phase, Progress};
 use mint_core::reconstruct::crossing_to_intercept;
 use mint_core::signs::SignRule;
 use mint_core::{discretize_triangle, Crossing, Grid, GridSize, Intercept, MARGIN};
@@ -204,6 +205,13 @@ fn clean_states(state: &mut [u8], lat: &Lattice, neighbours: &dyn Fn(u64) -> [u6
 /// Merges the scans at their poses into one closed mesh on a grid (see the
 /// module docs). Returns world `(positions, faces, report)`.
 pub fn grid_merge<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &GridMergeOptions) -> Result<(Vec<V3>, Vec<[u32; 3]>, GridMergeReport), RangeError> {
+    grid_merge_with(scans, poses, opts, &NoProgress)
+}
+
+/// [`grid_merge`], reporting each scan visited ([`Phase::GridMerge`]: the
+/// bounding-box pass, then the voting pass) and stopping with
+/// [`RangeError::Cancelled`] between scans when asked.
+pub fn grid_merge_with<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &GridMergeOptions, progress: &dyn Progress) -> Result<(Vec<V3>, Vec<[u32; 3]>, GridMergeReport), RangeError> {
     if scans.is_empty() {
         return Err(RangeError::option("scans", "nothing to merge"));
     }
@@ -213,7 +221,10 @@ pub fn grid_merge<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &Gri
     // 1. The grid around every posed scan vertex in use.
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
+    progress.start(Phase::GridMerge, 2 * poses.len() as u64);
+    let step = || crate::error::advance(progress);
     for (i, pose) in poses.iter().enumerate() {
+        step()?;
         let s = scans.scan(i)?;
         for f in &s.faces {
             for &v in f {
@@ -248,6 +259,7 @@ pub fn grid_merge<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &Gri
     let mut sum_wd = vec![0f32; nodes];
     let mut kept: Vec<EdgeCrossing> = Vec::new();
     for (si, pose) in poses.iter().enumerate() {
+        step()?;
         let s = scans.scan(si)?;
         for (fi, f) in s.faces.iter().enumerate() {
             let conf = s.face_confidence[fi];
@@ -283,6 +295,8 @@ pub fn grid_merge<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &Gri
             });
         }
     }
+
+    progress.finish();
 
     // 3. States: voted nodes by the sign of their mean, the border
     // outside, the rest filled breadth-first.

@@ -57,6 +57,7 @@ use crate::error::RangeError;
 use crate::geom::{add, cross, dist, dot, normalize, scale, sub, tri_normal, Rigid, V3};
 
 use crate::scan_mesh::ScanMesh;
+use mint_core::progress::{NoProgress, Phase, Progress};
 use mint_mesh::TriangleBvh;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -220,6 +221,13 @@ struct Targets<'a> {
 /// Registers `scans` from the `initial` poses; see the module docs.
 /// Errors: mismatched lengths, an anchor out of range, bad distances.
 pub fn align(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions) -> Result<AlignResult, RangeError> {
+    align_with(scans, initial, opts, &NoProgress)
+}
+
+/// [`align`], reporting each registration of a scan (phase
+/// [`Phase::Register`]; the refine passes count too) and stopping with
+/// [`RangeError::Cancelled`] between them when asked.
+pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, progress: &dyn Progress) -> Result<AlignResult, RangeError> {
     if scans.len() != initial.len() {
         return Err(RangeError::option("initial", format!("{} poses for {} scans", initial.len(), scans.len())));
     }
@@ -254,10 +262,17 @@ pub fn align(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions) -> Resu
     reports[opts.anchor].status = Status::Anchor;
     let mut registered = vec![opts.anchor];
     let mut pending: Vec<usize> = (0..scans.len()).filter(|&i| i != opts.anchor).collect();
+    let passes = match opts.strategy {
+        Strategy::Anchor => 1,
+        Strategy::Growing => 1 + opts.refine_passes,
+    };
+    progress.start(Phase::Register, (passes * pending.len()) as u64);
+    let step = || crate::error::advance(progress);
     match opts.strategy {
         Strategy::Anchor => {
             for &i in &pending {
                 register_one(&targets, i, &[opts.anchor], &mut poses, &dists, opts, &mut reports[i]);
+                step()?;
             }
         }
         Strategy::Growing => {
@@ -280,6 +295,7 @@ pub fn align(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions) -> Resu
                 if register_one(&targets, i, &registered, &mut poses, &dists, opts, &mut reports[i]) {
                     registered.push(i);
                 }
+                step()?;
             }
             let fine = &dists[dists.len() - 1..];
             for _ in 0..opts.refine_passes {
@@ -291,7 +307,9 @@ pub fn align(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions) -> Resu
                     let others: Vec<usize> = all.iter().copied().filter(|&j| j != i).collect();
                     let keep = poses[i];
                     let mut r = reports[i].clone();
-                    if !register_one(&targets, i, &others, &mut poses, fine, opts, &mut r) {
+                    let ok = register_one(&targets, i, &others, &mut poses, fine, opts, &mut r);
+                    step()?;
+                    if !ok {
                         poses[i] = keep;
                         continue;
                     }
@@ -301,6 +319,7 @@ pub fn align(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions) -> Resu
             }
         }
     }
+    progress.finish();
     for (i, r) in reports.iter_mut().enumerate() {
         let (deg, shift) = crate::geom::pose_error(&initial[i], &poses[i], &scans[i].bbox_corners());
         r.moved_deg = deg;

@@ -106,6 +106,13 @@ impl ScanFiles {
     /// each once to learn its sampling distance, keeping what fits in
     /// `budget` bytes.
     pub fn open(set: &crate::ScanSet, set_path: &Path, opts: &MeshOptions, budget: usize) -> Result<ScanFiles, RangeError> {
+        Self::open_with(set, set_path, opts, budget, &mint_core::progress::NoProgress)
+    }
+
+    /// [`ScanFiles::open`], reporting each scan read
+    /// ([`Phase::LoadScans`](mint_core::progress::Phase::LoadScans)) and
+    /// stopping with [`RangeError::Cancelled`] when asked.
+    pub fn open_with(set: &crate::ScanSet, set_path: &Path, opts: &MeshOptions, budget: usize, progress: &dyn mint_core::progress::Progress) -> Result<ScanFiles, RangeError> {
         for e in &set.entries {
             if let Err(source) = std::fs::File::open(&e.path) {
                 return Err(RangeError::MissingScan { set: set_path.to_path_buf(), line: e.line, scan: e.path.clone(), source });
@@ -119,10 +126,16 @@ impl ScanFiles {
             budget,
             cache: Mutex::new(Cache { scans: vec![None; n], last_used: vec![0; n], ..Default::default() }),
         };
+        progress.start(mint_core::progress::Phase::LoadScans, n as u64);
         for i in 0..n {
+            if progress.cancelled() {
+                return Err(RangeError::Cancelled);
+            }
             let s = files.scan(i)?.sampling;
             files.sampling[i] = s;
+            progress.advance(1);
         }
+        progress.finish();
         Ok(files)
     }
 

@@ -47,7 +47,8 @@
 //! demand within a budget, [`crate::source::ScanFiles`]); consensus
 //! geometry then visits the scans one at a time again.
 
-use crate::consensus::{consensus, ConsensusOptions, ConsensusReport};
+use crate::consensus::{consensus_with, ConsensusOptions, ConsensusReport};
+use mint_core::progress::{NoProgress, Phase, Progress};
 use crate::error::RangeError;
 use crate::geom::{add, dist, scale, Rigid, V3};
 use crate::mesh_ops::{compact, fill_small_holes, key, make_manifold, remove_small_components, remove_small_triangles};
@@ -217,6 +218,13 @@ impl Topo {
 /// then runs consensus geometry if asked. Returns `(positions, faces,
 /// report)`. Errors: mismatched lengths, no scans, bad options.
 pub fn zipper<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &ZipperOptions) -> Result<(Vec<V3>, Vec<[u32; 3]>, ZipperReport), RangeError> {
+    zipper_with(scans, poses, opts, &NoProgress)
+}
+
+/// [`zipper`], reporting each scan joined ([`Phase::Zipper`]) and the
+/// consensus passes, and stopping with [`RangeError::Cancelled`] between
+/// scans when asked.
+pub fn zipper_with<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &ZipperOptions, progress: &dyn Progress) -> Result<(Vec<V3>, Vec<[u32; 3]>, ZipperReport), RangeError> {
     if scans.is_empty() {
         return Err(RangeError::option("scans", "nothing to zipper"));
     }
@@ -231,11 +239,18 @@ pub fn zipper<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &ZipperO
     let s = scans.max_sampling();
     let d = opts.distance_factor * s;
     let mut report = ZipperReport { scans: scans.len(), distance: d, ..Default::default() };
+    progress.start(Phase::Zipper, poses.len() as u64);
     let mut model = Work::from_scan(&*scans.scan(0)?, &poses[0], 0);
+    progress.advance(1);
     for (k, pose) in poses.iter().enumerate().skip(1) {
+        if progress.cancelled() {
+            return Err(RangeError::Cancelled);
+        }
         let mut sw = Work::from_scan(&*scans.scan(k)?, pose, k as u32);
         zip_pair(&mut model, &mut sw, d, opts.stitch_factor * s, &mut report)?;
+        progress.advance(1);
     }
+    progress.finish();
     if opts.restitch {
         // A last pass over seams left open between any two scans, with
         // twice the radius.
@@ -254,7 +269,7 @@ pub fn zipper<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &ZipperO
     report.vertices_split += split;
     compact(&mut pos, &mut faces);
     if opts.consensus {
-        report.consensus = Some(consensus(&mut pos, &faces, scans, poses, &opts.consensus_options)?);
+        report.consensus = Some(consensus_with(&mut pos, &faces, scans, poses, &opts.consensus_options, progress)?);
     }
     report.vertices = pos.len();
     report.faces = faces.len();
