@@ -298,6 +298,7 @@ fn align_leaves_out_a_scan_with_no_overlap_and_goes_on() {
     let statuses: Vec<String> = j["scans"].as_array().unwrap().iter().map(|s| s["status"].to_string()).collect();
     assert_eq!(statuses.iter().filter(|s| s.contains("Failed")).count(), 1, "{statuses:?}");
     assert!(statuses[3].contains("no overlap"), "{statuses:?}");
+    assert_eq!((j["scans"][3]["moved_deg"].as_f64(), j["scans"][3]["moved"].as_f64()), (Some(0.0), Some(0.0)), "a scan left out keeps its initial pose");
     let written = std::fs::read_to_string(&out).unwrap();
     assert_eq!(written.lines().filter(|l| l.starts_with("bmesh")).count(), 5);
     assert!(!written.contains("view_03.ply"));

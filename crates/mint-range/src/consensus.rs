@@ -70,6 +70,9 @@ pub fn consensus_with<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u3
     if !(opts.radius > 0.0 && opts.reach > 0.0 && opts.radius.is_finite() && opts.reach.is_finite()) {
         return Err(RangeError::option("consensus", "radius and reach must be positive"));
     }
+    if scans.len() != poses.len() {
+        return Err(RangeError::option("poses", format!("{} poses for {} scans", poses.len(), scans.len())));
+    }
     let s = scans.max_sampling();
     let radius = opts.radius * s;
     let reach = opts.reach * s;

@@ -8,13 +8,17 @@
 //!
 //! ```text
 //! mint_range_grid 1
-//! format ascii                      # or binary_little_endian
+//! format ascii
 //! cols 640
 //! rows 480
 //! projection orthographic X0 Y0 DX DY
 //! comment anything
 //! end_header
 //! ```
+//!
+//! (`format` is `ascii` or `binary_little_endian`; `projection` is
+//! `orthographic X0 Y0 DX DY` or `pinhole FX FY CX CY`. Lines starting with
+//! `comment` are the only comments.)
 //!
 //! - `projection orthographic X0 Y0 DX DY`: the sample of cell (col, row)
 //!   with depth d is `(X0 + col·DX, Y0 + row·DY, d)`; the scanner looks
@@ -26,7 +30,8 @@
 //!   scans and an approximation away from the image centre for pinhole
 //!   ones.
 //! - Data, row-major from row 0: `ascii` — one line per row of `cols`
-//!   numbers, `nan` (or `-`) for a cell without a sample;
+//!   numbers, `nan` (any case, optionally signed) or `-` for a cell
+//!   without a sample;
 //!   `binary_little_endian` — `rows·cols` IEEE `f32`, NaN for no sample,
 //!   right after the newline of `end_header`.
 //!
@@ -145,7 +150,9 @@ pub fn read_depth_grid(path: &Path) -> Result<RangeImage, RangeError> {
     if n > u32::MAX as u64 {
         return Err(err(path, "header", format!("{cols} x {rows} cells is too many")));
     }
-    let mut depths: Vec<f64> = Vec::with_capacity(n as usize);
+    // Nothing is sized from the header before the data confirms it: a
+    // header can claim any size.
+    let mut depths: Vec<f64> = Vec::new();
     match encoding {
         GridEncoding::BinaryLittleEndian => {
             let need = n as usize * 4;
@@ -156,6 +163,7 @@ pub fn read_depth_grid(path: &Path) -> Result<RangeImage, RangeError> {
             if have > need {
                 return Err(err(path, format!("byte {}", pos + need), format!("{} bytes of unexpected data after the last depth", have - need)));
             }
+            depths.reserve_exact(n as usize);
             for (k, ch) in bytes[pos..].chunks_exact(4).enumerate() {
                 let v = f32::from_le_bytes([ch[0], ch[1], ch[2], ch[3]]) as f64;
                 if v.is_infinite() {
@@ -165,7 +173,7 @@ pub fn read_depth_grid(path: &Path) -> Result<RangeImage, RangeError> {
             }
         }
         GridEncoding::Ascii => {
-            let text = std::str::from_utf8(&bytes[pos..]).map_err(|_| err(path, "data", "the ascii data is not text"))?;
+            let text = std::str::from_utf8(&bytes[pos..]).map_err(|e| err(path, format!("byte {}", pos + e.valid_up_to()), "the ascii data is not text"))?;
             let mut row = 0u32;
             for (k, line) in text.lines().enumerate() {
                 let at_line = line_no + 1 + k;
@@ -177,7 +185,7 @@ pub fn read_depth_grid(path: &Path) -> Result<RangeImage, RangeError> {
                 }
                 let before = depths.len();
                 for (c, w) in line.split_whitespace().enumerate() {
-                    let v = if w == "nan" || w == "-" || w == "NaN" {
+                    let v = if w == "-" || w.trim_start_matches(['-', '+']).eq_ignore_ascii_case("nan") {
                         f64::NAN
                     } else {
                         w.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| err(path, format!("line {at_line} (row {row}, col {c})"), format!("'{w}' is not a finite depth or nan")))?
@@ -238,13 +246,16 @@ pub fn write_depth_grid(path: &Path, im: &RangeImage, encoding: GridEncoding, co
     }
     let (c0, r0, q0) = first.ok_or_else(|| RangeError::empty(path, "the range image has no samples"))?;
     let (dx, dy) = (dx.unwrap_or(1.0), dy.unwrap_or(1.0));
+    if !(dx.is_finite() && dy.is_finite() && dx != 0.0 && dy != 0.0) {
+        return Err(err(path, "writing", format!("the samples do not form an orthographic lattice (spacing {dx}, {dy}); write a PLY range image instead")));
+    }
     let (x0, y0) = (q0[0] - c0 as f64 * dx, q0[1] - r0 as f64 * dy);
     let tol = 1e-6 * dx.abs().max(dy.abs());
     for r in 0..im.rows {
         for c in 0..im.cols {
             if let Some(q) = p(c, r) {
                 if (q[0] - (x0 + c as f64 * dx)).abs() > tol || (q[1] - (y0 + r as f64 * dy)).abs() > tol {
-                    return Err(RangeError::option("image", format!("sample at col {c}, row {r} is off the orthographic lattice; write a PLY range image instead")));
+                    return Err(err(path, format!("writing col {c}, row {r}"), "the sample is off the orthographic lattice; write a PLY range image instead"));
                 }
             }
         }
@@ -347,6 +358,11 @@ mod tests {
             (head.replace("orthographic 0 0 1 1", "orthographic 0 0 1"), "line 5: 'projection orthographic' needs 4 numbers, found 3"),
             ("mint_range_grid 1\nformat binary_little_endian\ncols 3\nrows 2\nprojection orthographic 0 0 1 1\nend_header\nabcd".to_string(), "truncated: 2 x 3 depths need 24 bytes after the header, found 4"),
         ];
+        // A header may claim anything; nothing is allocated from it before
+        // the data confirms it.
+        std::fs::write(&f, "mint_range_grid 1\nformat binary_little_endian\ncols 65535\nrows 65535\nprojection orthographic 0 0 1 1\nend_header\nabcd").unwrap();
+        let e = read_depth_grid(&f).unwrap_err().to_string();
+        assert!(e.contains("truncated: 65535 x 65535 depths need 17179344900 bytes after the header, found 4"), "{e}");
         for (text, want) in cases {
             std::fs::write(&f, text).unwrap();
             let e = read_depth_grid(&f).unwrap_err().to_string();

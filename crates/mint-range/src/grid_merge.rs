@@ -38,17 +38,20 @@
 //!    exactly one intercept with the matching sign, at the
 //!    confidence-weighted mean of the crossings of all scans on that edge
 //!    with that sign (the merge of the MI paper); with none, at the zero
-//!    of the linear interpolation of the two end values; with an end
-//!    unvoted, at the midpoint.
+//!    of the linear interpolation of the two end values; at the midpoint
+//!    when an end was not voted or the two values do not straddle zero
+//!    (states that came from the fill or the clean-up).
 //! 5. **Reconstruct** with the resampler's state-first reconstruction
 //!    ([`mint_core::robust`], winding rule): the intercepts agree with the
 //!    states by construction, so every cell is canonical and the output is
 //!    a closed, oriented 2-manifold.
 //!
-//! Memory: two `f32` and one byte per grid node, plus the crossings (a few
-//! per cell the surface passes through, per scan seeing it), plus one scan
-//! at a time from the [`ScanSource`]; the whole grid is held at once,
-//! bounded by [`GridMergeOptions::max_nodes`].
+//! Memory: two `f32` and one byte per grid node, and during the clean-up
+//! a `u32` region label per node and a search stack (up to 8 bytes per
+//! node): at most about 21 bytes per node; plus the crossings (a few per
+//! cell the surface passes through, per scan seeing it), plus one scan at
+//! a time from the [`ScanSource`]. The whole grid is held at once, bounded
+//! by [`GridMergeOptions::max_nodes`].
 
 use crate::error::RangeError;
 use crate::geom::{normalize, tri_normal, Rigid, V3};
@@ -69,8 +72,8 @@ pub struct GridMergeOptions {
     /// Default `None`: the larger of 1.5 cells and 3 sampling distances
     /// (registration error and noise must fall inside it).
     pub band: Option<f64>,
-    /// Most grid nodes allowed (memory is about 9 bytes per node). Default
-    /// 200 million (1.8 GB).
+    /// Most grid nodes allowed (memory peaks at about 21 bytes per node).
+    /// Default 100 million (about 2 GB at the peak).
     pub max_nodes: u64,
     /// Inside regions (6-connected nodes) smaller than this fraction of the
     /// largest one are made outside: specks from stray samples. Default
@@ -80,7 +83,7 @@ pub struct GridMergeOptions {
 
 impl Default for GridMergeOptions {
     fn default() -> Self {
-        GridMergeOptions { size: GridSize::Cells(1_000_000), band: None, max_nodes: 200_000_000, min_part: 0.001 }
+        GridMergeOptions { size: GridSize::Cells(1_000_000), band: None, max_nodes: 100_000_000, min_part: 0.001 }
     }
 }
 
@@ -154,18 +157,12 @@ impl Lattice {
     }
 }
 
-/// Regions of equal state, 6-connected: every region of outside nodes
-/// that does not reach the grid's border becomes inside (a range scanner
-/// cannot see a sealed void, so such a region comes from noise or a
-/// missed back side), and every inside region with fewer than `min_part`
-/// times the nodes of the largest becomes outside. Returns how many of
-/// each were changed. Regions are found in node order, so the result does
-/// not depend on anything but the states.
-fn clean_states(state: &mut [u8], lat: &Lattice, neighbours: &dyn Fn(u64) -> [u64; 6], min_part: f64) -> (u64, u64) {
+/// Regions of equal state, 6-connected, in node order: `(region of each
+/// node, (state, size, touches the border) of each region)`.
+fn regions(state: &[u8], lat: &Lattice, neighbours: &dyn Fn(u64) -> [u64; 6]) -> (Vec<u32>, Vec<(u8, u64, bool)>) {
     const NONE: u32 = u32::MAX;
     let n = state.len();
     let mut region = vec![NONE; n];
-    // (state, size, touches the border) per region.
     let mut regions: Vec<(u8, u64, bool)> = Vec::new();
     let mut stack = Vec::new();
     for seed in 0..n {
@@ -190,15 +187,36 @@ fn clean_states(state: &mut [u8], lat: &Lattice, neighbours: &dyn Fn(u64) -> [u6
         }
         regions.push((st, size, border));
     }
-    let largest_inside = regions.iter().filter(|r| r.0 == 1).map(|r| r.1).max().unwrap_or(0);
-    let flip: Vec<bool> = regions.iter().map(|&(st, size, border)| if st == 0 { !border } else { (size as f64) < min_part * largest_inside as f64 }).collect();
+    (region, regions)
+}
+
+/// The clean-up of the node states. First every region of outside nodes
+/// that does not reach the grid's border becomes inside (a range scanner
+/// cannot see a sealed void, so such a region comes from noise or a
+/// missed back side). Then, on the new regions, every inside region with
+/// fewer than `min_part` times the nodes of the largest becomes outside
+/// (it then joins an outside region that reaches the border, so no new
+/// void appears). Returns how many regions of each kind were changed. The
+/// result depends on the states only.
+fn clean_states(state: &mut [u8], lat: &Lattice, neighbours: &dyn Fn(u64) -> [u64; 6], min_part: f64) -> (u64, u64) {
+    let (region, list) = regions(state, lat, neighbours);
+    let void: Vec<bool> = list.iter().map(|&(st, _, border)| st == 0 && !border).collect();
+    let voids = void.iter().filter(|&&v| v).count() as u64;
     for (i, s) in state.iter_mut().enumerate() {
-        if flip[region[i] as usize] {
-            *s = 1 - *s;
+        if void[region[i] as usize] {
+            *s = 1;
         }
     }
-    let voids = regions.iter().zip(&flip).filter(|(r, &f)| f && r.0 == 0).count() as u64;
-    let specks = regions.iter().zip(&flip).filter(|(r, &f)| f && r.0 == 1).count() as u64;
+    drop(region);
+    let (region, list) = regions(state, lat, neighbours);
+    let largest_inside = list.iter().filter(|r| r.0 == 1).map(|r| r.1).max().unwrap_or(0);
+    let speck: Vec<bool> = list.iter().map(|&(st, size, _)| st == 1 && (size as f64) < min_part * largest_inside as f64).collect();
+    let specks = speck.iter().filter(|&&v| v).count() as u64;
+    for (i, s) in state.iter_mut().enumerate() {
+        if speck[region[i] as usize] {
+            *s = 0;
+        }
+    }
     (voids, specks)
 }
 
@@ -243,7 +261,7 @@ pub fn grid_merge_with<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts:
     let dims = grid.local_dims();
     let lat = Lattice { n: dims.map(|d| d as u64 + 1) };
     if lat.len() > opts.max_nodes {
-        return Err(RangeError::option("size", format!("{} grid nodes exceed the limit of {} (about 9 bytes each); use fewer cells", lat.len(), opts.max_nodes)));
+        return Err(RangeError::option("size", format!("{} grid nodes exceed the limit of {} (up to about 21 bytes each); use fewer cells", lat.len(), opts.max_nodes)));
     }
     let s_max = scans.max_sampling();
     let band_world = opts.band.unwrap_or((1.5 * grid.cell).max(3.0 * s_max));

@@ -48,7 +48,8 @@
 //! is fixed and the others join one at a time, each time the one with the
 //! most pairs against the scans already registered, and registers against
 //! all of them; then [`AlignOptions::refine_passes`] passes re-register
-//! every scan against all others at the two finest levels. With
+//! every scan against all others at the final distance and the finest
+//! level. With
 //! [`Strategy::Anchor`] every scan registers against the anchor alone. A
 //! scan with fewer than [`AlignOptions::min_pairs`] pairs is reported as
 //! failed and left out; the run continues.
@@ -271,7 +272,9 @@ pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, pr
     match opts.strategy {
         Strategy::Anchor => {
             for &i in &pending {
-                register_one(&targets, i, &[opts.anchor], &mut poses, &dists, opts, &mut reports[i]);
+                if !register_one(&targets, i, &[opts.anchor], &mut poses, &dists, opts, &mut reports[i]) {
+                    poses[i] = initial[i];
+                }
                 step()?;
             }
         }
@@ -294,6 +297,8 @@ pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, pr
                 let i = pending.remove(k);
                 if register_one(&targets, i, &registered, &mut poses, &dists, opts, &mut reports[i]) {
                     registered.push(i);
+                } else {
+                    poses[i] = initial[i];
                 }
                 step()?;
             }
@@ -329,7 +334,8 @@ pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, pr
 }
 
 /// Pairs needed at a hierarchy level: `min_pairs` scaled by the level's
-/// share of the samples, at least 6.
+/// share of the (thinned) samples, at least 6 unless `min_pairs` is
+/// smaller, and never more than `min_pairs`.
 fn required(scan: &ScanMesh, level: usize, min_pairs: usize, cap: usize) -> usize {
     let used = |n: usize| n.div_ceil(stride(n, cap));
     let finest = used(scan.levels.last().map_or(1, Vec::len)).max(1);
@@ -496,7 +502,10 @@ impl Anderson {
         let df = nalgebra::DMatrix::from_fn(6, m, |r, c| fk[r] - f(&self.history[m - 1 - c])[r]);
         let dg = nalgebra::DMatrix::from_fn(6, m, |r, c| g[r] - self.history[m - 1 - c].1[r]);
         let Ok(svd) = nalgebra::SVD::try_new(df, true, true, f64::EPSILON, 100).ok_or(()) else { return g };
-        let Ok(theta) = svd.solve(&nalgebra::DVector::from_column_slice(fk.as_slice()), 1e-10) else { return g };
+        // Singular values below 1e-10 of the largest are treated as zero:
+        // a cut-off relative to the data, not to the scan's units.
+        let cutoff = 1e-10 * svd.singular_values.max();
+        let Ok(theta) = svd.solve(&nalgebra::DVector::from_column_slice(fk.as_slice()), cutoff) else { return g };
         let next = nalgebra::DVector::from_column_slice(&g) - dg * theta;
         if next.iter().any(|v| !v.is_finite()) {
             return g;

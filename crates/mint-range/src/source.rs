@@ -6,7 +6,9 @@
 //! Two sources: a slice of scans already in memory (tests, library users),
 //! and [`ScanFiles`], which loads the scans of a set file on demand and
 //! keeps the most recently used ones while their estimated size stays
-//! within a memory budget. With a budget larger than the set, each scan is
+//! within a memory budget (a single scan larger than the budget is still
+//! read, alone; during the first pass, which learns the scans' sizes, one
+//! scan may come on top of the budget until the others are dropped). With a budget larger than the set, each scan is
 //! read once; with a small one, scans are read again when needed (the
 //! results are the same either way: sources only change when a scan is
 //! read, never what it contains).
@@ -93,6 +95,8 @@ pub struct ScanFiles {
 #[derive(Default)]
 struct Cache {
     scans: Vec<Option<Arc<ScanMesh>>>,
+    /// Estimated size of each scan once it has been read (0 before).
+    sizes: Vec<usize>,
     last_used: Vec<u64>,
     clock: u64,
     bytes: usize,
@@ -124,7 +128,7 @@ impl ScanFiles {
             opts: opts.clone(),
             sampling: vec![0.0; n],
             budget,
-            cache: Mutex::new(Cache { scans: vec![None; n], last_used: vec![0; n], ..Default::default() }),
+            cache: Mutex::new(Cache { scans: vec![None; n], sizes: vec![0; n], last_used: vec![0; n], ..Default::default() }),
         };
         progress.start(mint_core::progress::Phase::LoadScans, n as u64);
         for i in 0..n {
@@ -147,6 +151,19 @@ impl ScanFiles {
     }
 }
 
+impl Cache {
+    /// Drops the least recently used scans other than `keep` while more
+    /// than `limit` bytes are held.
+    fn evict(&mut self, keep: usize, limit: usize) {
+        while self.bytes > limit {
+            let victim = (0..self.scans.len()).filter(|&j| j != keep && self.scans[j].is_some()).min_by_key(|&j| self.last_used[j]);
+            let Some(j) = victim else { break };
+            self.scans[j] = None;
+            self.bytes -= self.sizes[j];
+        }
+    }
+}
+
 impl ScanSource for ScanFiles {
     fn len(&self) -> usize {
         self.paths.len()
@@ -162,18 +179,17 @@ impl ScanSource for ScanFiles {
         if let Some(s) = &c.scans[i] {
             return Ok(ScanRef::Shared(s.clone()));
         }
+        // Make room first when the size is known (every read after the
+        // first pass of `open`), so the budget holds with the new scan in.
+        let known = c.sizes[i];
+        c.evict(i, self.budget.saturating_sub(known));
         let scan = Arc::new(load_scan(&self.paths[i], &self.opts)?);
         c.loads += 1;
-        c.bytes += scan.heap_bytes();
+        c.sizes[i] = scan.heap_bytes();
+        c.bytes += c.sizes[i];
         c.scans[i] = Some(scan.clone());
         c.peak_bytes = c.peak_bytes.max(c.bytes);
-        // Drop the least recently used others while over the budget.
-        while c.bytes > self.budget {
-            let victim = (0..c.scans.len()).filter(|&j| j != i && c.scans[j].is_some()).min_by_key(|&j| c.last_used[j]);
-            let Some(j) = victim else { break };
-            let s = c.scans[j].take().expect("victim is cached");
-            c.bytes -= s.heap_bytes();
-        }
+        c.evict(i, self.budget);
         Ok(ScanRef::Shared(scan))
     }
 }

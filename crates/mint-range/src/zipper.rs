@@ -296,8 +296,10 @@ fn zip_pair(m: &mut Work, s: &mut Work, d: f64, stitch_r: f64, report: &mut Zipp
     let mut ns = Nearest::new(s);
     // 1. Redundancy removal: with the confidence rule, then without. A
     //    face that fails the test keeps failing while the rule stays (the
-    //    other mesh only loses faces), so each pass looks only at faces
-    //    around the last pass's deletions.
+    //    other mesh only loses faces, so its nearest triangle only dies or
+    //    gains boundary corners) — except when a vertex of the other mesh
+    //    leaves the boundary but keeps faces, which is checked. So each
+    //    pass looks only at faces around the last pass's deletions.
     for use_conf in [true, false] {
         let mut cand_s = boundary_faces(s, &ts);
         let mut cand_m = boundary_faces(m, &tm);
@@ -308,8 +310,12 @@ fn zip_pair(m: &mut Work, s: &mut Work, d: f64, stitch_r: f64, report: &mut Zipp
             if cut_s.is_empty() && cut_m.is_empty() {
                 break;
             }
-            cand_s = ns.faces_around(s, &cut_s);
-            cand_m = nm.faces_around(m, &cut_m);
+            // A face that failed can pass again only if a vertex of the
+            // other mesh stopped being a boundary vertex while keeping
+            // faces (possible on the model, whose stitched vertices may
+            // have several fans): then look at every boundary face again.
+            cand_s = if nm.left_boundary_keeping_faces(m, &tm, &cut_m) { boundary_faces(s, &ts) } else { ns.faces_around(s, &cut_s) };
+            cand_m = if ns.left_boundary_keeping_faces(s, &ts, &cut_s) { boundary_faces(m, &tm) } else { nm.faces_around(m, &cut_m) };
         }
     }
     // 2. Trimming: S retreats until it meets M instead of overlapping it.
@@ -433,6 +439,14 @@ impl Nearest {
         out.sort_unstable();
         out.dedup();
         out
+    }
+
+    /// True if a corner of the deleted faces `cut` is no longer on the
+    /// boundary of `w` but still has live faces.
+    fn left_boundary_keeping_faces(&self, w: &Work, t: &Topo, cut: &[u32]) -> bool {
+        cut.iter().flat_map(|&f| w.faces[f as usize]).any(|v| {
+            !t.on_boundary(v) && self.face_list[self.face_start[v as usize] as usize..self.face_start[v as usize + 1] as usize].iter().any(|&f| w.alive[f as usize])
+        })
     }
 
     /// Fills in the nearest faces of the corners of `faces` not yet known.
