@@ -122,7 +122,6 @@ echo "== the whole bunny, 10 scans from bun.conf =="
 /usr/bin/time -f "%e %M" -o "$tmp/t2" "$mint" zipper "$tmp/aligned.conf" "$tmp/bunny.ply" 2> "$tmp/zip.log"
 /usr/bin/time -f "%e %M" -o "$tmp/t3" "$mint" zipper "$tmp/aligned.conf" "$tmp/bunny-grid.ply" --method grid --cells 2000000 2> "$tmp/grid.log"
 read a_s a_kb < "$tmp/t1"; read z_s z_kb < "$tmp/t2"; read g_s g_kb < "$tmp/t3"
-cat "$tmp/t1" "$tmp/t2" >/dev/null
 echo "align ${a_s}s (peak RSS $((a_kb/1024)) MiB) + zipper with consensus ${z_s}s (peak RSS $((z_kb/1024)) MiB) = $(python3 -c "print(round($a_s+$z_s,2))")s; grid merge at 2M cells ${g_s}s (peak RSS $((g_kb/1024)) MiB)"
 sed 's/^/  /' "$tmp/zip.log" "$tmp/grid.log"
 ref="$root/../shared/data/stanford_bunny_zipper_mesh/bun_zipper.ply"
@@ -130,4 +129,5 @@ for m in bunny bunny-grid; do
   "$mint" distance "$tmp/$m.ply" "$ref" --samples 300000 | sed "s/^/  $m: /" | head -2
   "$mint" distance "$ref" "$tmp/$m.ply" --samples 300000 | sed "s/^/  $m: /" | head -2
 done
-echo "cat of the 10 scans (the floor): $( { /usr/bin/time -f %e cat "$data"/*.ply > /dev/null; } 2>&1 )s"
+TIMEFORMAT=%3R
+echo "cat of the 10 scans (the floor): $( { time cat "$data"/*.ply > /dev/null; } 2>&1 )s ($(du -shL "$data" | cut -f1) of PLY)"
