@@ -169,7 +169,7 @@ fn write_options(ascii: bool, double: bool) -> WriteOptions {
 
 pub fn cmd_slice(a: SliceArgs) -> Result<()> {
     let axis = a.axis as usize;
-    let s = run::slice_file(&a.input, &a.output, a.sections, axis, &crate::progress::interrupted)?;
+    let s = run::slice_file(&a.input, &a.output, a.sections, axis, &crate::progress::Bars::new(a.quiet || a.json))?;
     let MethodStats::Slice(d) = &s.details else { unreachable!() };
     let line = format!(
         "sliced {} -> {}: {} of {} planes met the mesh, {} contours, {} vertices ({} open chains closed, {} contours dropped)",
@@ -211,7 +211,7 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
             Method::Angle(AngleOptions { threshold, open: a.open, caps: a.caps })
         }
     };
-    let s = run::reconstruct_file(&a.input, &a.output, method, write_options(a.ascii, a.double), &crate::progress::interrupted)?;
+    let s = run::reconstruct_file(&a.input, &a.output, method, write_options(a.ascii, a.double), &crate::progress::Bars::new(a.quiet || a.json))?;
     let extra = match &s.details {
         MethodStats::Mc(d) => format!(
             "grid {}x{}x{} cells of {:.6}, {} non-canonical cells",

@@ -21,6 +21,7 @@ use crate::mc::{McOptions, McReconstructor, McStats, StackSummary};
 use crate::optimize::{optimize, OptimizeStats};
 use crate::profile::{ProfileOptions, ProfileReader, ProfileWriter};
 use crate::slice::{SliceStats, Slicer};
+use mint_core::progress::{Phase, Progress};
 use mint_core::{MeshSink, SinkError};
 use mint_io::{AtomicFile, Format, MeshReader, MeshWriter, ReadOptions, TriangleChunk, WriteOptions};
 use serde::Serialize;
@@ -140,34 +141,46 @@ fn open_profile(path: &Path, opts: ProfileOptions) -> Result<ProfileReader<BufRe
 }
 
 /// `mint contours`: reconstructs the profile `input` into the mesh `output`.
-/// `cancelled` is polled once per section.
-pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: WriteOptions, cancelled: &dyn Fn() -> bool) -> Result<RunStats, ContourError> {
+/// Progress is reported per section (phases [`Phase::Sections`] and
+/// [`Phase::Contours`]) and cancellation polled as often.
+pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: WriteOptions, progress: &dyn Progress) -> Result<RunStats, ContourError> {
     let t = Instant::now();
     // Refuse an unknown output format before reading anything.
     Format::from_extension(output).ok_or_else(|| ContourError::input(output, "unknown output format: use .ply, .obj, .stl, .off, .mesh, .raw, .wrl or .3ds"))?;
     let open = matches!(method, Method::Angle(AngleOptions { open: true, .. }));
     let popts = ProfileOptions { check_intersections: !open, ..ProfileOptions::default() };
-    let check = || if cancelled() { Err(ContourError::Cancelled) } else { Ok(()) };
+    let check = || {
+        progress.advance(1);
+        if progress.cancelled() {
+            Err(ContourError::Cancelled)
+        } else {
+            Ok(())
+        }
+    };
     let (details, sections, in_vertices, parameters) = match method {
         Method::Mc(o) => {
             // Pass 1: bounding box and offsets (validates the whole file first).
             let mut r = open_profile(input, popts)?;
             let mut summary = None;
+            progress.start(Phase::Sections, 0);
             while let Some(s) = r.next_section()? {
                 let sm = summary.get_or_insert_with(|| StackSummary::new(r.frame().unwrap()));
                 sm.add(&s);
                 check()?;
             }
+            progress.finish();
             let summary = summary.expect("a valid profile has a section");
             // Pass 2: reconstruct while streaming.
             let mut sink = SpillSink::create(output, write)?;
             let mut mc = McReconstructor::new(&summary, o, input)?;
             let mut r = open_profile(input, popts)?;
+            progress.start(Phase::Contours, summary.offsets.len() as u64);
             while let Some(s) = r.next_section()? {
                 mc.push(&s, &mut sink)?;
                 check()?;
             }
             let st = mc.finish(&mut sink)?;
+            progress.finish();
             sink.finish()?;
             let p = params(&[("method", Value::Text("mc".into())), ("cubes", Value::Int(o.cubes as u64)), ("caps", Value::Bool(o.caps))]);
             (MethodStats::Mc(st), summary.offsets.len() as u64, summary.vertices, p)
@@ -177,12 +190,14 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
             let mut a = AngleReconstructor::new(o);
             let mut r = open_profile(input, popts)?;
             let mut n = 0u64;
+            progress.start(Phase::Contours, 0);
             while let Some(s) = r.next_section()? {
                 a.push(&s, &mut sink)?;
                 n += 1;
                 check()?;
             }
             let st = a.finish(&mut sink)?;
+            progress.finish();
             sink.finish()?;
             let p = params(&[
                 ("method", Value::Text("angle".into())),
@@ -213,8 +228,10 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
 }
 
 /// `mint slice`: cuts the mesh `input` by `sections` planes across `axis`
-/// (0, 1, 2 for x, y, z) into the profile `output`.
-pub fn slice_file(input: &Path, output: &Path, sections: u32, axis: usize, cancelled: &dyn Fn() -> bool) -> Result<RunStats, ContourError> {
+/// (0, 1, 2 for x, y, z) into the profile `output`. Progress is reported
+/// in bytes of the input ([`Phase::Slice`]), cancellation polled per chunk
+/// of faces.
+pub fn slice_file(input: &Path, output: &Path, sections: u32, axis: usize, progress: &dyn Progress) -> Result<RunStats, ContourError> {
     let t = Instant::now();
     if sections == 0 {
         return Err(ContourError::input(output, "--sections must be at least 1"));
@@ -234,15 +251,20 @@ pub fn slice_file(input: &Path, output: &Path, sections: u32, axis: usize, cance
     let mut slicer = Slicer::new(axis, lo, hi, sections);
     let mut chunk = TriangleChunk::new();
     let mut faces = 0u64;
+    progress.start(Phase::Slice, reader.bytes_total());
+    let mut reported = reader.bytes_done();
     while reader.next_chunk(&mut chunk)? {
         for (ids, p) in chunk.indices.iter().zip(&chunk.positions) {
             slicer.add(*ids, *p);
         }
         faces += chunk.len() as u64;
-        if cancelled() {
+        progress.advance(reader.bytes_done() - reported);
+        reported = reader.bytes_done();
+        if progress.cancelled() {
             return Err(ContourError::Cancelled);
         }
     }
+    progress.finish();
     let mut st = SliceStats::default();
     let levels = slicer.finish(&mut st);
     if levels.is_empty() {

@@ -24,6 +24,12 @@ pub enum Phase {
     Consensus,
     /// Discretizing scans on the grid merge's grid (units: scans).
     GridMerge,
+    /// Reading the sections of a contour stack (units: sections).
+    Sections,
+    /// Reconstructing a surface from contour sections (units: sections).
+    Contours,
+    /// Cutting a mesh into sections (units: bytes of the input).
+    Slice,
 }
 
 impl Phase {
@@ -38,6 +44,9 @@ impl Phase {
             Phase::Zipper => "zipper",
             Phase::Consensus => "consensus",
             Phase::GridMerge => "grid merge",
+            Phase::Sections => "sections",
+            Phase::Contours => "contours",
+            Phase::Slice => "slice",
         }
     }
 }

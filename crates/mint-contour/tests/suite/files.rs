@@ -11,9 +11,8 @@ use mint_io::{Format, MeshWriter, WriteOptions};
 use mint_testkit::topology::check_closed_oriented;
 use std::path::Path;
 
-fn never() -> bool {
-    false
-}
+/// Never asks to stop, shows nothing.
+const NEVER: &mint_core::progress::NoProgress = &mint_core::progress::NoProgress;
 
 fn write_mesh(path: &Path, m: &mint_core::TriMesh) {
     let mut w = MeshWriter::create(path, Format::from_path(path).unwrap(), WriteOptions { double: true, ..Default::default() }).unwrap();
@@ -39,7 +38,7 @@ fn slice_then_rebuild_in_every_format() {
     let mesh = dir.path().join("solid.ply");
     write_mesh(&mesh, &solid);
     let pro = dir.path().join("solid.pro");
-    let s = run::slice_file(&mesh, &pro, 25, 2, &never).unwrap();
+    let s = run::slice_file(&mesh, &pro, 25, 2, NEVER).unwrap();
     let MethodStats::Slice(d) = &s.details else { panic!() };
     assert_eq!((d.planes, d.sections, d.contours, d.chains_closed, d.contours_dropped), (25, 25, 25, 0, 0));
     assert_eq!(s.parameters["sections"], run::Value::Int(25));
@@ -54,7 +53,7 @@ fn slice_then_rebuild_in_every_format() {
         ("mc-open.off", Method::Mc(McOptions { cubes: 48, caps: false, ..Default::default() })),
     ] {
         let out = dir.path().join(name);
-        let st = run::reconstruct_file(&pro, &out, method, WriteOptions::default(), &never).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let st = run::reconstruct_file(&pro, &out, method, WriteOptions::default(), NEVER).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!((st.command.as_str(), st.input_faces_or_sections), ("contours", 25), "{name}");
         let (positions, faces) = run::load_mesh(&out).unwrap();
         assert_eq!((positions.len() as u64, faces.len() as u64), (st.vertices, st.faces), "{name}");
@@ -89,7 +88,7 @@ fn bad_profiles_fail_with_file_and_line_and_leave_no_output() {
         std::fs::write(&pro, text).unwrap();
         for method in [Method::Mc(McOptions::default()), Method::Angle(AngleOptions::default())] {
             let out = dir.path().join("out.ply");
-            let e = run::reconstruct_file(&pro, &out, method, WriteOptions::default(), &never).unwrap_err();
+            let e = run::reconstruct_file(&pro, &out, method, WriteOptions::default(), NEVER).unwrap_err();
             match &e {
                 ContourError::Profile(p) => assert_eq!((p.kind, p.line), (*kind, *line), "case {k}: {e}"),
                 other => panic!("case {k}: {other}"),
@@ -108,10 +107,18 @@ fn a_cancelled_run_leaves_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let pro = dir.path().join("a.pro");
     std::fs::write(&pro, "pro\nsection 0 0 0 1 0 0 0 1 0\nsection 0 0 1 1 0 1 0 1 1\n").unwrap();
-    let e = run::reconstruct_file(&pro, &dir.path().join("a.ply"), Method::Mc(McOptions::default()), WriteOptions::default(), &|| true).unwrap_err();
+    let e = run::reconstruct_file(&pro, &dir.path().join("a.ply"), Method::Mc(McOptions::default()), WriteOptions::default(), &AlwaysCancelled).unwrap_err();
     assert!(matches!(e, ContourError::Cancelled));
     assert_eq!(entries(dir.path()), vec!["a.pro"]);
 }
 
 
 
+
+/// Asks to stop at the first chance.
+struct AlwaysCancelled;
+impl mint_core::progress::Progress for AlwaysCancelled {
+    fn cancelled(&self) -> bool {
+        true
+    }
+}

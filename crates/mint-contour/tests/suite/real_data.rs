@@ -12,9 +12,8 @@ use mint_io::WriteOptions;
 use mint_testkit::topology::check_closed_oriented;
 use std::path::Path;
 
-fn never() -> bool {
-    false
-}
+/// Never asks to stop, shows nothing.
+const NEVER: &mint_core::progress::NoProgress = &mint_core::progress::NoProgress;
 
 fn load(p: &Path) -> TriMesh {
     let (positions, faces) = run::load_mesh(p).unwrap();
@@ -28,7 +27,7 @@ fn bunny_sliced_into_100_sections_and_rebuilt() {
     let original = load(&bunny);
     let dir = tempfile::tempdir().unwrap();
     let pro = dir.path().join("bunny.pro");
-    let s = run::slice_file(&bunny, &pro, 100, 2, &never).unwrap();
+    let s = run::slice_file(&bunny, &pro, 100, 2, NEVER).unwrap();
     let MethodStats::Slice(d) = &s.details else { panic!() };
     eprintln!("bunny sliced: {d:?}");
     assert_eq!(d.sections, 100);
@@ -37,7 +36,7 @@ fn bunny_sliced_into_100_sections_and_rebuilt() {
         ("angle", Method::Angle(AngleOptions { caps: true, ..Default::default() })),
     ] {
         let out = dir.path().join(format!("{name}.ply"));
-        let st = run::reconstruct_file(&pro, &out, method, WriteOptions::default(), &never).unwrap();
+        let st = run::reconstruct_file(&pro, &out, method, WriteOptions::default(), NEVER).unwrap();
         let m = load(&out);
         let (ab, ba) = mint_mesh::symmetric_distance((&m.positions, &m.faces), (&original.positions, &original.faces), 200_000, 1);
         eprintln!(
@@ -98,7 +97,7 @@ fn rtstruct_body_and_lung_stacks() {
         let pro = dir.path().join(format!("{roi}.pro"));
         std::fs::write(&pro, rtstruct_profile(&txt, roi)).unwrap();
         let out = dir.path().join(format!("{roi}-mc.ply"));
-        let r = run::reconstruct_file(&pro, &out, Method::Mc(McOptions { cubes: 128, caps: true, ..Default::default() }), WriteOptions::default(), &never);
+        let r = run::reconstruct_file(&pro, &out, Method::Mc(McOptions { cubes: 128, caps: true, ..Default::default() }), WriteOptions::default(), NEVER);
         let st = match r {
             Ok(st) => st,
             Err(e) => {
@@ -115,7 +114,7 @@ fn rtstruct_body_and_lung_stacks() {
         assert_eq!(d.non_canonical_cells, 0, "{roi}");
         check_closed_oriented(&load(&out)).unwrap_or_else(|e| panic!("{roi}: {e}"));
         let out = dir.path().join(format!("{roi}-angle.ply"));
-        let st = run::reconstruct_file(&pro, &out, Method::Angle(AngleOptions { caps: true, ..Default::default() }), WriteOptions::default(), &never).unwrap();
+        let st = run::reconstruct_file(&pro, &out, Method::Angle(AngleOptions { caps: true, ..Default::default() }), WriteOptions::default(), NEVER).unwrap();
         eprintln!("rtstruct {roi} angle: {} faces, {:?}", st.faces, st.details);
     }
 }
