@@ -327,7 +327,9 @@ pub fn remove_small_triangles(positions: &[V3], faces: &mut Vec<[u32; 3]>, min_a
                     let old = normalize(tri_normal(positions[gf[0] as usize], positions[gf[1] as usize], positions[gf[2] as usize]));
                     let nf = gf.map(|w| if w == v { u } else { w });
                     let new = normalize(tri_normal(positions[nf[0] as usize], positions[nf[1] as usize], positions[nf[2] as usize]));
-                    if dot(old, new) < 0.5 {
+                    // No fold-over; a face with no normal (zero area)
+                    // cannot fold and must not block its own removal.
+                    if old != [0.0; 3] && dot(old, new) < 0.5 {
                         continue 'cand;
                     }
                 }
