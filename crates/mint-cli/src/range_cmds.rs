@@ -144,6 +144,9 @@ pub struct ZipperArgs {
     #[arg(long, value_enum, default_value_t = MergeMethod::Zipper)]
     pub method: MergeMethod,
     /// Grid method: about this many cubic cells over the scans' bounding box.
+    /// Detail below a cell is dropped, and parts thinner than about a cell
+    /// can come apart (the bunny needs 2M cells to keep the back of its
+    /// head in one piece); raise it for more detail.
     #[arg(long, conflicts_with = "cell_size", default_value_t = 1_000_000)]
     pub cells: u64,
     /// Grid method: cell edge length in scan units (instead of --cells).
