@@ -454,24 +454,7 @@ fn free_region(members: &[u32], faces: &[[u32; 3]], neighbour: &[[u32; 3]], regi
 mod tests {
     use super::*;
 
-    /// A flat n x n grid of squares (2 n² triangles) in the plane z = 0.
-    fn grid(n: u32) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
-        let mut p = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                p.push([i as f64, j as f64, 0.0]);
-            }
-        }
-        let id = |i: u32, j: u32| j * (n + 1) + i;
-        let mut f = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        (p, f)
-    }
+    use mint_testkit::flat_grid as grid;
 
     #[test]
     fn a_flat_grid_keeps_its_boundary_vertices() {

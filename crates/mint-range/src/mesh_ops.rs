@@ -377,24 +377,7 @@ pub fn min_altitude(p: [V3; 3]) -> f64 {
 mod tests {
     use super::*;
 
-    /// An n×n grid of unit squares in the plane z = 0, facing +z.
-    fn grid(n: u32) -> (Vec<V3>, Vec<[u32; 3]>) {
-        let mut p = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                p.push([i as f64, j as f64, 0.0]);
-            }
-        }
-        let id = |i: u32, j: u32| j * (n + 1) + i;
-        let mut f = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        (p, f)
-    }
+    use mint_testkit::flat_grid as grid;
 
     #[test]
     fn a_bowtie_vertex_is_split_and_a_third_face_dropped() {

@@ -60,6 +60,27 @@ impl RayBvh {
     /// Calls `f` for every hit with `t` in `[t0, t1]` of the line
     /// `o + t·d` (in no particular order).
     pub fn segment_hits(&self, o: V3, d: V3, t0: f64, t1: f64, mut f: impl FnMut(Hit)) {
+        self.walk(o, d, t0, t1, |h| {
+            f(h);
+            t1
+        });
+    }
+
+    /// The hit with the smallest `t` in `[t0, t1]`, if any.
+    pub fn first_hit(&self, o: V3, d: V3, t0: f64, t1: f64) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        self.walk(o, d, t0, t1, |h| {
+            if best.is_none_or(|b| h.t < b.t) {
+                best = Some(h);
+            }
+            best.map_or(t1, |b| b.t)
+        });
+        best
+    }
+
+    /// Visits the hits with `t` in `[t0, t1]`, where `visit` returns the
+    /// new upper end of the interval (the nodes beyond it are skipped).
+    fn walk(&self, o: V3, d: V3, t0: f64, mut t1: f64, mut visit: impl FnMut(Hit) -> f64) {
         if self.nodes.is_empty() {
             return;
         }
@@ -77,7 +98,7 @@ impl RayBvh {
                 for k in n.first..n.first + n.count {
                     if let Some((t, b)) = intersect(&self.tris[k as usize], o, d) {
                         if t >= t0 && t <= t1 {
-                            f(Hit { t, face: self.ids[k as usize], bary: b });
+                            t1 = visit(Hit { t, face: self.ids[k as usize], bary: b });
                         }
                     }
                 }
@@ -88,41 +109,6 @@ impl RayBvh {
                 sp += 2;
             }
         }
-    }
-
-    /// The hit with the smallest `t` in `[t0, t1]`, if any.
-    pub fn first_hit(&self, o: V3, d: V3, t0: f64, t1: f64) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        let mut limit = t1;
-        if self.nodes.is_empty() {
-            return None;
-        }
-        let inv = d.map(|c| 1.0 / c);
-        let mut stack = [0u32; 64];
-        let mut sp = 1;
-        while sp > 0 {
-            sp -= 1;
-            let idx = stack[sp];
-            let n = self.nodes[idx as usize];
-            if !slab(&n, o, inv, t0, limit) {
-                continue;
-            }
-            if n.count > 0 {
-                for k in n.first..n.first + n.count {
-                    if let Some((t, b)) = intersect(&self.tris[k as usize], o, d) {
-                        if t >= t0 && t <= limit && best.is_none_or(|h| t < h.t) {
-                            limit = t;
-                            best = Some(Hit { t, face: self.ids[k as usize], bary: b });
-                        }
-                    }
-                }
-            } else {
-                stack[sp] = n.first;
-                stack[sp + 1] = idx + 1;
-                sp += 2;
-            }
-        }
-        best
     }
 }
 

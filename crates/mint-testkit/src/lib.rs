@@ -7,6 +7,8 @@
 //!   independently of mint-mesh so the two can check each other;
 //! - [`Rng`]: a tiny deterministic PRNG.
 //! - [`shared_data`]: the path of `../shared/data`, or a skip message.
+//! - [`flat_grid`]: an n×n grid of unit squares, an open mesh with a known
+//!   boundary, for mesh-surgery tests.
 
 pub mod hull;
 pub mod topology;
@@ -43,4 +45,24 @@ pub fn shared_data() -> Option<std::path::PathBuf> {
         eprintln!("skipping: real-data folder {} is absent", p.display());
         None
     }
+}
+
+/// An n×n grid of unit squares in the plane z = 0, two triangles each
+/// (2 n² faces, (n + 1)² vertices, row-major), facing +z.
+pub fn flat_grid(n: u32) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    let mut p = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            p.push([i as f64, j as f64, 0.0]);
+        }
+    }
+    let id = |i: u32, j: u32| j * (n + 1) + i;
+    let mut f = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    (p, f)
 }
