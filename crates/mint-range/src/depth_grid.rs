@@ -268,7 +268,7 @@ pub fn write_depth_grid(path: &Path, im: &RangeImage, encoding: GridEncoding, co
     };
     write!(buf, "mint_range_grid 1\nformat {enc}\ncols {}\nrows {}\nprojection orthographic {x0:e} {y0:e} {dx:e} {dy:e}\n", im.cols, im.rows).map_err(io_err)?;
     for c in comments {
-        write!(buf, "comment {}\n", c.replace(['\n', '\r'], " ")).map_err(io_err)?;
+        writeln!(buf, "comment {}", c.replace(['\n', '\r'], " ")).map_err(io_err)?;
     }
     buf.extend_from_slice(b"end_header\n");
     for r in 0..im.rows {

@@ -54,7 +54,7 @@
 //! by [`GridMergeOptions::max_nodes`].
 
 use crate::error::RangeError;
-use crate::geom::{normalize, tri_normal, Rigid, V3};
+use crate::geom::{normalize, tri_normal, Rigid};
 use crate::source::ScanSource;
 use mint_core::progress::{NoProgress, Phase, Progress};
 use mint_core::reconstruct::crossing_to_intercept;
@@ -222,14 +222,14 @@ fn clean_states(state: &mut [u8], lat: &Lattice, neighbours: &dyn Fn(u64) -> [u6
 
 /// Merges the scans at their poses into one closed mesh on a grid (see the
 /// module docs). Returns world `(positions, faces, report)`.
-pub fn grid_merge<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &GridMergeOptions) -> Result<(Vec<V3>, Vec<[u32; 3]>, GridMergeReport), RangeError> {
+pub fn grid_merge<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &GridMergeOptions) -> Result<crate::Merged<GridMergeReport>, RangeError> {
     grid_merge_with(scans, poses, opts, &NoProgress)
 }
 
 /// [`grid_merge`], reporting each scan visited ([`Phase::GridMerge`]: the
 /// bounding-box pass, then the voting pass) and stopping with
 /// [`RangeError::Cancelled`] between scans when asked.
-pub fn grid_merge_with<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &GridMergeOptions, progress: &dyn Progress) -> Result<(Vec<V3>, Vec<[u32; 3]>, GridMergeReport), RangeError> {
+pub fn grid_merge_with<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &GridMergeOptions, progress: &dyn Progress) -> Result<crate::Merged<GridMergeReport>, RangeError> {
     if scans.is_empty() {
         return Err(RangeError::option("scans", "nothing to merge"));
     }

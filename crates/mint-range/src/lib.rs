@@ -44,6 +44,9 @@ pub mod synth;
 pub mod zipper;
 
 pub use error::RangeError;
+
+/// A merged mesh: world positions, faces, and the method's report.
+pub type Merged<R> = (Vec<geom::V3>, Vec<[u32; 3]>, R);
 pub use geom::Rigid;
 pub use range_image::RangeImage;
 pub use scan_mesh::{load_scan, load_set, MeshOptions, ScanMesh};

@@ -80,7 +80,7 @@ impl RangeImage {
         let mut buf = Vec::with_capacity(64 + order.len() * 12 + self.cells.len() * 5);
         write!(buf, "ply\nformat binary_little_endian 1.0\n").map_err(io_err)?;
         for c in comments {
-            write!(buf, "comment {}\n", c.replace(['\n', '\r'], " ")).map_err(io_err)?;
+            writeln!(buf, "comment {}", c.replace(['\n', '\r'], " ")).map_err(io_err)?;
         }
         write!(
             buf,

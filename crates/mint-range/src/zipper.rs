@@ -217,14 +217,14 @@ impl Topo {
 /// Zippers the scans at their poses into one mesh (see the module docs),
 /// then runs consensus geometry if asked. Returns `(positions, faces,
 /// report)`. Errors: mismatched lengths, no scans, bad options.
-pub fn zipper<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &ZipperOptions) -> Result<(Vec<V3>, Vec<[u32; 3]>, ZipperReport), RangeError> {
+pub fn zipper<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &ZipperOptions) -> Result<crate::Merged<ZipperReport>, RangeError> {
     zipper_with(scans, poses, opts, &NoProgress)
 }
 
 /// [`zipper`], reporting each scan joined ([`Phase::Zipper`]) and the
 /// consensus passes, and stopping with [`RangeError::Cancelled`] between
 /// scans when asked.
-pub fn zipper_with<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &ZipperOptions, progress: &dyn Progress) -> Result<(Vec<V3>, Vec<[u32; 3]>, ZipperReport), RangeError> {
+pub fn zipper_with<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &ZipperOptions, progress: &dyn Progress) -> Result<crate::Merged<ZipperReport>, RangeError> {
     if scans.is_empty() {
         return Err(RangeError::option("scans", "nothing to zipper"));
     }
