@@ -235,15 +235,7 @@ pub fn resample_in_core<I>(grid: &Grid, triangles: I, sink: &mut dyn crate::Mesh
 where
     I: IntoIterator<Item = [[f64; 3]; 3]>,
 {
-    let [_, nb, ns] = grid.local_dims();
-    let mut planes: Vec<Vec<Intercept>> = vec![Vec::new(); ns as usize + 1];
-    for t in triangles {
-        let local = t.map(|p| grid.to_local(p));
-        crate::discretize::discretize_triangle(&local, |c| {
-            let r = crossing_to_intercept(&c, nb);
-            planes[r.plane as usize].push(r);
-        });
-    }
+    let mut planes = discretize_in_core(grid, triangles);
     for p in &mut planes {
         crate::intercept::filter_plane(p);
     }
@@ -255,6 +247,23 @@ where
         sink.face(*f)?;
     }
     Ok(result)
+}
+
+/// The raw intercepts of `triangles` (world coordinates), per plane.
+fn discretize_in_core<I>(grid: &Grid, triangles: I) -> Vec<Vec<Intercept>>
+where
+    I: IntoIterator<Item = [[f64; 3]; 3]>,
+{
+    let [_, nb, ns] = grid.local_dims();
+    let mut planes: Vec<Vec<Intercept>> = vec![Vec::new(); ns as usize + 1];
+    for t in triangles {
+        let local = t.map(|p| grid.to_local(p));
+        crate::discretize::discretize_triangle(&local, |c| {
+            let r = crossing_to_intercept(&c, nb);
+            planes[r.plane as usize].push(r);
+        });
+    }
+    planes
 }
 
 /// [`resample_in_core`] under a sign rule: `Orient` is the strict path;
@@ -274,15 +283,7 @@ where
         let r = resample_in_core(grid, triangles, sink)?;
         return Ok((r, Default::default(), SignRule::Orient));
     }
-    let [_, nb, ns] = grid.local_dims();
-    let mut planes: Vec<Vec<Intercept>> = vec![Vec::new(); ns as usize + 1];
-    for t in triangles {
-        let local = t.map(|p| grid.to_local(p));
-        crate::discretize::discretize_triangle(&local, |c| {
-            let r = crossing_to_intercept(&c, nb);
-            planes[r.plane as usize].push(r);
-        });
-    }
+    let mut planes = discretize_in_core(grid, triangles);
     let rule = if rule == SignRule::Auto {
         let mut census = crate::signs::LineCensus::default();
         for p in &mut planes {

@@ -207,20 +207,11 @@ pub fn csg(scene: &Scene, scene_name: &str, output: &Path, opts: &ResampleOption
     })?;
     progress.finish();
     drop(sources);
-    summary.output_vertices = out.vertices;
-    summary.output_faces = out.faces;
-    summary.inconsistent_lines = repair.inconsistent_lines;
-    summary.synthesized_vertices = repair.synthesized_vertices;
-    summary.merged_edges = repair.merged_edges;
-    summary.dropped_intercepts = repair.dropped_intercepts;
-    summary.seconds_reconstruct = t.elapsed().as_secs_f64();
+    summary.record_reconstruction(&repair, &out, t);
     check_cancel(progress)?;
 
     // 5. Faces after vertices; rename into place.
-    let t = Instant::now();
-    out.finish(progress)?;
-    summary.seconds_write = t.elapsed().as_secs_f64();
-    summary.seconds_total = t_start.elapsed().as_secs_f64();
+    summary.finish_output(out, progress, t_start)?;
     Ok(summary)
 }
 

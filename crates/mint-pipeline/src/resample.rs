@@ -156,6 +156,30 @@ pub struct ResampleSummary {
     pub open_cells: u64,
 }
 
+impl ResampleSummary {
+    /// Records what reconstruction did (repair counters, output counts,
+    /// the phase's time since `t`); shared by resample and csg.
+    pub(crate) fn record_reconstruction(&mut self, repair: &RepairStats, out: &OrderedOutput, t: Instant) {
+        self.inconsistent_lines = repair.inconsistent_lines;
+        self.synthesized_vertices = repair.synthesized_vertices;
+        self.merged_edges = repair.merged_edges;
+        self.dropped_intercepts = repair.dropped_intercepts;
+        self.output_vertices = out.vertices;
+        self.output_faces = out.faces;
+        self.seconds_reconstruct = t.elapsed().as_secs_f64();
+    }
+
+    /// Appends the faces after the vertices and renames the output into
+    /// place, recording the write time and the total since `t_start`.
+    pub(crate) fn finish_output(&mut self, out: OrderedOutput, progress: &dyn Progress, t_start: Instant) -> Result<(), PipelineError> {
+        let t = Instant::now();
+        out.finish(progress)?;
+        self.seconds_write = t.elapsed().as_secs_f64();
+        self.seconds_total = t_start.elapsed().as_secs_f64();
+        Ok(())
+    }
+}
+
 /// Why a run failed. Each variant's text is one line naming the file.
 #[derive(Debug, thiserror::Error)]
 pub enum PipelineError {
@@ -386,20 +410,11 @@ pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &
         summary.intercepts_kept = summary.intercepts_found - repair.dropped_intercepts;
         summary.intercepts_removed = repair.dropped_intercepts;
     }
-    summary.inconsistent_lines = repair.inconsistent_lines;
-    summary.synthesized_vertices = repair.synthesized_vertices;
-    summary.merged_edges = repair.merged_edges;
-    summary.dropped_intercepts = repair.dropped_intercepts;
-    summary.output_vertices = out.vertices;
-    summary.output_faces = out.faces;
-    summary.seconds_reconstruct = t.elapsed().as_secs_f64();
+    summary.record_reconstruction(&repair, &out, t);
     check_cancel(progress)?;
 
     // 5. Faces after vertices, then rename into place.
-    let t = Instant::now();
-    out.finish(progress)?;
-    summary.seconds_write = t.elapsed().as_secs_f64();
-    summary.seconds_total = t_start.elapsed().as_secs_f64();
+    summary.finish_output(out, progress, t_start)?;
     Ok(summary)
 }
 
