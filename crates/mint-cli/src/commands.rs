@@ -151,6 +151,31 @@ confidence, and the resampler rebuilds the surface. The result is always closed 
 meet.\n\n\
 Examples:\n  mint zipper bun-aligned.conf bunny.ply\n  mint zipper bun-aligned.conf bunny-closed.ply --method grid --cells 2000000")]
     Zipper(crate::range_cmds::ZipperArgs),
+    /// Run resample, bool or csg as separate tasks: plan, run one task,
+    /// watch (for resuming, and for clusters and schedulers).
+    #[command(subcommand, long_about = "Run resample, bool or csg as stages of separate tasks, for schedulers and clusters.\n\n\
+A staged run lives in a work directory DIR shared by every machine (NFS or the like). `mint stage plan` \
+writes DIR/plan.json: the inputs' fingerprints, the options, and the stages in order with their task \
+counts (bounds and discretize: one task per part of the input's faces; census, holes and reconstruct: \
+one per slab of the grid; write: one). `mint stage run DIR STAGE TASK` runs one task; tasks of one stage \
+may run in any order, at the same time, on any machine, once the stages before are complete. A task's \
+result is written atomically with a checksum; running a finished task again does nothing. The last \
+stage writes the output. The output bytes are the same as one `mint resample` run.\n\n\
+Example:\n  mint stage plan resample scan.ply out.ply --cells 100000000 --work /shared/run --parts 16 --slabs 16\n  \
+mint stage run /shared/run bounds 0     # ... every task of every stage, in stage order\n  \
+mint stage status /shared/run\n\n\
+`mint slurm` does all of this on a Slurm cluster; docs/SCALE.md has the recipe for other schedulers.")]
+    Stage(crate::stage_cmds::StageCommand),
+    /// Run resample, bool or csg on a Slurm cluster: one job array per stage.
+    #[command(long_about = "Run resample, bool or csg on a Slurm cluster.\n\n\
+Writes the plan into --work DIR (which every node must see at the same path), writes one sbatch \
+script per stage into DIR/slurm/, and submits them as job arrays (one array task per stage task), \
+each depending on the one before (afterok, --kill-on-invalid-dep=yes), with `sbatch --parsable`. \
+Prints the job ids. --dry-run writes the scripts and submits nothing; --wait follows the run with \
+squeue and exits with its status. Extra sbatch options (partition, account, time, memory) go in \
+--sbatch \"...\".\n\n\
+Example:\n  mint slurm resample scan.ply out.ply --cells 100000000 --work /shared/run --parts 32 --slabs 32 \\\n      --sbatch \"--partition=batch --time=2:00:00\" --wait")]
+    Slurm(crate::stage_cmds::SlurmArgs),
 }
 
 #[derive(Args, Debug)]
@@ -250,7 +275,7 @@ pub struct ValidateArgs {
     pub json: bool,
 }
 
-#[derive(Args, Debug)]
+#[derive(Args, Debug, Clone)]
 pub struct ResampleArgs {
     /// Input mesh (PLY, OBJ, STL or OFF).
     pub input: PathBuf,
@@ -280,6 +305,22 @@ pub struct ResampleArgs {
     /// Force slabs of K cell layers (for tests and tuning); without it, --mem decides.
     #[arg(long, value_name = "K")]
     pub slab: Option<u32>,
+    /// Keep the run's stages in DIR: a run killed at any moment (crash,
+    /// kill -9, reboot) resumes where it stopped when run again with the same
+    /// DIR, after checking that the inputs and options are the same. DIR is
+    /// kept at the end (remove it yourself). [default: a temporary directory,
+    /// removed at the end]
+    #[arg(long, value_name = "DIR")]
+    pub work: Option<PathBuf>,
+    /// Split the reading of the input's faces into P parts (one task each;
+    /// binary PLY and binary STL split, other formats are read whole by the
+    /// first part). The output is the same for any P.
+    #[arg(long, value_name = "P", default_value_t = 1)]
+    pub parts: u32,
+    /// Split the grid into S slabs (one reconstruction task each). The
+    /// output is the same for any S.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub slabs: u32,
     /// How crossing signs become inside/outside. auto: robust; picks union
     /// (orientation kept, overlapping scans merge) or parity (orientation
     /// ignored, for flipped faces) from a census of all grid lines, and
@@ -339,6 +380,25 @@ pub struct GridArgs {
     /// Force slabs of K cell layers; without it, --mem decides.
     #[arg(long, value_name = "K")]
     pub slab: Option<u32>,
+    /// Keep the run's stages in DIR: a run killed at any moment (crash,
+    /// kill -9, reboot) resumes where it stopped when run again with the same
+    /// DIR, after checking that the inputs and options are the same. DIR is
+    /// kept at the end (remove it yourself). [default: a temporary directory,
+    /// removed at the end]
+    #[arg(long, value_name = "DIR")]
+    pub work: Option<PathBuf>,
+    /// Split the reading of the input's faces into P parts (one task each;
+    /// binary PLY and binary STL split, other formats are read whole by the
+    /// first part). The output is the same for any P.
+    #[arg(long, value_name = "P", default_value_t = 1)]
+    pub parts: u32,
+    /// Split the grid into S slabs (one reconstruction task each). The
+    /// output is the same for any S.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub slabs: u32,
+    /// Shift the grid by fractions of a cell, e.g. 0.5,0,0 [default: 0,0,0].
+    #[arg(long, value_parser = parse_triple, hide = true)]
+    pub grid_offset: Option<[f64; 3]>,
     /// No progress bars and no summary.
     #[arg(long, short)]
     pub quiet: bool,
@@ -347,7 +407,7 @@ pub struct GridArgs {
     pub json: bool,
 }
 
-#[derive(Args, Debug)]
+#[derive(Args, Debug, Clone)]
 pub struct BoolArgs {
     /// union, intersection or difference (A minus B).
     #[arg(value_enum)]
@@ -362,7 +422,7 @@ pub struct BoolArgs {
     pub grid: GridArgs,
 }
 
-#[derive(Args, Debug)]
+#[derive(Args, Debug, Clone)]
 pub struct CsgArgs {
     /// Scene file (JSON).
     pub scene: PathBuf,
@@ -443,6 +503,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Scan(a) => crate::range_cmds::cmd_scan(a),
         Command::Align(a) => crate::range_cmds::cmd_align(a),
         Command::Zipper(a) => crate::range_cmds::cmd_zipper(a),
+        Command::Stage(c) => crate::stage_cmds::cmd_stage(c),
+        Command::Slurm(a) => crate::stage_cmds::cmd_slurm(a),
     }
 }
 
@@ -450,7 +512,8 @@ fn cmd_resample(a: ResampleArgs) -> Result<()> {
     resample_and_report(a).map(|_| ())
 }
 
-fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::ResampleSummary> {
+/// The library options of `mint resample`'s arguments.
+pub(crate) fn resample_options(a: &ResampleArgs) -> Result<ResampleOptions> {
     let size = match (a.cells, a.cell_size) {
         (Some(n), None) => {
             if n == 0 {
@@ -461,10 +524,9 @@ fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::ResampleSummary
         (None, Some(h)) => GridSize::CellSize(h),
         _ => bail!("give exactly one of --cells N or --cell-size H"),
     };
-    let mem = a.mem.unwrap_or_else(|| alloc::total_ram().map(|r| r / 4).unwrap_or(2 << 30));
-    let opts = ResampleOptions {
+    Ok(ResampleOptions {
         size,
-        mem_bytes: mem,
+        mem_bytes: a.mem.unwrap_or_else(default_mem),
         threads: a.threads,
         tmp_dir: a.tmp.clone(),
         axis: match a.axis {
@@ -484,19 +546,66 @@ fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::ResampleSummary
             SignsArg::Parity => mint_core::signs::SignRule::Parity,
         },
         max_hole: if a.close_all { None } else { Some(a.max_hole) },
-    };
+        work_dir: a.work.clone(),
+        parts: a.parts,
+        slabs: a.slabs,
+    })
+}
+
+/// The default heap budget: a quarter of RAM (2 GiB when RAM is unknown).
+pub(crate) fn default_mem() -> u64 {
+    alloc::total_ram().map(|r| r / 4).unwrap_or(2 << 30)
+}
+
+/// The mesh `mint resample` reads: the input itself, or, for a PLY range
+/// image, its triangulation (mint-range owns range images; the engine sees
+/// a mesh). With a work directory the triangulation is kept there, so that
+/// a resumed run finds the same file; otherwise it is a temporary file.
+pub(crate) fn resample_input(input: &std::path::Path, work: Option<&std::path::Path>, tmp: &std::path::Path) -> Result<(PathBuf, Option<tempfile::NamedTempFile>)> {
+    if let Some(dir) = work {
+        let kept = dir.join("range-image-mesh.ply");
+        if kept.is_file() {
+            return Ok((kept, None));
+        }
+        std::fs::create_dir_all(dir).with_context(|| format!("{}: creating the work directory", dir.display()))?;
+        return Ok(match mint_range::range_image_as_mesh(input, dir)? {
+            Some(t) => {
+                t.persist(&kept).map_err(|e| anyhow::anyhow!("{}: {}", kept.display(), e.error))?;
+                (kept, None)
+            }
+            None => (input.to_path_buf(), None),
+        });
+    }
+    Ok(match mint_range::range_image_as_mesh(input, tmp)? {
+        Some(t) => (t.path().to_path_buf(), Some(t)),
+        None => (input.to_path_buf(), None),
+    })
+}
+
+pub(crate) fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::ResampleSummary> {
+    let opts = resample_options(&a)?;
+    let mem = opts.mem_bytes;
+    let tmp_root = a.tmp.clone().unwrap_or_else(|| a.output.parent().filter(|p| !p.as_os_str().is_empty()).map(PathBuf::from).unwrap_or_else(|| PathBuf::from(".")));
+    let (input, _range_mesh) = resample_input(&a.input, a.work.as_deref(), &tmp_root)?;
     let bars = Bars::new(a.quiet || a.json);
-    let summary = resample(&a.input, &a.output, &opts, &bars)?;
+    let mut summary = resample(&input, &a.output, &opts, &bars)?;
+    summary.input = a.input.display().to_string();
+    print_resample_summary(&summary, a.json, a.quiet, mem)?;
+    Ok(summary)
+}
+
+/// Prints a resampling summary: JSON on stdout, or lines on stderr.
+pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, json: bool, quiet: bool, mem: u64) -> Result<()> {
     let peak_heap = alloc::peak_heap();
     let peak_rss = alloc::peak_rss();
-    if a.json {
-        let mut v = serde_json::to_value(&summary)?;
+    if json {
+        let mut v = serde_json::to_value(summary)?;
         v["mem_budget_bytes"] = mem.into();
         v["peak_heap_bytes"] = peak_heap.into();
         v["peak_rss_bytes"] = peak_rss.into();
         println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !a.quiet {
-        let s = &summary;
+    } else if !quiet {
+        let s = summary;
         eprintln!("resampled {} -> {}", s.input, s.output);
         eprintln!(
             "  input        {} vertices, {} faces{}",
@@ -536,7 +645,12 @@ fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::ResampleSummary
             human_bytes(mem)
         );
     }
-    Ok(summary)
+    if let Some(dir) = &summary.work_dir {
+        if !json && !quiet {
+            eprintln!("  work dir     {dir} ({} tasks run, {} found done); remove it when you no longer need to resume", summary.tasks_run, summary.tasks_resumed);
+        }
+    }
+    Ok(())
 }
 
 fn cmd_info(a: InfoArgs) -> Result<()> {
@@ -788,6 +902,9 @@ fn cmd_demo(a: DemoArgs) -> Result<()> {
         tmp: None,
         axis: AxisArg::Auto,
         slab: None,
+        work: None,
+        parts: 1,
+        slabs: 1,
         signs: SignsArg::Auto,
         max_hole: 16,
         close_all: false,
@@ -825,7 +942,7 @@ fn tempfile_dir() -> Result<TempDir> {
     Ok(TempDir(base))
 }
 
-fn grid_options(g: &GridArgs) -> Result<ResampleOptions> {
+pub(crate) fn grid_options(g: &GridArgs) -> Result<ResampleOptions> {
     let size = match (g.cells, g.cell_size) {
         (Some(n), None) if n > 0 => GridSize::Cells(n),
         (None, Some(h)) => GridSize::CellSize(h),
@@ -833,15 +950,20 @@ fn grid_options(g: &GridArgs) -> Result<ResampleOptions> {
     };
     Ok(ResampleOptions {
         size,
-        mem_bytes: g.mem.unwrap_or_else(|| alloc::total_ram().map(|r| r / 4).unwrap_or(2 << 30)),
+        mem_bytes: g.mem.unwrap_or_else(default_mem),
         threads: g.threads,
         tmp_dir: g.tmp.clone(),
         slab_layers: g.slab,
+        grid_offset: g.grid_offset.unwrap_or([0.0; 3]),
+        work_dir: g.work.clone(),
+        parts: g.parts,
+        slabs: g.slabs,
+        max_hole: None,
         ..Default::default()
     })
 }
 
-fn report(g: &GridArgs, s: &mint_pipeline::ResampleSummary) -> Result<()> {
+pub(crate) fn report(g: &GridArgs, s: &mint_pipeline::ResampleSummary) -> Result<()> {
     if g.json {
         let mut v = serde_json::to_value(s)?;
         v["peak_heap_bytes"] = alloc::peak_heap().into();

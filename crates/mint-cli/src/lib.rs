@@ -8,6 +8,7 @@ pub mod alloc;
 mod commands;
 mod contour_cmds;
 mod range_cmds;
+mod stage_cmds;
 pub mod progress;
 pub mod units;
 

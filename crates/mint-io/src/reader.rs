@@ -188,6 +188,18 @@ pub(crate) trait FaceStream: Send {
     fn fill(&mut self, out: &mut Emit, stats: &mut ReadStats) -> Result<bool, Error>;
     /// Bytes of the input consumed so far.
     fn bytes_done(&self) -> u64;
+    /// The number of face records, when every record has the same size if
+    /// it is a triangle, so that records `first .. end` can be read alone
+    /// (binary PLY with one face element, binary STL). `None` otherwise.
+    fn splittable_records(&self) -> Option<u64> {
+        None
+    }
+    /// Restricts the stream to face records `first .. end`, each of which
+    /// must be a triangle (checked while reading). Only called when
+    /// [`FaceStream::splittable_records`] is `Some`.
+    fn restrict(&mut self, _first: u64, _end: u64) -> Result<(), Error> {
+        unreachable!("restrict called on a stream that cannot be split")
+    }
 }
 
 /// What a format module hands back from opening a file.
@@ -275,6 +287,37 @@ impl MeshReader {
             bytes_total,
             finished: false,
         })
+    }
+
+    /// Opens `path` to read only its face records `first .. end`, for
+    /// splitting one file's faces among independent workers. The file must
+    /// be splittable (see [`MeshReader::splittable_records`]); every record
+    /// in the range must be a triangle, or reading fails naming the record.
+    /// Chunks hold [`ReadOptions::chunk_triangles`] triangles counted from
+    /// `first`.
+    pub fn open_range(path: &Path, opts: ReadOptions, first: u64, end: u64) -> Result<MeshReader, Error> {
+        let mut r = MeshReader::open(path, opts)?;
+        match r.body.splittable_records() {
+            Some(n) if first <= end && end <= n => r.body.restrict(first, end)?,
+            Some(n) => {
+                return Err(Error::unsupported(path, format!("face records {first}..{end} asked of a file with {n}")));
+            }
+            None => {
+                return Err(Error::unsupported(
+                    path,
+                    "this file's faces cannot be read in parts (only binary PLY with one face element and binary STL can); convert it with `mint convert IN OUT.ply`",
+                ));
+            }
+        }
+        Ok(r)
+    }
+
+    /// The number of face records when the file's faces can be read in
+    /// independent ranges with [`MeshReader::open_range`] (binary PLY with
+    /// one face element whose other properties are fixed-size, binary STL),
+    /// else `None`.
+    pub fn splittable_records(&self) -> Option<u64> {
+        self.body.splittable_records()
     }
 
     /// The file this reader reads.

@@ -242,6 +242,16 @@ struct StlBody {
 }
 
 impl FaceStream for StlBody {
+    fn splittable_records(&self) -> Option<u64> {
+        self.binary.then_some(self.facets)
+    }
+
+    fn restrict(&mut self, first: u64, end: u64) -> Result<(), Error> {
+        self.next = first;
+        self.facets = end;
+        Ok(())
+    }
+
     fn fill(&mut self, out: &mut Emit, _stats: &mut ReadStats) -> Result<bool, Error> {
         while self.next < self.facets && out.room() {
             let k = self.next as u32 * 3;

@@ -1,20 +1,34 @@
-//! mint's out-of-core pipelines. Entry points read like a script: check the
-//! contract, then run named stages; each stage reports to a [`Progress`]
-//! hook that can also cancel the run.
+//! mint's out-of-core engine: one staged evaluation of solids on the grid
+//! for `resample` (one mesh), `bool` (two) and `csg` (meshes and analytic
+//! primitives under an expression). Entry points read like a script: check
+//! the contract, then run named stages; each stage reports to a
+//! [`Progress`] hook that can also cancel the run.
 //!
-//! - [`resample`]: Marching Intersections resampling of a mesh file
-//!   (stream faces → discretize → shard store → plan slabs → reconstruct
-//!   slabs in parallel → write in order);
-//! - [`csg`]: booleans and CSG trees of meshes and analytic primitives
-//!   ([`scene`] parses the scene files), on the same machinery.
+//! - [`engine`]: the drivers: a whole run in one process ([`resample`],
+//!   [`boolean`], [`csg`]), or one task at a time ([`plan_run`],
+//!   [`run_task`], [`status`]) for resuming and for clusters;
+//! - [`plan`]: what a run is (job, options, fingerprints, stages);
+//! - [`stages`]: the tasks of each stage and the reduces between stages;
+//! - [`passes`]: the parallel passes inside a task (bounds, discretize,
+//!   slab planning, ordered reconstruction);
+//! - [`workdir`]: task directories, atomic commits, checksums;
+//! - [`slurm`]: submitting a plan to a Slurm cluster;
+//! - [`scene`]: the CSG scene format.
 
-pub mod csg;
-mod output;
+pub mod engine;
+pub mod error;
+pub mod options;
+pub mod passes;
+pub mod plan;
 pub mod progress;
-pub mod resample;
 pub mod scene;
+pub mod slurm;
+pub mod stages;
+pub mod workdir;
 
+pub use engine::{boolean, csg, plan_run, resample, run_task, status, summarize_dir, RunStatus, StageStatus, TaskOptions, TaskOutcome};
+pub use error::PipelineError;
+pub use options::{ResampleOptions, ResampleSummary};
+pub use plan::{Job, Plan};
 pub use progress::{NoProgress, Phase, Progress};
-pub use csg::{boolean, csg};
-pub use resample::{resample, PipelineError, ResampleOptions, ResampleSummary};
 pub use scene::{parse_scene, Scene, SceneError};

@@ -49,6 +49,6 @@ pub use error::RangeError;
 pub type Merged<R> = (Vec<geom::V3>, Vec<[u32; 3]>, R);
 pub use geom::Rigid;
 pub use range_image::RangeImage;
-pub use scan_mesh::{load_scan, load_set, MeshOptions, ScanMesh};
+pub use scan_mesh::{load_scan, load_set, range_image_as_mesh, MeshOptions, ScanMesh};
 pub use scanset::{ScanEntry, ScanSet, SetFormat};
 pub use source::{ScanFiles, ScanSource};

@@ -360,3 +360,31 @@ mod tests {
         assert!((m.confidence[6 * 12 + 6] - 0.5).abs() < 1e-12);
     }
 }
+
+/// When `path` is a PLY range image (a `range_grid` of samples and no
+/// faces), triangulates it as one scan is (shorter diagonal, no bridging of
+/// depth jumps) into a temporary binary PLY in `dir`, removed when the
+/// returned file is dropped; `None` for any other file. This is how
+/// `mint resample` takes a range image: the engine sees a mesh.
+pub fn range_image_as_mesh(path: &Path, dir: &Path) -> Result<Option<tempfile::NamedTempFile>, RangeError> {
+    let reader = mint_io::MeshReader::open(path, mint_io::ReadOptions { chunk_triangles: 1, spill_dir: Some(dir.to_path_buf()), resolve_positions: false })?;
+    if reader.range_grid().is_none() || reader.info().face_count.unwrap_or(0) != 0 {
+        return Ok(None);
+    }
+    drop(reader);
+    let scan = load_scan(path, &MeshOptions::default())?;
+    let tmp = tempfile::Builder::new()
+        .prefix(".mint-range-")
+        .suffix(".ply")
+        .tempfile_in(dir)
+        .map_err(|source| RangeError::File { path: dir.to_path_buf(), what: "creating the range-image mesh", source })?;
+    let mut w = mint_io::MeshWriter::create(tmp.path(), mint_io::Format::Ply, mint_io::WriteOptions { double: true, ..Default::default() })?;
+    for p in &scan.positions {
+        w.write_vertex(*p)?;
+    }
+    for f in &scan.faces {
+        w.write_face(*f)?;
+    }
+    w.finish()?;
+    Ok(Some(tmp))
+}

@@ -1,30 +1,36 @@
 //! The on-disk intercept store.
 //!
-//! During discretization every [`Intercept`] is appended to one *shard* file
-//! chosen by its slab-axis plane: shard `b` holds planes
-//! `b * planes_per_shard .. (b + 1) * planes_per_shard`. Shards are plain
-//! concatenations of 16-byte little-endian records in arrival order (the
-//! format is in docs/FORMATS.md); order inside a shard does not matter
-//! because every reader sorts by [`Intercept::sort_key`]. The store also
-//! counts records per plane, which is what the slab planner needs to size
-//! slabs to the memory budget before any shard is read back.
+//! During discretization every [`Intercept`] is appended by a
+//! [`ShardWriter`] to one *shard* file chosen by its slab-axis plane: shard
+//! `b` holds planes `b * planes_per_shard .. (b + 1) * planes_per_shard`.
+//! Shards are plain concatenations of 16-byte little-endian records in
+//! arrival order (the format is in docs/FORMATS.md); order inside a shard
+//! does not matter because every reader sorts by [`Intercept::sort_key`],
+//! a total order. The writer counts records per plane and checksums every
+//! shard (CRC-32); [`ShardWriter::finish`] returns both as a
+//! [`ShardManifest`], which the caller stores beside the shards.
 //!
-//! Reading a plane range streams the shards that overlap it and keeps only
-//! the records in range, so memory follows what is kept, not shard size.
+//! A [`ShardSet`] reads plane ranges back from any number of such stores
+//! (one per part of the input, written by different processes or machines),
+//! streaming the shards that overlap the range, keeping only records in
+//! range, and checking each shard's length and checksum against its
+//! manifest, so a truncated or corrupted file is reported, never read as
+//! data. Memory follows what is kept, not shard size.
 //!
-//! All files live in one temporary directory under the caller's temp root; it
-//! is deleted when the [`ShardStore`] is dropped, on success, error or
-//! cancellation alike.
+//! The store does not own its directory: the staged engine (mint-pipeline)
+//! decides where shards live and when they are removed.
 
 use mint_core::intercept::FAMILY_S;
 use mint_core::Intercept;
+use serde::{Deserialize, Serialize};
 use std::fs::File;
-use std::io::{BufReader, BufWriter, Read, Write};
+use std::io::{BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
-/// Most shard files open at once while writing.
+/// Most shard files per store.
 pub const MAX_SHARDS: u32 = 256;
-const RECORD: usize = 16;
+/// Bytes per stored record.
+pub const RECORD: usize = 16;
 const WRITE_BUFFER: usize = 64 * 1024;
 
 /// Store failures; each names the file involved.
@@ -33,144 +39,213 @@ pub enum StoreError {
     /// Creating, writing or reading a shard failed (full disk, permissions…).
     #[error("{path}: {op}: {source}")]
     Io { path: PathBuf, op: &'static str, source: std::io::Error },
-    /// A shard's length is not a whole number of records: it was truncated
-    /// or changed by another process while mint ran.
-    #[error("{path}: shard length {len} is not a multiple of {RECORD} bytes (truncated or modified during the run)")]
-    Corrupt { path: PathBuf, len: u64 },
+    /// A shard's length or checksum is not the one its writer recorded: it
+    /// was truncated, damaged, or changed by another process. Fix: re-run
+    /// the task that wrote it (remove its task directory first).
+    #[error("{path}: {what} (the shard was truncated or damaged after it was written; re-run the task that wrote it)")]
+    Corrupt { path: PathBuf, what: String },
 }
 
 fn io_err<'a>(path: &'a Path, op: &'static str) -> impl FnOnce(std::io::Error) -> StoreError + 'a {
     move |source| StoreError::Io { path: path.to_path_buf(), op, source }
 }
 
-/// The shards of one run, with per-plane record counts.
-pub struct ShardStore {
-    dir: tempfile::TempDir,
-    planes: u32,
-    planes_per_shard: u32,
-    writers: Vec<Option<BufWriter<File>>>,
-    counts: Vec<u64>,
-    bytes_written: u64,
+/// One shard file as its writer left it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ShardFile {
+    /// Shard number (its planes are `index * planes_per_shard ..`).
+    pub index: u32,
+    /// Length in bytes.
+    pub len: u64,
+    /// CRC-32 (IEEE) of the whole file.
+    pub crc32: u32,
 }
 
-impl ShardStore {
-    /// Creates an empty store for `planes` slab-axis planes in a new
-    /// temporary directory under `tmp_root`.
-    pub fn create(tmp_root: &Path, planes: u32) -> Result<ShardStore, StoreError> {
-        let dir = tempfile::Builder::new()
-            .prefix(".mint-shards-")
-            .tempdir_in(tmp_root)
-            .map_err(io_err(tmp_root, "creating the shard directory"))?;
+/// What a finished [`ShardWriter`] wrote: enough to read the shards back
+/// and to check them.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ShardManifest {
+    /// Slab-axis planes covered (records have `plane < planes`).
+    pub planes: u32,
+    pub planes_per_shard: u32,
+    /// Records per plane (families A and B of plane k, S of layer k).
+    pub counts: Vec<u64>,
+    /// The shard files that exist (shards never written are empty).
+    pub shards: Vec<ShardFile>,
+}
+
+impl ShardManifest {
+    /// Total records.
+    pub fn records(&self) -> u64 {
+        self.counts.iter().sum()
+    }
+    /// Total bytes of the shard files.
+    pub fn bytes(&self) -> u64 {
+        self.shards.iter().map(|s| s.len).sum()
+    }
+}
+
+/// The file name of shard `index`.
+pub fn shard_name(index: u32) -> String {
+    format!("shard-{index:05}.bin")
+}
+
+struct OpenShard {
+    file: BufWriter<File>,
+    crc: crc32fast::Hasher,
+    len: u64,
+}
+
+/// Appends records to the shards of one store in an existing directory.
+pub struct ShardWriter {
+    dir: PathBuf,
+    planes: u32,
+    planes_per_shard: u32,
+    open: Vec<Option<OpenShard>>,
+    counts: Vec<u64>,
+}
+
+impl ShardWriter {
+    /// A writer for `planes` slab-axis planes into `dir` (which must exist).
+    pub fn create(dir: &Path, planes: u32) -> ShardWriter {
         let planes = planes.max(1);
         let planes_per_shard = planes.div_ceil(MAX_SHARDS);
         let shards = planes.div_ceil(planes_per_shard);
-        Ok(ShardStore {
-            dir,
+        ShardWriter {
+            dir: dir.to_path_buf(),
             planes,
             planes_per_shard,
-            writers: (0..shards).map(|_| None).collect(),
+            open: (0..shards).map(|_| None).collect(),
             counts: vec![0; planes as usize],
-            bytes_written: 0,
-        })
+        }
     }
 
-    /// The temporary directory holding the shards.
-    pub fn dir(&self) -> &Path {
-        self.dir.path()
-    }
-
-    fn shard_path(&self, shard: u32) -> PathBuf {
-        self.dir.path().join(format!("shard-{shard:05}.bin"))
-    }
-
-    /// Appends records (any planes, any order).
+    /// Appends records (any planes below `planes`, any order).
     pub fn append(&mut self, records: &[Intercept]) -> Result<(), StoreError> {
         for r in records {
             debug_assert!(r.plane < self.planes);
-            let shard = r.plane / self.planes_per_shard;
-            if self.writers[shard as usize].is_none() {
-                let path = self.shard_path(shard);
+            let shard = (r.plane / self.planes_per_shard) as usize;
+            if self.open[shard].is_none() {
+                let path = self.dir.join(shard_name(shard as u32));
                 let f = File::create(&path).map_err(io_err(&path, "creating a shard"))?;
-                self.writers[shard as usize] = Some(BufWriter::with_capacity(WRITE_BUFFER, f));
+                self.open[shard] = Some(OpenShard { file: BufWriter::with_capacity(WRITE_BUFFER, f), crc: crc32fast::Hasher::new(), len: 0 });
             }
-            let w = self.writers[shard as usize].as_mut().unwrap();
-            if let Err(e) = w.write_all(&r.to_le_bytes()) {
-                let path = self.shard_path(shard);
+            let s = self.open[shard].as_mut().unwrap();
+            let bytes = r.to_le_bytes();
+            if let Err(e) = s.file.write_all(&bytes) {
+                let path = self.dir.join(shard_name(shard as u32));
                 return Err(io_err(&path, "writing a shard")(e));
             }
+            s.crc.update(&bytes);
+            s.len += RECORD as u64;
             self.counts[r.plane as usize] += 1;
         }
-        self.bytes_written += (records.len() * RECORD) as u64;
         Ok(())
     }
 
-    /// Flushes and closes all shard writers. Call before reading.
-    pub fn finish_writing(&mut self) -> Result<(), StoreError> {
-        for shard in 0..self.writers.len() {
-            if let Some(mut w) = self.writers[shard].take() {
-                let path = self.shard_path(shard as u32);
-                w.flush().map_err(io_err(&path, "writing a shard"))?;
+    /// Flushes, syncs and closes every shard; returns the manifest.
+    pub fn finish(self) -> Result<ShardManifest, StoreError> {
+        let mut shards = Vec::new();
+        for (index, s) in self.open.into_iter().enumerate() {
+            if let Some(s) = s {
+                let path = self.dir.join(shard_name(index as u32));
+                let f = s.file.into_inner().map_err(|e| io_err(&path, "writing a shard")(e.into_error()))?;
+                f.sync_all().map_err(io_err(&path, "writing a shard"))?;
+                shards.push(ShardFile { index: index as u32, len: s.len, crc32: s.crc.finalize() });
             }
         }
-        Ok(())
+        Ok(ShardManifest { planes: self.planes, planes_per_shard: self.planes_per_shard, counts: self.counts, shards })
+    }
+}
+
+/// Several stores read as one: the records of a plane are those of every
+/// store, in store order.
+#[derive(Debug, Clone, Default)]
+pub struct ShardSet {
+    parts: Vec<(PathBuf, ShardManifest)>,
+}
+
+impl ShardSet {
+    /// An empty set.
+    pub fn new() -> ShardSet {
+        ShardSet::default()
     }
 
-    /// Records stored per plane (families A, B of plane k and S of layer k).
-    pub fn plane_counts(&self) -> &[u64] {
-        &self.counts
+    /// Adds the store in `dir` described by `manifest`.
+    pub fn push(&mut self, dir: PathBuf, manifest: ShardManifest) {
+        self.parts.push((dir, manifest));
     }
 
-    /// Total bytes appended.
-    pub fn bytes_written(&self) -> u64 {
-        self.bytes_written
+    /// Records per plane, summed over the stores (length: the most planes
+    /// of any store).
+    pub fn plane_counts(&self) -> Vec<u64> {
+        let n = self.parts.iter().map(|(_, m)| m.counts.len()).max().unwrap_or(0);
+        let mut c = vec![0u64; n];
+        for (_, m) in &self.parts {
+            for (a, b) in c.iter_mut().zip(&m.counts) {
+                *a += b;
+            }
+        }
+        c
     }
 
     /// Reads planes `first ..= last` into one vector per plane (unsorted).
     /// For the last plane, only family-A and -B records are kept when
     /// `boundary_last` is set (the slab above owns its layer).
     pub fn read_planes(&self, first: u32, last: u32, boundary_last: bool) -> Result<Vec<Vec<Intercept>>, StoreError> {
-        let mut out: Vec<Vec<Intercept>> = (first..=last)
-            .map(|k| {
-                let n = self.counts.get(k as usize).copied().unwrap_or(0);
-                Vec::with_capacity(n as usize)
-            })
-            .collect();
-        if first >= self.planes {
-            return Ok(out);
-        }
-        let last_in = last.min(self.planes - 1);
+        let counts = self.plane_counts();
+        let mut out: Vec<Vec<Intercept>> =
+            (first..=last).map(|k| Vec::with_capacity(counts.get(k as usize).copied().unwrap_or(0) as usize)).collect();
         let mut buf = vec![0u8; 1 << 20];
-        for shard in first / self.planes_per_shard..=last_in / self.planes_per_shard {
-            let path = self.shard_path(shard);
-            let file = match File::open(&path) {
-                Ok(f) => f,
-                Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue, // never written: empty
-                Err(e) => return Err(io_err(&path, "opening a shard")(e)),
-            };
-            let len = file.metadata().map_err(io_err(&path, "reading a shard"))?.len();
-            if len % RECORD as u64 != 0 {
-                return Err(StoreError::Corrupt { path, len });
+        for (dir, m) in &self.parts {
+            if first >= m.planes {
+                continue;
             }
-            let mut reader = BufReader::with_capacity(1 << 16, file);
-            let mut remaining = len as usize;
-            while remaining > 0 {
-                let n = remaining.min(buf.len());
-                reader.read_exact(&mut buf[..n]).map_err(io_err(&path, "reading a shard"))?;
-                remaining -= n;
-                for rec in buf[..n].chunks_exact(RECORD) {
-                    let r = Intercept::from_le_bytes(rec);
-                    if r.plane < first || r.plane > last {
-                        continue;
-                    }
-                    if boundary_last && r.plane == last && r.family() == FAMILY_S {
-                        continue;
+            let last_in = last.min(m.planes - 1);
+            let (s0, s1) = (first / m.planes_per_shard, last_in / m.planes_per_shard);
+            for shard in m.shards.iter().filter(|s| s.index >= s0 && s.index <= s1) {
+                let path = dir.join(shard_name(shard.index));
+                read_shard(&path, shard, &mut buf, |r| {
+                    if r.plane < first || r.plane > last || (boundary_last && r.plane == last && r.family() == FAMILY_S) {
+                        return;
                     }
                     out[(r.plane - first) as usize].push(r);
-                }
+                })?;
             }
         }
         Ok(out)
     }
+}
+
+/// Streams one shard's records to `keep`, checking its length and checksum.
+fn read_shard(path: &Path, want: &ShardFile, buf: &mut [u8], mut keep: impl FnMut(Intercept)) -> Result<(), StoreError> {
+    let mut file = match File::open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(StoreError::Corrupt { path: path.to_path_buf(), what: "the shard is missing".into() })
+        }
+        Err(e) => return Err(io_err(path, "opening a shard")(e)),
+    };
+    let len = file.metadata().map_err(io_err(path, "reading a shard"))?.len();
+    if len != want.len {
+        return Err(StoreError::Corrupt { path: path.to_path_buf(), what: format!("{len} bytes, {} were written", want.len) });
+    }
+    let mut crc = crc32fast::Hasher::new();
+    let mut remaining = len as usize;
+    while remaining > 0 {
+        let n = remaining.min(buf.len());
+        file.read_exact(&mut buf[..n]).map_err(io_err(path, "reading a shard"))?;
+        remaining -= n;
+        crc.update(&buf[..n]);
+        for rec in buf[..n].chunks_exact(RECORD) {
+            keep(Intercept::from_le_bytes(rec));
+        }
+    }
+    let got = crc.finalize();
+    if got != want.crc32 {
+        return Err(StoreError::Corrupt { path: path.to_path_buf(), what: format!("checksum {got:08x}, {:08x} was written", want.crc32) });
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -178,45 +253,61 @@ mod tests {
     use super::*;
     use mint_core::intercept::{FAMILY_A, FAMILY_B};
 
-    #[test]
-    fn records_come_back_by_plane_and_the_directory_is_removed() {
-        let root = tempfile::tempdir().unwrap();
-        let dir;
-        {
-            let mut s = ShardStore::create(root.path(), 1000).unwrap();
-            dir = s.dir().to_path_buf();
-            let mut recs = Vec::new();
-            for k in 0..1000u32 {
-                for fam in [FAMILY_A, FAMILY_B, FAMILY_S] {
-                    recs.push(Intercept::new(k, fam, k % 7, 1.5 + k as f64, k % 2 == 0));
-                }
+    fn records(planes: u32) -> Vec<Intercept> {
+        let mut recs = Vec::new();
+        for k in 0..planes {
+            for fam in [FAMILY_A, FAMILY_B, FAMILY_S] {
+                recs.push(Intercept::new(k, fam, k % 7, 1.5 + k as f64, k % 2 == 0));
             }
-            s.append(&recs).unwrap();
-            s.finish_writing().unwrap();
-            assert_eq!(s.plane_counts().iter().sum::<u64>(), 3000);
-            assert_eq!(s.plane_counts()[17], 3);
-            let planes = s.read_planes(10, 20, true).unwrap();
-            assert_eq!(planes.len(), 11);
-            assert!(planes[..10].iter().all(|p| p.len() == 3));
-            assert_eq!(planes[10].len(), 2, "boundary plane keeps A and B only");
-            assert!(planes[3].iter().all(|r| r.plane == 13));
-            let all = s.read_planes(0, 999, false).unwrap();
-            assert_eq!(all.iter().map(|p| p.len()).sum::<usize>(), 3000);
-            assert!(dir.exists());
         }
-        assert!(!dir.exists(), "shard directory removed on drop");
+        recs
     }
 
     #[test]
-    fn a_truncated_shard_is_reported_with_its_path() {
+    fn records_come_back_by_plane_from_several_stores() {
         let root = tempfile::tempdir().unwrap();
-        let mut s = ShardStore::create(root.path(), 4).unwrap();
-        s.append(&[Intercept::new(1, FAMILY_A, 0, 1.5, true)]).unwrap();
-        s.finish_writing().unwrap();
-        let shard = std::fs::read_dir(s.dir()).unwrap().next().unwrap().unwrap().path();
-        let f = std::fs::OpenOptions::new().write(true).open(&shard).unwrap();
-        f.set_len(10).unwrap();
-        let e = s.read_planes(0, 3, false).unwrap_err();
-        assert!(e.to_string().contains("shard-"), "{e}");
+        let mut set = ShardSet::new();
+        let recs = records(1000);
+        for (i, half) in recs.chunks(1500).enumerate() {
+            let dir = root.path().join(format!("part-{i}"));
+            std::fs::create_dir(&dir).unwrap();
+            let mut w = ShardWriter::create(&dir, 1000);
+            w.append(half).unwrap();
+            let m = w.finish().unwrap();
+            assert_eq!(m.records(), 1500);
+            set.push(dir, m);
+        }
+        let counts = set.plane_counts();
+        assert_eq!(counts.iter().sum::<u64>(), 3000);
+        assert_eq!(counts[17], 3);
+        let planes = set.read_planes(10, 20, true).unwrap();
+        assert_eq!(planes.len(), 11);
+        assert!(planes[..10].iter().all(|p| p.len() == 3));
+        assert_eq!(planes[10].len(), 2, "boundary plane keeps A and B only");
+        assert!(planes[3].iter().all(|r| r.plane == 13));
+        let all = set.read_planes(0, 999, false).unwrap();
+        assert_eq!(all.iter().map(|p| p.len()).sum::<usize>(), 3000);
+    }
+
+    #[test]
+    fn a_truncated_or_damaged_shard_is_reported_with_its_path() {
+        let root = tempfile::tempdir().unwrap();
+        let mut w = ShardWriter::create(root.path(), 4);
+        w.append(&[Intercept::new(1, FAMILY_A, 0, 1.5, true), Intercept::new(2, FAMILY_B, 0, 2.5, false)]).unwrap();
+        let m = w.finish().unwrap();
+        let mut set = ShardSet::new();
+        set.push(root.path().to_path_buf(), m);
+        let shard = root.path().join(shard_name(0));
+        let mut bytes = std::fs::read(&shard).unwrap();
+        bytes[9] ^= 1;
+        std::fs::write(&shard, &bytes).unwrap();
+        let e = set.read_planes(0, 3, false).unwrap_err();
+        assert!(e.to_string().contains("shard-00000.bin") && e.to_string().contains("checksum"), "{e}");
+        std::fs::write(&shard, &bytes[..10]).unwrap();
+        let e = set.read_planes(0, 3, false).unwrap_err();
+        assert!(e.to_string().contains("10 bytes, 32 were written"), "{e}");
+        std::fs::remove_file(&shard).unwrap();
+        let e = set.read_planes(0, 3, false).unwrap_err();
+        assert!(e.to_string().contains("missing"), "{e}");
     }
 }

@@ -90,6 +90,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         cur: None,
         finished: false,
         bytes_done: 0,
+        range_only: false,
     };
     body.next_offset = body.header.body;
     let mut positions = Positions::empty();
@@ -439,6 +440,9 @@ struct Cursor {
     ls: Option<ListState>,
     /// True if the element was reached by the walk (its end continues it).
     walked: bool,
+    /// Reading a range of records (`MeshReader::open_range`): every record
+    /// must be a triangle, so that records have one size.
+    tri_only: bool,
 }
 
 /// Progress through one index list.
@@ -466,6 +470,8 @@ pub(crate) struct PlyBody {
     cur: Option<Cursor>,
     finished: bool,
     bytes_done: u64,
+    /// Only a range of one face element's records is read (see `restrict`).
+    range_only: bool,
 }
 
 impl PlyBody {
@@ -665,7 +671,7 @@ impl PlyBody {
         };
         let Role::Faces { list, strip } = self.roles[elem] else { unreachable!() };
         let count = self.header.elements[elem].count;
-        self.cur = Some(Cursor { elem, list, strip, count, record: 0, pos: start, rec_start: start, ls: None, walked });
+        self.cur = Some(Cursor { elem, list, strip, count, record: 0, pos: start, rec_start: start, ls: None, walked, tri_only: false });
         Ok(())
     }
 
@@ -881,11 +887,53 @@ fn stream_records<S: Src>(
         cur.rec_start = s.mark();
         s.skip_props(&el.props[..cur.list]).map_err(|e| ctx.src(e, cur.record, cur.rec_start))?;
         let n = s.list_len(cty).map_err(|e| ctx.src(e, cur.record, cur.rec_start))?;
+        if cur.tri_only && n != 3 {
+            let e = Error::unsupported(
+                ctx.path,
+                format!("a face with {n} corners: a file read in parts must hold only triangles (run it as one part, --parts 1)"),
+            );
+            return Err(ctx.at(e, cur.record, cur.rec_start));
+        }
         cur.ls = Some(ListState { left: n, len: n, seen: 0, a: 0, b: 0, odd: false });
     }
 }
 
 impl FaceStream for PlyBody {
+    fn splittable_records(&self) -> Option<u64> {
+        if self.header.encoding == Encoding::Ascii {
+            return None;
+        }
+        let mut faces = self.roles.iter().enumerate().filter(|(_, r)| matches!(r, Role::Faces { .. }));
+        let (e, Role::Faces { list, strip: false }) = faces.next()? else { return None };
+        if faces.next().is_some() || self.range_only {
+            return None;
+        }
+        let el = &self.header.elements[e];
+        let others_fixed = el.props.iter().enumerate().all(|(i, p)| i == *list || matches!(p.ty, PropType::Scalar(_)));
+        others_fixed.then_some(el.count)
+    }
+
+    fn restrict(&mut self, first: u64, end: u64) -> Result<(), Error> {
+        self.start_next()?;
+        let Some((elem, list, start)) = self.cur.as_ref().map(|c| (c.elem, c.list, c.pos)) else { return Ok(()) };
+        let el = &self.header.elements[elem];
+        let PropType::List { count: cty, item: ity } = el.props[list].ty else { unreachable!() };
+        let others: usize = el.props.iter().map(|p| if let PropType::Scalar(s) = p.ty { s.size() } else { 0 }).sum();
+        let stride = others + cty.size() + 3 * ity.size();
+        let map = self.map.clone();
+        fixed_end(&self.ctx(map.bytes(), elem), start, stride, end)?;
+        let Some(cur) = self.cur.as_mut() else { unreachable!() };
+        cur.pos = start + first as usize * stride;
+        cur.rec_start = cur.pos;
+        cur.record = first;
+        cur.count = end;
+        cur.walked = false;
+        cur.tri_only = true;
+        self.bytes_done = cur.pos as u64;
+        self.range_only = true;
+        Ok(())
+    }
+
     fn fill(&mut self, out: &mut Emit, stats: &mut ReadStats) -> Result<bool, Error> {
         while !self.finished {
             if self.cur.is_none() {
@@ -893,6 +941,10 @@ impl FaceStream for PlyBody {
                 continue;
             }
             let ended = self.stream(out, stats)?;
+            if ended && self.range_only {
+                self.finished = true;
+                break;
+            }
             if !ended && !out.room() {
                 return Ok(true);
             }

@@ -1,0 +1,51 @@
+//! Why a run or a task failed: [`PipelineError`]. Each variant's text is one
+//! line naming the file (input, work directory or output) and what to do.
+
+use mint_core::grid::GridError;
+use mint_store::StoreError;
+use std::path::PathBuf;
+
+/// Why a run failed. Each variant's text is one line naming the file.
+#[derive(Debug, thiserror::Error)]
+pub enum PipelineError {
+    /// Reading the input or writing the output failed (bad input, full disk…).
+    #[error(transparent)]
+    Io(#[from] mint_io::Error),
+    /// The shard store failed, or a shard is damaged.
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    /// The grid cannot be built; the message says which option to change.
+    #[error("{path}: {source}")]
+    Grid { path: PathBuf, source: GridError },
+    /// A vertex position is NaN or infinite.
+    #[error("{path}: vertex {index} has a non-finite coordinate ({x}, {y}, {z})")]
+    NonFinite { path: PathBuf, index: u64, x: f64, y: f64, z: f64 },
+    /// The input has no triangles.
+    #[error("{path}: the mesh has no triangles to resample")]
+    Empty { path: PathBuf },
+    /// A temporary or work file failed.
+    #[error("{path}: {op}: {source}")]
+    Temp { path: PathBuf, op: &'static str, source: std::io::Error },
+    /// A CSG scene whose result is unbounded (e.g. a lone half-space).
+    #[error("{path}: the scene is unbounded (intersect half-spaces with a bounded solid)")]
+    Unbounded { path: PathBuf },
+    /// A staged run's work directory, plan or task results are not what
+    /// the command needs: another input or options, a missing or damaged
+    /// task result, a plan of another version. The message says which and
+    /// what to do.
+    #[error("{path}: {message}")]
+    Stage { path: PathBuf, message: String },
+    /// A scene file could not be read or parsed.
+    #[error(transparent)]
+    Scene(#[from] crate::scene::SceneError),
+    /// The user interrupted the run; temporary files were removed.
+    #[error("interrupted; no output written")]
+    Cancelled,
+}
+
+impl PipelineError {
+    /// A [`PipelineError::Stage`] error.
+    pub(crate) fn stage(path: impl Into<PathBuf>, message: impl Into<String>) -> PipelineError {
+        PipelineError::Stage { path: path.into(), message: message.into() }
+    }
+}

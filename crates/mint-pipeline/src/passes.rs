@@ -1,0 +1,334 @@
+//! The parallel passes the stages are made of, each over one input or one
+//! range of layers, with `threads` workers inside one process:
+//! [`bounds`] (a range of vertices → a box, checking finiteness),
+//! [`discretize_all`] (a stream of triangles → intercept records in a shard
+//! store, plus the signed volume per chunk), [`plan_slabs`] (a layer range →
+//! sub-slabs that fit the memory budget) and [`reconstruct_ordered`] (sub-slabs
+//! reconstructed in parallel, handed on strictly in order, with at most
+//! `threads + 1` results in memory).
+
+use crate::error::PipelineError;
+use crate::progress::{Phase, Progress};
+use mint_core::grid::Grid;
+use mint_core::primitives::Transform;
+use mint_core::reconstruct::{crossing_to_intercept, SlabResult};
+use mint_core::signs::RepairStats;
+use mint_core::{discretize_triangle, FilterStats, Intercept};
+use mint_io::{MeshReader, TriangleChunk, VertexPositions};
+use mint_store::{ShardWriter, StoreError};
+use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Condvar, Mutex};
+
+/// Triangles per chunk handed from the reader to the workers. Parts of a
+/// split input start at multiples of it, so that the per-chunk volumes (and
+/// their sum) do not depend on the split.
+pub const CHUNK_TRIANGLES: usize = 64 * 1024;
+/// Estimated heap bytes per stored record while its slab is reconstructed:
+/// the record, its vertex, about two faces, active-cell ids, and slack.
+pub const BYTES_PER_RECORD_IN_SLAB: u64 = 128;
+/// Heap kept aside for channels, chunk buffers and shard write buffers.
+pub const FIXED_RESERVE: u64 = 48 << 20;
+
+pub(crate) fn check_cancel(progress: &dyn Progress) -> Result<(), PipelineError> {
+    if progress.cancelled() {
+        Err(PipelineError::Cancelled)
+    } else {
+        Ok(())
+    }
+}
+
+/// The bounding box of vertices `range` (after `xf`), read from the map in
+/// parallel; `None` for an empty range. Also the check that every vertex is
+/// finite, so that workers resolving indices later need not check again.
+pub(crate) fn bounds(
+    positions: &VertexPositions,
+    range: (u64, u64),
+    path: &Path,
+    threads: usize,
+    progress: &dyn Progress,
+    xf: Option<&Transform>,
+) -> Result<Option<([f64; 3], [f64; 3])>, PipelineError> {
+    let (first, end) = range;
+    let n = end - first;
+    progress.start(Phase::Bounds, n);
+    let per = n.div_ceil(threads as u64).max(1);
+    let parts: Vec<Result<([f64; 3], [f64; 3]), PipelineError>> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads as u64)
+            .map(|t| {
+                s.spawn(move || {
+                    let mut lo = [f64::INFINITY; 3];
+                    let mut hi = [f64::NEG_INFINITY; 3];
+                    let (a, b) = (first + (t * per).min(n), first + ((t + 1) * per).min(n));
+                    for i in a..b {
+                        let p = positions.get(i as u32);
+                        if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
+                            return Err(PipelineError::NonFinite { path: path.to_path_buf(), index: i, x: p[0], y: p[1], z: p[2] });
+                        }
+                        let p = match xf {
+                            Some(t) => t.apply_point(p),
+                            None => p,
+                        };
+                        for d in 0..3 {
+                            lo[d] = lo[d].min(p[d]);
+                            hi[d] = hi[d].max(p[d]);
+                        }
+                        if (i - a) % (1 << 20) == (1 << 20) - 1 {
+                            progress.advance(1 << 20);
+                        }
+                    }
+                    Ok((lo, hi))
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().expect("bounds worker panicked")).collect()
+    });
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for part in parts {
+        let (l, h) = part?;
+        for d in 0..3 {
+            lo[d] = lo[d].min(l[d]);
+            hi[d] = hi[d].max(h[d]);
+        }
+    }
+    progress.finish();
+    Ok((n > 0).then_some((lo, hi)))
+}
+
+/// Streams every triangle of `reader` through the workers into `store`.
+/// Returns the number of triangles read and six times the signed volume of
+/// each chunk (in grid units), in chunk order, so that their sum does not
+/// depend on threads or on how the input was split into parts.
+pub(crate) fn discretize_all(
+    reader: &mut MeshReader,
+    grid: &Grid,
+    store: &mut ShardWriter,
+    threads: usize,
+    progress: &dyn Progress,
+    xf: Option<&Transform>,
+    expected_faces: u64,
+) -> Result<(u64, Vec<f64>), PipelineError> {
+    use crossbeam_channel::bounded;
+    let [_, nb, _] = grid.local_dims();
+    let positions = reader.positions();
+    let positions = &positions;
+    let (chunk_tx, chunk_rx) = bounded::<(usize, TriangleChunk)>(threads * 2);
+    let (free_tx, free_rx) = bounded::<TriangleChunk>(threads * 3 + 2);
+    let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
+    progress.start(Phase::Discretize, expected_faces);
+    let mut faces = 0u64;
+    let mut volumes: Vec<f64> = Vec::new();
+    let result: Result<(), PipelineError> = std::thread::scope(|s| {
+        for _ in 0..threads {
+            let (chunk_rx, free_tx, rec_tx) = (chunk_rx.clone(), free_tx.clone(), rec_tx.clone());
+            s.spawn(move || {
+                for (seq, chunk) in chunk_rx {
+                    let mut recs = Vec::with_capacity(chunk.indices.len() / 4 + 16);
+                    let mut volume = 0.0;
+                    for tri in &chunk.indices {
+                        // Indices were range-checked by the reader; positions
+                        // were checked finite by the bounds pass.
+                        let at = |i: u32| {
+                            let p = positions.get(i);
+                            grid.to_local(match xf {
+                                Some(t) => t.apply_point(p),
+                                None => p,
+                            })
+                        };
+                        let local = [at(tri[0]), at(tri[1]), at(tri[2])];
+                        volume += signed_volume6(&local);
+                        discretize_triangle(&local, |c| recs.push(crossing_to_intercept(&c, nb)));
+                    }
+                    let _ = free_tx.try_send(chunk);
+                    if rec_tx.send((seq, recs, volume)).is_err() {
+                        return; // the writer stopped on an error
+                    }
+                }
+            });
+        }
+        drop((chunk_rx, free_tx, rec_tx));
+        let volumes = &mut volumes;
+        let writer = s.spawn(move || -> Result<(), StoreError> {
+            for (seq, recs, volume) in rec_rx {
+                if volumes.len() <= seq {
+                    volumes.resize(seq + 1, 0.0);
+                }
+                volumes[seq] = volume;
+                store.append(&recs)?;
+            }
+            Ok(())
+        });
+        let read: Result<(), PipelineError> = (|| {
+            let mut seq = 0usize;
+            loop {
+                check_cancel(progress)?;
+                let mut chunk = free_rx.try_recv().unwrap_or_default();
+                if !reader.next_chunk(&mut chunk)? {
+                    return Ok(());
+                }
+                let n = chunk.indices.len() as u64;
+                faces += n;
+                if chunk_tx.send((seq, chunk)).is_err() {
+                    return Ok(()); // workers gone: the writer failed; its error follows
+                }
+                seq += 1;
+                progress.advance(n);
+            }
+        })();
+        drop(chunk_tx);
+        let written = writer.join().expect("shard writer panicked");
+        read?;
+        written?;
+        Ok(())
+    });
+    result?;
+    progress.finish();
+    Ok((faces, volumes))
+}
+
+/// Six times the signed volume of the tetrahedron (origin, a, b, c).
+#[inline]
+fn signed_volume6(t: &[[f64; 3]; 3]) -> f64 {
+    let [a, b, c] = t;
+    a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0])
+}
+
+/// Splits layers `first .. ns` into slabs `(k0, k1)`: layers `k0 .. k1`,
+/// reading planes `k0 ..= k1`. With `fixed`, every slab has that many
+/// layers; otherwise slabs grow while their planes' records fit `budget`
+/// bytes (never below one layer).
+pub fn plan_slabs(counts: &[u64], first: u32, ns: u32, fixed: Option<u32>, budget: u64) -> Vec<(u32, u32)> {
+    let mut slabs = Vec::new();
+    let mut k0 = first;
+    while k0 < ns {
+        let mut k1 = k0 + 1;
+        match fixed {
+            Some(n) => k1 = (k0 + n.max(1)).min(ns),
+            None => {
+                let bytes = |k: u32| counts.get(k as usize).copied().unwrap_or(0) * BYTES_PER_RECORD_IN_SLAB;
+                let mut used = bytes(k0) + bytes(k1);
+                while k1 < ns && used + bytes(k1 + 1) <= budget {
+                    k1 += 1;
+                    used += bytes(k1);
+                }
+            }
+        }
+        slabs.push((k0, k1));
+        k0 = k1;
+    }
+    slabs
+}
+
+/// A progress hook that only forwards cancellation (for hidden passes).
+pub(crate) fn cancel_only(p: &dyn Progress) -> impl Progress + '_ {
+    struct CancelOnly<'a>(&'a dyn Progress);
+    impl Progress for CancelOnly<'_> {
+        fn cancelled(&self) -> bool {
+            self.0.cancelled()
+        }
+    }
+    CancelOnly(p)
+}
+
+/// What one slab's reconstruction returns.
+pub(crate) type Done = (SlabResult, FilterStats, RepairStats);
+
+/// Reconstructs `slabs` on `threads` workers and hands results to `emit`
+/// strictly in slab order. At most `threads + 1` slabs are held at once.
+pub(crate) fn reconstruct_ordered(
+    slabs: &[(u32, u32)],
+    threads: usize,
+    compute: &(dyn Fn(u32, u32) -> Result<Done, PipelineError> + Sync),
+    progress: &dyn Progress,
+    emit: &mut dyn FnMut(SlabResult, FilterStats, RepairStats, u64) -> Result<(), PipelineError>,
+) -> Result<(), PipelineError> {
+    let window = threads as u64 + 1;
+    let next = AtomicU64::new(0);
+    let written = (Mutex::new(0u64), Condvar::new());
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let (tx, rx) = crossbeam_channel::unbounded::<(u64, Result<Done, PipelineError>)>();
+    std::thread::scope(|s| {
+        for _ in 0..threads {
+            let tx = tx.clone();
+            let (next, written, stop) = (&next, &written, &stop);
+            s.spawn(move || loop {
+                let i = next.fetch_add(1, Ordering::SeqCst);
+                if i >= slabs.len() as u64 || stop.load(Ordering::SeqCst) {
+                    return;
+                }
+                {
+                    let (lock, cv) = written;
+                    let mut w = lock.lock().unwrap();
+                    while i >= *w + window && !stop.load(Ordering::SeqCst) {
+                        w = cv.wait(w).unwrap();
+                    }
+                }
+                let (k0, k1) = slabs[i as usize];
+                let r = compute(k0, k1);
+                if tx.send((i, r)).is_err() {
+                    return;
+                }
+            });
+        }
+        drop(tx);
+        let mut pending = std::collections::BTreeMap::new();
+        let mut want = 0u64;
+        let mut outcome = Ok(());
+        for (i, r) in rx.iter() {
+            pending.insert(i, r);
+            while let Some(r) = pending.remove(&want) {
+                let step = r.and_then(|(res, f, rep)| {
+                    let (k0, k1) = slabs[want as usize];
+                    emit(res, f, rep, (k1 - k0) as u64)
+                });
+                let step = step.and_then(|_| check_cancel(progress));
+                if let Err(e) = step {
+                    outcome = Err(e);
+                    stop.store(true, Ordering::SeqCst);
+                }
+                want += 1;
+                let (lock, cv) = &written;
+                *lock.lock().unwrap() = want;
+                cv.notify_all();
+                if outcome.is_err() {
+                    break;
+                }
+            }
+            if outcome.is_err() {
+                break;
+            }
+        }
+        if outcome.is_err() {
+            stop.store(true, Ordering::SeqCst);
+            let (lock, cv) = &written;
+            *lock.lock().unwrap() = u64::MAX / 2;
+            cv.notify_all();
+        }
+        outcome
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fixed_slabs_cover_every_layer_once() {
+        let counts = vec![5u64; 11];
+        assert_eq!(plan_slabs(&counts, 0, 10, Some(3), 0), vec![(0, 3), (3, 6), (6, 9), (9, 10)]);
+        assert_eq!(plan_slabs(&counts, 0, 10, Some(1), 0).len(), 10);
+    }
+
+    #[test]
+    fn budget_slabs_grow_until_full_but_never_below_one_layer() {
+        let counts = vec![10u64; 11];
+        let per = 10 * BYTES_PER_RECORD_IN_SLAB;
+        assert_eq!(plan_slabs(&counts, 0, 10, None, 0).len(), 10);
+        // Room for 4 planes = 3 layers.
+        let s = plan_slabs(&counts, 0, 10, None, 4 * per);
+        assert_eq!(s[0], (0, 3));
+        assert_eq!(s.last().unwrap().1, 10);
+        assert_eq!(plan_slabs(&counts, 0, 10, None, u64::MAX), vec![(0, 10)]);
+    }
+}

@@ -1,0 +1,728 @@
+//! The stages of the engine, each a function of one task, and the small
+//! reduce steps between them. A task reads the plan and the results of the
+//! stages before it, and writes only into its own [`TaskBuild`].
+//!
+//! | stage         | tasks  | reads                         | writes                                   |
+//! |---------------|--------|-------------------------------|------------------------------------------|
+//! | `bounds`      | parts  | a range of each mesh's vertices | its box (JSON)                         |
+//! | `discretize`  | parts  | a range of each mesh's faces  | shards per mesh, counts, chunk volumes   |
+//! | `census`      | slabs  | the slab's planes (all parts) | line census per mesh (JSON)              |
+//! | `holes`       | slabs  | the slab's planes             | hole-capping cell ids (`holes.bin`)      |
+//! | `reconstruct` | slabs  | the slab's planes             | `vertices.bin`, `faces.bin` (slab ids)   |
+//! | `write`       | 1      | every slab's vertices, faces  | the output, renamed into place           |
+//!
+//! The reduces, each deterministic and cheap, run in whichever task needs
+//! them: [`Ctx::grid`] (every bounds box → the grid), [`Ctx::inverted`]
+//! (chunk volumes in chunk order → the inside-out sign), [`Ctx::slab_ranges`]
+//! (per-plane counts → the slabs' layer ranges), [`Ctx::rules`] (line
+//! census → each mesh's sign rule), [`Ctx::open_cells`] (hole cells → the
+//! groups left open).
+//!
+//! Every vertex id depends only on the grid and the input
+//! (`mint_core::reconstruct`), and the write stage concatenates slabs in
+//! order, so the output bytes do not depend on parts, slabs, threads,
+//! memory or task order.
+
+use crate::error::PipelineError;
+use crate::passes::{bounds, cancel_only, check_cancel, discretize_all, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, CHUNK_TRIANGLES, FIXED_RESERVE};
+use crate::plan::{OperandPlan, Plan};
+use crate::progress::{Phase, Progress};
+use crate::scene::{Operand, Scene};
+use crate::workdir::{read_records, read_result, FileSum, SumWriter, TaskBuild};
+use mint_core::grid::Grid;
+use mint_core::holes::{open_cells, HoleStats, OpenCells};
+use mint_core::intercept::filter_plane;
+use mint_core::primitives::Transform;
+use mint_core::reconstruct::reconstruct_slab;
+use mint_core::robust::{census_plane, reconstruct_slab_solids, BoolOp, Expr};
+use mint_core::signs::{LineCensus, RepairStats, SignRule};
+use mint_core::{FilterStats, Intercept};
+use mint_io::{Format, MeshReader, MeshWriter, ReadOptions, WriteOptions};
+use mint_store::{ShardManifest, ShardSet, ShardWriter};
+use serde::{Deserialize, Serialize};
+use std::sync::OnceLock as OnceCell;
+use std::path::{Path, PathBuf};
+
+/// A bounds task's result: per operand, the box of its vertex range.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct BoundsResult {
+    pub operands: Vec<Option<[[f64; 3]; 2]>>,
+}
+
+/// A discretize task's result for one mesh operand.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct MeshPart {
+    pub faces: u64,
+    /// Six times the signed volume of each chunk of faces, in grid units.
+    pub chunk_volumes6: Vec<f64>,
+    pub shards: ShardManifest,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct DiscretizeResult {
+    pub operands: Vec<Option<MeshPart>>,
+}
+
+/// A line census (see `mint_core::signs::LineCensus`).
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize)]
+pub struct Census {
+    pub lines: u64,
+    pub winding_valid: u64,
+    pub odd: u64,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CensusResult {
+    pub operands: Vec<Option<Census>>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct HolesResult {
+    pub cells: u64,
+    pub file: FileSum,
+}
+
+/// What reconstruction repaired (see `mint_core::signs::RepairStats`).
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize)]
+pub struct Repair {
+    pub inconsistent_lines: u64,
+    pub synthesized_vertices: u64,
+    pub merged_edges: u64,
+    pub dropped_intercepts: u64,
+}
+
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct ReconstructResult {
+    pub layers: [u32; 2],
+    pub sub_slabs: u64,
+    pub planned_slab_bytes: u64,
+    pub vertices: u64,
+    pub faces: u64,
+    pub vertices_file: Option<FileSum>,
+    pub faces_file: Option<FileSum>,
+    pub active_cells: u64,
+    pub non_canonical_cells: u64,
+    pub non_canonical_list: Vec<[u32; 3]>,
+    pub filter_kept: u64,
+    pub filter_removed: u64,
+    pub repair: Repair,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct WriteResult {
+    pub output: PathBuf,
+    pub vertices: u64,
+    pub faces: u64,
+}
+
+/// Everything a task needs: the plan, its scene, this process's threads and
+/// budget, and the reduces, each computed at most once.
+pub struct Ctx<'a> {
+    pub dir: PathBuf,
+    pub plan: Plan,
+    pub scene: Scene,
+    pub threads: usize,
+    pub mem_bytes: u64,
+    pub progress: &'a dyn Progress,
+    grid: OnceCell<Grid>,
+    parts: OnceCell<Vec<DiscretizeResult>>,
+    rules: OnceCell<(Vec<SignRule>, Vec<Census>)>,
+    open: OnceCell<(Option<OpenCells>, HoleStats)>,
+}
+
+fn identity(t: &Transform) -> bool {
+    t.m == [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] && t.t == [0.0; 3]
+}
+
+/// The part of `n` items that part `i` of `parts` takes, in whole chunks.
+pub fn part_range(n: u64, parts: u32, i: u32, chunk: u64) -> (u64, u64) {
+    let chunks = n.div_ceil(chunk);
+    let at = |j: u32| (chunks * j as u64 / parts as u64 * chunk).min(n);
+    (at(i), at(i + 1))
+}
+
+impl<'a> Ctx<'a> {
+    pub fn new(dir: &Path, plan: Plan, scene: Scene, threads: usize, mem_bytes: u64, progress: &'a dyn Progress) -> Ctx<'a> {
+        Ctx {
+            dir: dir.to_path_buf(),
+            plan,
+            scene,
+            threads: threads.max(1),
+            mem_bytes,
+            progress,
+            grid: OnceCell::new(),
+            parts: OnceCell::new(),
+            rules: OnceCell::new(),
+            open: OnceCell::new(),
+        }
+    }
+
+    fn name(&self) -> PathBuf {
+        self.plan.job.path()
+    }
+
+    fn transform(&self, j: usize) -> Option<&Transform> {
+        match &self.scene.operands[j] {
+            Operand::Mesh { transform, .. } if !identity(transform) => Some(transform),
+            _ => None,
+        }
+    }
+
+    fn read_options(&self) -> ReadOptions {
+        ReadOptions { chunk_triangles: CHUNK_TRIANGLES, spill_dir: Some(self.dir.clone()), resolve_positions: false }
+    }
+
+    /// Heap budget of one sub-slab in flight.
+    fn slab_budget(&self) -> u64 {
+        self.mem_bytes.saturating_sub(FIXED_RESERVE) / (self.threads as u64 + 2)
+    }
+
+    // ----- reduces -----
+
+    /// The grid, from every bounds task's boxes.
+    pub fn grid(&self) -> Result<&Grid, PipelineError> {
+        if let Some(g) = self.grid.get() {
+            return Ok(g);
+        }
+        let n = self.scene.operands.len();
+        let mut leaf: Vec<Option<([f64; 3], [f64; 3])>> = vec![None; n];
+        for t in 0..self.plan.tasks("bounds") {
+            let r: BoundsResult = read_result(&self.dir, "bounds", t)?;
+            for (j, b) in r.operands.iter().enumerate().take(n) {
+                if let Some([l, h]) = b {
+                    let e = leaf[j].get_or_insert(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]));
+                    for d in 0..3 {
+                        e.0[d] = e.0[d].min(l[d]);
+                        e.1[d] = e.1[d].max(h[d]);
+                    }
+                }
+            }
+        }
+        let mut boxes = Vec::with_capacity(n);
+        for (j, op) in self.scene.operands.iter().enumerate() {
+            boxes.push(match op {
+                Operand::Primitive(p) => p.bounds(),
+                Operand::Mesh { path, .. } => leaf[j].ok_or_else(|| PipelineError::Empty { path: path.clone() })?,
+            });
+        }
+        let (elo, ehi) = expr_bounds(&self.scene.expr, &boxes);
+        if (0..3).any(|d| !(elo[d].is_finite() && ehi[d].is_finite())) {
+            return Err(PipelineError::Unbounded { path: self.name() });
+        }
+        if (0..3).any(|d| elo[d] > ehi[d]) {
+            return Err(PipelineError::Empty { path: self.name() });
+        }
+        // The grid holds every bounded operand whole (so that every line
+        // starts and ends outside each of them), not only the result's box.
+        let (mut lo, mut hi) = (elo, ehi);
+        for (l, h) in &boxes {
+            for d in 0..3 {
+                if l[d].is_finite() && h[d].is_finite() {
+                    lo[d] = lo[d].min(l[d]);
+                    hi[d] = hi[d].max(h[d]);
+                }
+            }
+        }
+        let o = &self.plan.options;
+        let grid = Grid::around(lo, hi, o.size(), o.grid_offset, o.axis).map_err(|source| PipelineError::Grid { path: self.name(), source })?;
+        Ok(self.grid.get_or_init(|| grid))
+    }
+
+    /// Every discretize task's result, in part order.
+    pub fn parts(&self) -> Result<&[DiscretizeResult], PipelineError> {
+        if let Some(p) = self.parts.get() {
+            return Ok(p);
+        }
+        let mut v = Vec::new();
+        for t in 0..self.plan.tasks("discretize") {
+            v.push(read_result::<DiscretizeResult>(&self.dir, "discretize", t)?);
+        }
+        for (j, op) in self.scene.operands.iter().enumerate() {
+            if let Operand::Mesh { path, .. } = op {
+                if v.iter().map(|r| r.operands.get(j).and_then(|o| o.as_ref()).map_or(0, |m| m.faces)).sum::<u64>() == 0 {
+                    return Err(PipelineError::Empty { path: path.clone() });
+                }
+            }
+        }
+        Ok(self.parts.get_or_init(|| v))
+    }
+
+    /// The shards of mesh operand `j`, over every part.
+    pub fn shards(&self, j: usize) -> Result<ShardSet, PipelineError> {
+        let mut set = ShardSet::new();
+        for (t, r) in self.parts()?.iter().enumerate() {
+            if let Some(Some(m)) = r.operands.get(j) {
+                set.push(crate::workdir::task_dir(&self.dir, "discretize", t as u32).join(format!("op-{j}")), m.shards.clone());
+            }
+        }
+        Ok(set)
+    }
+
+    /// Faces, and the signed volume (grid units), of mesh operand `j`: the
+    /// chunk volumes summed in chunk order, as one process would.
+    pub fn faces_and_volume(&self, j: usize) -> Result<(u64, f64), PipelineError> {
+        let mut faces = 0;
+        let mut sum = 0.0f64;
+        for r in self.parts()? {
+            if let Some(Some(m)) = r.operands.get(j) {
+                faces += m.faces;
+                for v in &m.chunk_volumes6 {
+                    sum += v;
+                }
+            }
+        }
+        Ok((faces, sum / 6.0))
+    }
+
+    /// True when mesh operand `j` is inside-out (negative volume): its signs
+    /// are reversed, so that it reads as the solid it encloses.
+    pub fn inverted(&self, j: usize) -> Result<bool, PipelineError> {
+        Ok(matches!(self.scene.operands[j], Operand::Mesh { .. }) && self.faces_and_volume(j)?.1 < 0.0)
+    }
+
+    /// Records per plane, over every mesh operand.
+    fn plane_counts(&self) -> Result<Vec<u64>, PipelineError> {
+        let [_, _, ns] = self.grid()?.local_dims();
+        let mut c = vec![0u64; ns as usize + 1];
+        for r in self.parts()? {
+            for m in r.operands.iter().flatten() {
+                for (a, b) in c.iter_mut().zip(&m.shards.counts) {
+                    *a += b;
+                }
+            }
+        }
+        Ok(c)
+    }
+
+    /// The layer ranges `[a, b)` of the plan's slabs: consecutive layers,
+    /// cut where the running count of records passes each equal share.
+    pub fn slab_ranges(&self) -> Result<Vec<(u32, u32)>, PipelineError> {
+        let [_, _, ns] = self.grid()?.local_dims();
+        let counts = self.plane_counts()?;
+        Ok(slab_ranges(&counts[..ns as usize], self.plan.slabs))
+    }
+
+    /// Each operand's sign rule, and each mesh's census (summed over slabs).
+    pub fn rules(&self) -> Result<&(Vec<SignRule>, Vec<Census>), PipelineError> {
+        if let Some(r) = self.rules.get() {
+            return Ok(r);
+        }
+        let n = self.scene.operands.len();
+        let mut census = vec![Census::default(); n];
+        if self.plan.has_stage("census") {
+            for t in 0..self.plan.tasks("census") {
+                let r: CensusResult = read_result(&self.dir, "census", t)?;
+                for (j, c) in r.operands.iter().enumerate().take(n) {
+                    if let Some(c) = c {
+                        census[j].lines += c.lines;
+                        census[j].winding_valid += c.winding_valid;
+                        census[j].odd += c.odd;
+                    }
+                }
+            }
+        }
+        let asked = self.plan.options.sign_rule();
+        let strict = self.plan.strict();
+        let rules = self
+            .scene
+            .operands
+            .iter()
+            .zip(&census)
+            .map(|(op, c)| match op {
+                Operand::Primitive(_) => SignRule::Union,
+                Operand::Mesh { .. } => match asked {
+                    SignRule::Orient if strict => SignRule::Orient,
+                    SignRule::Auto | SignRule::Orient => LineCensus { lines: c.lines, winding_valid: c.winding_valid, odd: c.odd }.resolve(),
+                    r => r,
+                },
+            })
+            .collect();
+        Ok(self.rules.get_or_init(|| (rules, census)))
+    }
+
+    /// The hole-capping cells left open (`None`: close every hole).
+    pub fn open_cells(&self) -> Result<&(Option<OpenCells>, HoleStats), PipelineError> {
+        if let Some(o) = self.open.get() {
+            return Ok(o);
+        }
+        let result = match self.plan.options.max_hole {
+            Some(k) if self.plan.has_stage("holes") => {
+                let mut cells: Vec<u64> = Vec::new();
+                for t in 0..self.plan.tasks("holes") {
+                    let r: HolesResult = read_result(&self.dir, "holes", t)?;
+                    let path = crate::workdir::task_dir(&self.dir, "holes", t).join("holes.bin");
+                    read_records::<8>(&path, r.file, |b| {
+                        cells.push(u64::from_le_bytes(*b));
+                        Ok(())
+                    })?;
+                }
+                let (set, stats) = open_cells(&mut cells, self.grid()?.local_dims(), k);
+                ((!set.is_empty()).then_some(set), stats)
+            }
+            _ => (None, HoleStats::default()),
+        };
+        Ok(self.open.get_or_init(|| result))
+    }
+
+    /// Every operand's raw intercepts for planes `k0 ..= k1` (the last one
+    /// without its layer's S records), inside-out meshes reversed.
+    fn operand_planes(&self, k0: u32, k1: u32) -> Result<Vec<Vec<Vec<Intercept>>>, PipelineError> {
+        let grid = self.grid()?;
+        let mut operands = Vec::with_capacity(self.scene.operands.len());
+        for (j, op) in self.scene.operands.iter().enumerate() {
+            operands.push(match op {
+                Operand::Mesh { .. } => {
+                    let mut planes = self.shards(j)?.read_planes(k0, k1, true)?;
+                    if self.inverted(j)? {
+                        planes.iter_mut().flatten().for_each(|r| r.signed_value = -r.signed_value);
+                    }
+                    planes
+                }
+                Operand::Primitive(p) => (k0..=k1).map(|k| p.plane_intercepts(grid, k, k < k1)).collect(),
+            });
+        }
+        Ok(operands)
+    }
+
+    /// Sub-slabs of layers `a .. b` that fit the budget.
+    fn sub_slabs(&self, a: u32, b: u32) -> Result<Vec<(u32, u32)>, PipelineError> {
+        let counts = self.plane_counts()?;
+        Ok(if a >= b { Vec::new() } else { plan_slabs(&counts, a, b, self.plan.tuning.slab_layers, self.slab_budget()) })
+    }
+
+    /// Warms every reduce a slab task needs, so that worker threads only read.
+    fn prepare_slab_task(&self) -> Result<(), PipelineError> {
+        self.grid()?;
+        self.parts()?;
+        self.rules()?;
+        Ok(())
+    }
+}
+
+/// Splits layers `0 .. counts.len()` into `slabs` consecutive ranges, cut
+/// where the running count passes each `i / slabs` share of the total (and
+/// never inside a layer); empty ranges when there are fewer layers.
+pub fn slab_ranges(counts: &[u64], slabs: u32) -> Vec<(u32, u32)> {
+    let ns = counts.len() as u32;
+    let total: u64 = counts.iter().sum();
+    let mut cuts = vec![0u32];
+    let (mut k, mut run) = (0u32, 0u64);
+    for i in 1..slabs {
+        let share = (total as u128 * i as u128 / slabs as u128) as u64;
+        let last = *cuts.last().unwrap();
+        // Leave at least one layer for each slab still to come, when there are enough.
+        let max_k = ns.saturating_sub(slabs - i);
+        while k < max_k && (run < share || k == last) {
+            run += counts[k as usize];
+            k += 1;
+        }
+        cuts.push(k);
+    }
+    cuts.push(ns);
+    cuts.windows(2).map(|w| (w[0], w[1].max(w[0]))).collect()
+}
+
+/// The bounding box of an expression over its leaves' boxes.
+fn expr_bounds(e: &Expr, leaf: &[([f64; 3], [f64; 3])]) -> ([f64; 3], [f64; 3]) {
+    match e {
+        Expr::Operand(i) => leaf[*i],
+        Expr::Op(op, c) => {
+            let bs: Vec<_> = c.iter().map(|x| expr_bounds(x, leaf)).collect();
+            match op {
+                BoolOp::Union => bs.iter().fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(l, h), (bl, bh)| {
+                    ([0, 1, 2].map(|d| l[d].min(bl[d])), [0, 1, 2].map(|d| h[d].max(bh[d])))
+                }),
+                BoolOp::Intersection => bs.iter().fold(([f64::NEG_INFINITY; 3], [f64::INFINITY; 3]), |(l, h), (bl, bh)| {
+                    ([0, 1, 2].map(|d| l[d].max(bl[d])), [0, 1, 2].map(|d| h[d].min(bh[d])))
+                }),
+                BoolOp::Difference => bs[0],
+            }
+        }
+    }
+}
+
+// ----- the stages -----
+
+/// Runs task `task` of `stage` into `build`; returns the result to commit.
+pub fn run_stage_task(ctx: &Ctx, stage: &str, task: u32, build: &TaskBuild) -> Result<serde_json::Value, PipelineError> {
+    let v = match stage {
+        "bounds" => serde_json::to_value(bounds_task(ctx, task)?),
+        "discretize" => serde_json::to_value(discretize_task(ctx, task, build.path())?),
+        "census" => serde_json::to_value(census_task(ctx, task)?),
+        "holes" => serde_json::to_value(holes_task(ctx, task, build.path())?),
+        "reconstruct" => serde_json::to_value(reconstruct_task(ctx, task, build.path())?),
+        "write" => serde_json::to_value(write_task(ctx)?),
+        _ => return Err(PipelineError::stage(&ctx.dir, format!("no stage '{stage}'"))),
+    };
+    Ok(v.expect("results serialize"))
+}
+
+fn bounds_task(ctx: &Ctx, task: u32) -> Result<BoundsResult, PipelineError> {
+    let mut operands = Vec::new();
+    for (j, op) in ctx.scene.operands.iter().enumerate() {
+        let Operand::Mesh { path, .. } = op else {
+            operands.push(None);
+            continue;
+        };
+        let OperandPlan::Mesh { vertices, split_faces, .. } = &ctx.plan.operands[j] else { unreachable!() };
+        let range = match split_faces {
+            Some(_) => part_range(*vertices, ctx.plan.parts, task, 1),
+            None if task == 0 => (0, *vertices),
+            None => (0, 0),
+        };
+        if range.0 == range.1 {
+            operands.push(None);
+            continue;
+        }
+        let reader = MeshReader::open(path, ctx.read_options())?;
+        let b = bounds(&reader.positions(), range, path, ctx.threads, ctx.progress, ctx.transform(j))?;
+        operands.push(b.map(|(l, h)| [l, h]));
+        check_cancel(ctx.progress)?;
+    }
+    Ok(BoundsResult { operands })
+}
+
+fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult, PipelineError> {
+    let grid = ctx.grid()?;
+    let [_, _, ns] = grid.local_dims();
+    let mut operands = Vec::new();
+    for (j, op) in ctx.scene.operands.iter().enumerate() {
+        let Operand::Mesh { path, .. } = op else {
+            operands.push(None);
+            continue;
+        };
+        let OperandPlan::Mesh { split_faces, .. } = &ctx.plan.operands[j] else { unreachable!() };
+        let mut reader = match split_faces {
+            Some(n) => {
+                let (a, b) = part_range(*n, ctx.plan.parts, task, CHUNK_TRIANGLES as u64);
+                if ctx.plan.parts == 1 {
+                    MeshReader::open(path, ctx.read_options())?
+                } else {
+                    MeshReader::open_range(path, ctx.read_options(), a, b)?
+                }
+            }
+            None if task == 0 => MeshReader::open(path, ctx.read_options())?,
+            None => {
+                operands.push(None);
+                continue;
+            }
+        };
+        let expected = match split_faces {
+            Some(n) => {
+                let (a, b) = part_range(*n, ctx.plan.parts, task, CHUNK_TRIANGLES as u64);
+                b - a
+            }
+            None => reader.info().face_count.unwrap_or(0),
+        };
+        let dir = out.join(format!("op-{j}"));
+        std::fs::create_dir(&dir).map_err(|source| PipelineError::Temp { path: dir.clone(), op: "creating a shard directory", source })?;
+        let mut writer = ShardWriter::create(&dir, ns + 1);
+        let (faces, chunk_volumes6) = discretize_all(&mut reader, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), expected)?;
+        let shards = writer.finish()?;
+        operands.push(Some(MeshPart { faces, chunk_volumes6, shards }));
+        check_cancel(ctx.progress)?;
+    }
+    Ok(DiscretizeResult { operands })
+}
+
+fn census_task(ctx: &Ctx, task: u32) -> Result<CensusResult, PipelineError> {
+    let (a, b) = ctx.slab_ranges()?[task as usize];
+    let mut operands = Vec::new();
+    for (j, op) in ctx.scene.operands.iter().enumerate() {
+        if !matches!(op, Operand::Mesh { .. }) {
+            operands.push(None);
+            continue;
+        }
+        let shards = ctx.shards(j)?;
+        let invert = ctx.inverted(j)?;
+        let mut c = LineCensus::default();
+        for (k0, k1) in ctx.sub_slabs(a, b)? {
+            for p in &mut shards.read_planes(k0, k1 - 1, false)? {
+                if invert {
+                    p.iter_mut().for_each(|r| r.signed_value = -r.signed_value);
+                }
+                c += census_plane(p);
+            }
+            check_cancel(ctx.progress)?;
+        }
+        operands.push(Some(Census { lines: c.lines, winding_valid: c.winding_valid, odd: c.odd }));
+    }
+    Ok(CensusResult { operands })
+}
+
+fn holes_task(ctx: &Ctx, task: u32, out: &Path) -> Result<HolesResult, PipelineError> {
+    ctx.prepare_slab_task()?;
+    let (a, b) = ctx.slab_ranges()?[task as usize];
+    let grid = ctx.grid()?;
+    let (rules, _) = ctx.rules()?;
+    let mut file = SumWriter::create(out.join("holes.bin"))?;
+    let mut cells = 0u64;
+    let compute = |k0: u32, k1: u32| -> Result<Done, PipelineError> {
+        let (mut res, rep) = reconstruct_slab_solids(grid, k0, ctx.operand_planes(k0, k1)?, rules, &ctx.scene.expr, None);
+        res.vertices = Vec::new();
+        res.faces = Vec::new();
+        Ok((res, FilterStats::default(), rep))
+    };
+    reconstruct_ordered(&ctx.sub_slabs(a, b)?, ctx.threads, &compute, &cancel_only(ctx.progress), &mut |res, _, _, _| {
+        for c in &res.hole_cells {
+            file.write(&c.to_le_bytes())?;
+        }
+        cells += res.hole_cells.len() as u64;
+        Ok(())
+    })?;
+    Ok(HolesResult { cells, file: file.finish()? })
+}
+
+fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path) -> Result<ReconstructResult, PipelineError> {
+    ctx.prepare_slab_task()?;
+    let (a, b) = ctx.slab_ranges()?[task as usize];
+    let grid = ctx.grid()?;
+    let (rules, _) = ctx.rules()?;
+    let strict = ctx.plan.strict();
+    let open = if strict { None } else { ctx.open_cells()?.0.as_ref() };
+    let max_listed = ctx.plan.options.max_listed;
+    let subs = ctx.sub_slabs(a, b)?;
+    let counts = ctx.plane_counts()?;
+    let mut r = ReconstructResult { layers: [a, b], sub_slabs: subs.len() as u64, ..Default::default() };
+    r.planned_slab_bytes =
+        subs.iter().map(|&(k0, k1)| counts[k0 as usize..=k1 as usize].iter().sum::<u64>() * BYTES_PER_RECORD_IN_SLAB).max().unwrap_or(0);
+    let compute = |k0: u32, k1: u32| -> Result<Done, PipelineError> {
+        let mut operands = ctx.operand_planes(k0, k1)?;
+        if !strict {
+            let (res, rep) = reconstruct_slab_solids(grid, k0, operands, rules, &ctx.scene.expr, open);
+            return Ok((res, FilterStats::default(), rep));
+        }
+        let mut planes = operands.swap_remove(0);
+        let mut stats = FilterStats::default();
+        let owned = planes.len() - 1;
+        for (n, p) in planes.iter_mut().enumerate() {
+            let f = filter_plane(p);
+            if n < owned {
+                stats += f;
+            }
+        }
+        Ok((reconstruct_slab(grid, k0, &planes, max_listed), stats, RepairStats::default()))
+    };
+    let mut vfile = SumWriter::create(out.join("vertices.bin"))?;
+    let mut ffile = SumWriter::create(out.join("faces.bin"))?;
+    let mut filter = FilterStats::default();
+    let mut repair = RepairStats::default();
+    ctx.progress.start(Phase::Reconstruct, (b - a) as u64);
+    reconstruct_ordered(&subs, ctx.threads, &compute, ctx.progress, &mut |res, f, rep, layers| {
+        filter += f;
+        repair += rep;
+        for v in &res.vertices {
+            let mut bytes = [0u8; 24];
+            for d in 0..3 {
+                bytes[8 * d..8 * d + 8].copy_from_slice(&v[d].to_le_bytes());
+            }
+            vfile.write(&bytes)?;
+        }
+        for f in &res.faces {
+            let mut bytes = [0u8; 12];
+            for d in 0..3 {
+                let id = u32::try_from(f[d] as u64 + r.vertices).map_err(|_| PipelineError::stage(&ctx.plan.output, "more than 2^32 output vertices in one slab; use more slabs"))?;
+                bytes[4 * d..4 * d + 4].copy_from_slice(&id.to_le_bytes());
+            }
+            ffile.write(&bytes)?;
+        }
+        r.vertices += res.vertices.len() as u64;
+        r.faces += res.faces.len() as u64;
+        r.active_cells += res.stats.active_cells;
+        r.non_canonical_cells += res.stats.non_canonical_cells;
+        let room = max_listed.saturating_sub(r.non_canonical_list.len());
+        r.non_canonical_list.extend(res.non_canonical.iter().take(room));
+        ctx.progress.advance(layers);
+        Ok(())
+    })?;
+    ctx.progress.finish();
+    r.vertices_file = Some(vfile.finish()?);
+    r.faces_file = Some(ffile.finish()?);
+    r.filter_kept = filter.kept;
+    r.filter_removed = filter.removed;
+    r.repair = Repair {
+        inconsistent_lines: repair.inconsistent_lines,
+        synthesized_vertices: repair.synthesized_vertices,
+        merged_edges: repair.merged_edges,
+        dropped_intercepts: repair.dropped_intercepts,
+    };
+    Ok(r)
+}
+
+fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
+    let output = &ctx.plan.output;
+    let format = Format::from_path(output)?;
+    let o = &ctx.plan.options;
+    let write = WriteOptions { ascii: o.ascii, double: o.double, spill_dir: Some(ctx.dir.clone()) };
+    let slabs: Vec<ReconstructResult> = (0..ctx.plan.tasks("reconstruct")).map(|t| read_result(&ctx.dir, "reconstruct", t)).collect::<Result<_, _>>()?;
+    let total_faces: u64 = slabs.iter().map(|s| s.faces).sum();
+    let mut writer = MeshWriter::create(output, format, write)?;
+    ctx.progress.start(Phase::Write, total_faces);
+    for (t, s) in slabs.iter().enumerate() {
+        let path = crate::workdir::task_dir(&ctx.dir, "reconstruct", t as u32).join("vertices.bin");
+        read_records::<24>(&path, s.vertices_file.unwrap_or(FileSum { len: 0, crc32: 0 }), |b| {
+            let c = |d: usize| f64::from_le_bytes(b[8 * d..8 * d + 8].try_into().unwrap());
+            writer.write_vertex([c(0), c(1), c(2)])?;
+            Ok(())
+        })?;
+        check_cancel(ctx.progress)?;
+    }
+    let mut offset = 0u64;
+    let mut written = 0u64;
+    for (t, s) in slabs.iter().enumerate() {
+        let path = crate::workdir::task_dir(&ctx.dir, "reconstruct", t as u32).join("faces.bin");
+        read_records::<12>(&path, s.faces_file.unwrap_or(FileSum { len: 0, crc32: 0 }), |b| {
+            let id = |d: usize| (u32::from_le_bytes(b[4 * d..4 * d + 4].try_into().unwrap()) as u64 + offset) as u32;
+            writer.write_face([id(0), id(1), id(2)])?;
+            written += 1;
+            if written % (1 << 16) == 0 {
+                ctx.progress.advance(1 << 16);
+                check_cancel(ctx.progress)?;
+            }
+            Ok(())
+        })?;
+        offset += s.vertices;
+    }
+    let vertices = offset;
+    if vertices > u32::MAX as u64 + 1 {
+        return Err(PipelineError::stage(output, format!("{vertices} output vertices do not fit 32-bit indices; use a coarser grid")));
+    }
+    writer.finish()?;
+    ctx.progress.finish();
+    Ok(WriteResult { output: output.clone(), vertices, faces: total_faces })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parts_cover_every_item_once_in_whole_chunks() {
+        for (n, parts, chunk) in [(0u64, 3u32, 4u64), (10, 1, 4), (10, 3, 4), (1000, 7, 64), (5, 9, 1)] {
+            let mut next = 0;
+            for i in 0..parts {
+                let (a, b) = part_range(n, parts, i, chunk);
+                assert_eq!(a, next);
+                assert!(a == n || a % chunk == 0);
+                next = b;
+            }
+            assert_eq!(next, n);
+        }
+    }
+
+    #[test]
+    fn slab_ranges_tile_the_layers_and_balance_records() {
+        let counts = vec![1u64, 1, 1, 100, 1, 1, 100, 1, 1, 1];
+        let r = slab_ranges(&counts, 3);
+        assert_eq!(r.len(), 3);
+        assert_eq!(r[0].0, 0);
+        assert_eq!(r[2].1, 10);
+        assert!(r.windows(2).all(|w| w[0].1 == w[1].0));
+        assert!(r.iter().all(|&(a, b)| b > a), "{r:?}");
+        // More slabs than layers: every layer once, the rest empty.
+        let r = slab_ranges(&[5, 5], 4);
+        assert_eq!(r.len(), 4);
+        assert_eq!(r.iter().map(|&(a, b)| b - a).sum::<u32>(), 2);
+        assert_eq!(slab_ranges(&[3, 4, 5], 1), vec![(0, 3)]);
+    }
+}

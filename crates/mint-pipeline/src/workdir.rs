@@ -1,0 +1,252 @@
+//! The work directory of a staged run, and how a task's result gets there.
+//!
+//! ```text
+//! DIR/plan.json                     the plan (see `plan`)
+//! DIR/<stage>/<task>/result.json    a finished task: "crc32 XXXXXXXX" line, then JSON
+//! DIR/<stage>/<task>/...            its data files (shards, vertices, faces, hole cells)
+//! DIR/<stage>/.<task>.tmp-<pid>-<n> a task being written (or abandoned by a dead process)
+//! ```
+//! A task writes everything into its own temporary directory, syncs it,
+//! and renames it to `<task>` at the end: a task directory either does not
+//! exist or is complete, whatever kills the process, and tasks of one stage
+//! on different machines never touch the same file. Two processes racing on
+//! one task both succeed; the second rename finds the first one's result
+//! and discards its own. Nothing is ever appended to a shared file and no
+//! lock is taken, so DIR may live on NFS-like shared storage.
+//!
+//! Every data file is checksummed (CRC-32, in the task's result), and every
+//! reader checks length and checksum, so a truncated or damaged result is
+//! reported with its path, never used.
+
+use crate::error::PipelineError;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use std::fs::File;
+use std::io::{BufReader, BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+/// The plan's file name inside the work directory.
+pub const PLAN_FILE: &str = "plan.json";
+/// A finished task's result file.
+pub const RESULT_FILE: &str = "result.json";
+
+/// The directory of a finished task.
+pub fn task_dir(dir: &Path, stage: &str, task: u32) -> PathBuf {
+    dir.join(stage).join(format!("{task:05}"))
+}
+
+fn io<'a>(path: &'a Path, op: &'static str) -> impl FnOnce(std::io::Error) -> PipelineError + 'a {
+    move |source| PipelineError::Temp { path: path.to_path_buf(), op, source }
+}
+
+/// Writes `bytes` to `path` through a temporary file beside it, synced and
+/// renamed: readers see the old file or the whole new one.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PipelineError> {
+    let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
+    let write = || -> std::io::Result<()> {
+        let mut f = File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    };
+    write().map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io(path, "writing")(e)
+    })
+}
+
+/// Serializes `value` as checksummed JSON: a first line `crc32 XXXXXXXX`
+/// (of the JSON text that follows), then the JSON.
+pub fn checked_json<T: Serialize>(value: &T) -> Vec<u8> {
+    let json = serde_json::to_string_pretty(value).expect("task results serialize");
+    let mut out = format!("crc32 {:08x}\n", crc32fast::hash(json.as_bytes())).into_bytes();
+    out.extend_from_slice(json.as_bytes());
+    out.push(b'\n');
+    out
+}
+
+/// Reads checksummed JSON written by [`checked_json`].
+pub fn read_checked_json<T: DeserializeOwned>(path: &Path) -> Result<T, PipelineError> {
+    let bytes = std::fs::read(path).map_err(io(path, "reading"))?;
+    let bad = |what: &str| PipelineError::stage(path, format!("{what}; remove its task directory and run the task again"));
+    let nl = bytes.iter().position(|&b| b == b'\n').ok_or_else(|| bad("damaged task result (no checksum line)"))?;
+    let head = std::str::from_utf8(&bytes[..nl]).map_err(|_| bad("damaged task result (checksum line)"))?;
+    let want = head.strip_prefix("crc32 ").and_then(|h| u32::from_str_radix(h.trim(), 16).ok());
+    let body = &bytes[nl + 1..];
+    let body = body.strip_suffix(b"\n").unwrap_or(body);
+    match want {
+        Some(w) if w == crc32fast::hash(body) => {}
+        Some(_) => return Err(bad("damaged task result (checksum mismatch)")),
+        None => return Err(bad("damaged task result (checksum line)")),
+    }
+    serde_json::from_slice(body).map_err(|e| bad(&format!("unreadable task result ({e})")))
+}
+
+/// True when the task's directory holds a result.
+pub fn is_done(dir: &Path, stage: &str, task: u32) -> bool {
+    task_dir(dir, stage, task).join(RESULT_FILE).is_file()
+}
+
+/// Reads a finished task's result; one line naming the task when it is
+/// missing or damaged.
+pub fn read_result<T: DeserializeOwned>(dir: &Path, stage: &str, task: u32) -> Result<T, PipelineError> {
+    let path = task_dir(dir, stage, task).join(RESULT_FILE);
+    if !path.is_file() {
+        return Err(PipelineError::stage(
+            dir,
+            format!("stage '{stage}' task {task} is not done (run `mint stage run {} {stage} {task}` first)", dir.display()),
+        ));
+    }
+    read_checked_json(&path)
+}
+
+/// A task being written: a temporary directory renamed into place by
+/// [`TaskBuild::commit`], removed if dropped uncommitted.
+pub struct TaskBuild {
+    tmp: PathBuf,
+    target: PathBuf,
+    committed: bool,
+}
+
+impl TaskBuild {
+    /// Starts writing task `task` of `stage`.
+    pub fn begin(dir: &Path, stage: &str, task: u32) -> Result<TaskBuild, PipelineError> {
+        let stage_dir = dir.join(stage);
+        std::fs::create_dir_all(&stage_dir).map_err(io(&stage_dir, "creating the stage directory"))?;
+        let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.subsec_nanos()).unwrap_or(0);
+        let tmp = stage_dir.join(format!(".{task:05}.tmp-{}-{nanos}", std::process::id()));
+        std::fs::create_dir(&tmp).map_err(io(&tmp, "creating a task directory"))?;
+        Ok(TaskBuild { tmp, target: task_dir(dir, stage, task), committed: false })
+    }
+
+    /// Where the task writes its files.
+    pub fn path(&self) -> &Path {
+        &self.tmp
+    }
+
+    /// Writes the result, syncs, and renames the directory into place. If
+    /// another process finished the same task first, keeps its result.
+    pub fn commit<T: Serialize>(mut self, result: &T) -> Result<(), PipelineError> {
+        let path = self.tmp.join(RESULT_FILE);
+        let write = || -> std::io::Result<()> {
+            let mut f = File::create(&path)?;
+            f.write_all(&checked_json(result))?;
+            f.sync_all()?;
+            // The directory entries of the data files and the result.
+            if let Ok(d) = File::open(&self.tmp) {
+                let _ = d.sync_all();
+            }
+            Ok(())
+        };
+        write().map_err(io(&path, "writing a task result"))?;
+        match std::fs::rename(&self.tmp, &self.target) {
+            Ok(()) => {
+                self.committed = true;
+                if let Some(parent) = self.target.parent().and_then(|p| File::open(p).ok()) {
+                    let _ = parent.sync_all();
+                }
+                Ok(())
+            }
+            Err(_) if self.target.join(RESULT_FILE).is_file() => Ok(()), // another process won; drop removes ours
+            Err(e) => Err(io(&self.target, "renaming a finished task into place")(e)),
+        }
+    }
+}
+
+impl Drop for TaskBuild {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.tmp);
+        }
+    }
+}
+
+/// Length and checksum of a data file, as its writer saw it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FileSum {
+    pub len: u64,
+    pub crc32: u32,
+}
+
+/// A buffered writer that checksums what it writes.
+pub struct SumWriter {
+    path: PathBuf,
+    out: BufWriter<File>,
+    crc: crc32fast::Hasher,
+    len: u64,
+}
+
+impl SumWriter {
+    pub fn create(path: PathBuf) -> Result<SumWriter, PipelineError> {
+        let f = File::create(&path).map_err(io(&path, "creating a task file"))?;
+        Ok(SumWriter { path, out: BufWriter::with_capacity(1 << 20, f), crc: crc32fast::Hasher::new(), len: 0 })
+    }
+
+    pub fn write(&mut self, bytes: &[u8]) -> Result<(), PipelineError> {
+        self.crc.update(bytes);
+        self.len += bytes.len() as u64;
+        let path = &self.path;
+        self.out.write_all(bytes).map_err(io(path, "writing a task file"))
+    }
+
+    /// Flushes and syncs; returns the file's length and checksum.
+    pub fn finish(self) -> Result<FileSum, PipelineError> {
+        let path = self.path;
+        let f = self.out.into_inner().map_err(|e| io(&path, "writing a task file")(e.into_error()))?;
+        f.sync_all().map_err(io(&path, "writing a task file"))?;
+        Ok(FileSum { len: self.len, crc32: self.crc.finalize() })
+    }
+}
+
+/// Streams a data file in records of `N` bytes to `each`, checking its
+/// length and checksum against `want` (a mismatch is reported before the
+/// caller's work is committed, since nothing is renamed until the end).
+pub fn read_records<const N: usize>(
+    path: &Path,
+    want: FileSum,
+    mut each: impl FnMut(&[u8; N]) -> Result<(), PipelineError>,
+) -> Result<(), PipelineError> {
+    let damaged = |what: String| PipelineError::stage(path, format!("{what}: the task result is damaged; remove its task directory and run the task again"));
+    let f = File::open(path).map_err(|e| match e.kind() {
+        std::io::ErrorKind::NotFound => damaged("missing".into()),
+        _ => io(path, "opening a task file")(e),
+    })?;
+    let len = f.metadata().map_err(io(path, "reading a task file"))?.len();
+    if len != want.len {
+        return Err(damaged(format!("{len} bytes, {} were written", want.len)));
+    }
+    let mut rd = BufReader::with_capacity(1 << 20, f);
+    let mut crc = crc32fast::Hasher::new();
+    let mut rec = [0u8; N];
+    for _ in 0..len / N as u64 {
+        rd.read_exact(&mut rec).map_err(io(path, "reading a task file"))?;
+        crc.update(&rec);
+        each(&rec)?;
+    }
+    if crc.finalize() != want.crc32 {
+        return Err(damaged("checksum mismatch".into()));
+    }
+    Ok(())
+}
+
+/// Bytes of all files under `path` (0 if it does not exist).
+pub fn disk_bytes(path: &Path) -> u64 {
+    let Ok(rd) = std::fs::read_dir(path) else {
+        return std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+    };
+    rd.flatten()
+        .map(|e| match e.file_type() {
+            Ok(t) if t.is_dir() => disk_bytes(&e.path()),
+            _ => e.metadata().map(|m| m.len()).unwrap_or(0),
+        })
+        .sum()
+}
+
+/// Temporary task directories present in a stage (tasks being written, or
+/// abandoned by a process that died).
+pub fn temp_tasks(dir: &Path, stage: &str) -> Vec<PathBuf> {
+    let Ok(rd) = std::fs::read_dir(dir.join(stage)) else { return Vec::new() };
+    let mut v: Vec<PathBuf> = rd.flatten().map(|e| e.path()).filter(|p| p.file_name().is_some_and(|n| n.to_string_lossy().contains(".tmp-"))).collect();
+    v.sort();
+    v
+}
