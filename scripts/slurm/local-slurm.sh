@@ -20,7 +20,8 @@
 #     SLURM_CONF. An /etc/slurm/slurm.conf not written by this script is moved
 #     aside to slurm.conf.before-mint-local-slurm first.
 #   * Starts slurmctld and slurmd (they daemonize themselves, pid files in the
-#     state dir) and waits until `sinfo` shows the node idle (timeout 90 s).
+#     state dir) and waits until `sinfo` shows the node idle and the running
+#     slurmd has registered (timeout 90 s).
 #   * Records in $STATE/owned/ the pid of every daemon it started itself;
 #     `down` signals only those pids (after checking the process name), never
 #     anything else. `up` and `down` are idempotent; `down` also cleans up
@@ -380,25 +381,25 @@ cmd_up() {
 
 cmd_down() {
   need_root
-  local any= name
+  local any= name pid
   # Reverse start order: slurmd, slurmctld, then munged.
   for name in slurmd slurmctld munged; do
+    # A daemon launched by an 'up' that died before recording its pid: take
+    # the pid from the daemon's own pid file (noted in NAME.launched).
+    if [ ! -e "$OWNED/$name.pid" ] && [ -e "$OWNED/$name.launched" ]; then
+      pid=$(read_pid "$(cat "$OWNED/$name.launched")")
+      if [ -n "$pid" ] && is_proc "$pid" "$name"; then record "$name" "$pid"; fi
+    fi
+    rm -f "$OWNED/$name.launched"
     [ -e "$OWNED/$name.pid" ] || continue
     any=1
     stop_owned "$name"
   done
-  # Daemons launched by an 'up' that died before recording their pid: take
-  # the pid from the daemon's own pid file.
-  for name in slurmd slurmctld munged; do
-    [ -e "$OWNED/$name.launched" ] || continue
-    local pid; pid=$(read_pid "$(cat "$OWNED/$name.launched")")
-    if [ -n "$pid" ] && is_proc "$pid" "$name"; then
-      any=1; record "$name" "$pid"; stop_owned "$name"
-    fi
-    rm -f "$OWNED/$name.launched"
-  done
   [ -n "$any" ] || say "nothing to stop (no daemon started by this script is running)"
-  rm -f "$STATE/slurmctld.pid" "$STATE/slurmd.pid"
+  for name in slurmctld slurmd; do
+    pid=$(read_pid "$STATE/$name.pid")
+    if [ -n "$pid" ] && ! is_proc "$pid" "$name"; then rm -f "$STATE/$name.pid"; fi
+  done
   say "down"
 }
 

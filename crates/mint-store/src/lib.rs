@@ -293,16 +293,16 @@ mod tests {
     fn a_truncated_or_damaged_shard_is_reported_with_its_path() {
         let root = tempfile::tempdir().unwrap();
         let mut w = ShardWriter::create(root.path(), 4);
-        w.append(&[Intercept::new(1, FAMILY_A, 0, 1.5, true), Intercept::new(2, FAMILY_B, 0, 2.5, false)]).unwrap();
+        w.append(&[Intercept::new(1, FAMILY_A, 0, 1.5, true), Intercept::new(1, FAMILY_B, 0, 2.5, false)]).unwrap();
         let m = w.finish().unwrap();
         let mut set = ShardSet::new();
         set.push(root.path().to_path_buf(), m);
-        let shard = root.path().join(shard_name(0));
+        let shard = root.path().join(shard_name(1));
         let mut bytes = std::fs::read(&shard).unwrap();
         bytes[9] ^= 1;
         std::fs::write(&shard, &bytes).unwrap();
         let e = set.read_planes(0, 3, false).unwrap_err();
-        assert!(e.to_string().contains("shard-00000.bin") && e.to_string().contains("checksum"), "{e}");
+        assert!(e.to_string().contains("shard-00001.bin") && e.to_string().contains("checksum"), "{e}");
         std::fs::write(&shard, &bytes[..10]).unwrap();
         let e = set.read_planes(0, 3, false).unwrap_err();
         assert!(e.to_string().contains("10 bytes, 32 were written"), "{e}");
