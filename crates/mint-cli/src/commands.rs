@@ -638,12 +638,16 @@ pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, j
             "  time         {:.2}s (bounds {:.2}s, discretize {:.2}s, reconstruct {:.2}s, write {:.2}s)",
             s.seconds_total, s.seconds_bounds, s.seconds_discretize, s.seconds_reconstruct, s.seconds_write
         );
-        eprintln!(
-            "  memory       peak heap {}, peak RSS {}, budget {}",
-            human_bytes(peak_heap),
-            peak_rss.map(human_bytes).unwrap_or_else(|| "?".into()),
-            human_bytes(mem)
-        );
+        if s.distributed {
+            eprintln!("  memory       per task: see each task's line (mint stage run) or its log");
+        } else {
+            eprintln!(
+                "  memory       peak heap {}, peak RSS {}, budget {}",
+                human_bytes(peak_heap),
+                peak_rss.map(human_bytes).unwrap_or_else(|| "?".into()),
+                human_bytes(mem)
+            );
+        }
     }
     if let Some(dir) = &summary.work_dir {
         if !json && !quiet {

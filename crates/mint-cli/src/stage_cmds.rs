@@ -133,7 +133,13 @@ pub fn cmd_stage(c: StageCommand) -> Result<()> {
             let outcome = mint_pipeline::run_task(&a.dir, &a.stage, a.task, &topts, &bars)?;
             match outcome {
                 mint_pipeline::TaskOutcome::AlreadyDone => eprintln!("{} {}: already done", a.stage, a.task),
-                mint_pipeline::TaskOutcome::Ran => eprintln!("{} {}: done in {:.2}s", a.stage, a.task, t.elapsed().as_secs_f64()),
+                mint_pipeline::TaskOutcome::Ran => eprintln!(
+                    "{} {}: done in {:.2}s, peak heap {}",
+                    a.stage,
+                    a.task,
+                    t.elapsed().as_secs_f64(),
+                    human_bytes(crate::alloc::peak_heap())
+                ),
             }
             if a.stage == "write" && !a.quiet {
                 let s = mint_pipeline::summarize_dir(&a.dir, &bars)?;

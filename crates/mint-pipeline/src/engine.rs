@@ -307,13 +307,37 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
 }
 
 /// The summary of a finished staged run in `dir` (for `mint stage run`'s
-/// last task and `mint slurm --wait`).
+/// last task and `mint slurm --wait`), with wall times per stage measured
+/// from the plan's writing to each stage's last task.
 pub fn summarize_dir(dir: &Path, progress: &dyn Progress) -> Result<ResampleSummary, PipelineError> {
     let plan = Plan::load(dir)?;
     let scene = plan.job.scene()?;
     let mem = plan.tuning.mem_bytes;
+    let stages = plan.stages.clone();
     let ctx = Ctx::new(dir, plan, scene, 1, mem, progress);
-    summarize(&ctx)
+    let mut s = summarize(&ctx)?;
+    // Wall times of a run whose tasks ran elsewhere: from the plan's
+    // writing to each stage's last finished task (directory times).
+    let mtime = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+    if let Some(start) = mtime(&dir.join(PLAN_FILE)) {
+        let mut prev = start;
+        let mut secs = std::collections::HashMap::new();
+        for st in &stages {
+            let end = (0..st.tasks).filter_map(|t| mtime(&task_dir(dir, &st.name, t))).max().unwrap_or(prev).max(prev);
+            secs.insert(st.name.clone(), end.duration_since(prev).map_or(0.0, |d| d.as_secs_f64()));
+            prev = end;
+        }
+        let sec = |n: &str| secs.get(n).copied().unwrap_or(0.0);
+        s.seconds_bounds = sec("bounds");
+        s.seconds_discretize = sec("discretize");
+        s.seconds_census = sec("census");
+        s.seconds_reconstruct = sec("holes") + sec("reconstruct");
+        s.seconds_write = sec("write");
+        s.seconds_total = prev.duration_since(start).map_or(0.0, |d| d.as_secs_f64());
+    }
+    s.work_dir = Some(dir.display().to_string());
+    s.distributed = true;
+    Ok(s)
 }
 
 /// One stage's progress in a work directory.

@@ -133,4 +133,8 @@ pub struct ResampleSummary {
     /// Tasks run by this process, and tasks found already done (resumed).
     pub tasks_run: u64,
     pub tasks_resumed: u64,
+    /// The tasks ran in other processes (`mint stage run`, Slurm): times
+    /// are wall times between stage completions, and this process's memory
+    /// says nothing of theirs.
+    pub distributed: bool,
 }
