@@ -7,3 +7,4 @@ mod core_props;
 mod csg;
 mod resample;
 mod scans;
+mod stages;

@@ -650,7 +650,9 @@ pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, j
         }
     }
     if let Some(dir) = &summary.work_dir {
-        if !json && !quiet {
+        if !json && !quiet && summary.distributed {
+            eprintln!("  work dir     {dir} (remove it when you no longer need its results)");
+        } else if !json && !quiet {
             eprintln!("  work dir     {dir} ({} tasks run, {} found done); remove it when you no longer need to resume", summary.tasks_run, summary.tasks_resumed);
         }
     }

@@ -1,0 +1,349 @@
+//! The staged engine (issue 11): a run split into tasks, run in any order,
+//! by separate processes, killed and resumed, gives the bytes of one
+//! process; and every way a work directory can be wrong gives one line.
+
+use crate::common::{box_mesh, write_mesh, write_trimesh};
+use mint_core::robust::BoolOp;
+use mint_core::GridSize;
+use mint_pipeline::engine::{plan_run, run_task, TaskOptions, TaskOutcome};
+use mint_pipeline::{boolean, csg, parse_scene, resample, Job, NoProgress, Plan, ResampleOptions};
+use std::path::{Path, PathBuf};
+
+fn opts(cells: u64) -> ResampleOptions {
+    ResampleOptions { size: GridSize::Cells(cells), threads: 2, ..Default::default() }
+}
+
+fn mint_bin() -> PathBuf {
+    PathBuf::from(env!("CARGO_BIN_EXE_mint"))
+}
+
+/// A small SplitMix64 for task orders and kill times.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn shuffle<T>(&mut self, v: &mut [T]) {
+        for i in (1..v.len()).rev() {
+            v.swap(i, (self.next() % (i as u64 + 1)) as usize);
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Order {
+    Forward,
+    Reverse,
+    Shuffled(u64),
+}
+
+/// Runs every task of the plan in `dir`, stage by stage, each stage's
+/// tasks in `order`.
+fn run_all_tasks(dir: &Path, order: Order) {
+    let plan = Plan::load(dir).unwrap();
+    for st in &plan.stages {
+        let mut tasks: Vec<u32> = (0..st.tasks).collect();
+        match order {
+            Order::Forward => {}
+            Order::Reverse => tasks.reverse(),
+            Order::Shuffled(seed) => Rng(seed ^ st.tasks as u64).shuffle(&mut tasks),
+        }
+        for t in tasks {
+            let o = run_task(dir, &st.name, t, &TaskOptions { threads: 1 + (t as usize % 2), mem_bytes: None }, &NoProgress)
+                .unwrap_or_else(|e| panic!("{} {t}: {e}", st.name));
+            assert_eq!(o, TaskOutcome::Ran);
+        }
+    }
+}
+
+/// Plans `job` into a fresh directory with `parts` and `slabs`, runs it task
+/// by task in `order`, and returns the output bytes.
+fn staged_bytes(root: &Path, name: &str, job: Job, o: &ResampleOptions, parts: u32, slabs: u32, order: Order) -> Vec<u8> {
+    let dir = root.join(format!("work-{name}"));
+    let out = root.join(format!("{name}.ply"));
+    let o = ResampleOptions { parts, slabs, ..o.clone() };
+    plan_run(job, None, &out, &o, &dir).unwrap();
+    run_all_tasks(&dir, order);
+    // Every task again: all no-ops, output unchanged.
+    let plan = Plan::load(&dir).unwrap();
+    for st in &plan.stages {
+        for t in 0..st.tasks {
+            assert_eq!(run_task(&dir, &st.name, t, &TaskOptions::default(), &NoProgress).unwrap(), TaskOutcome::AlreadyDone);
+        }
+    }
+    std::fs::read(&out).unwrap()
+}
+
+#[test]
+fn staged_resample_equals_one_process_for_any_parts_slabs_and_task_order() {
+    let d = tempfile::tempdir().unwrap();
+    let input = write_mesh(d.path(), "g.ply", |s| drop(mint_gen::genus(2, 300_000, s).unwrap()));
+    let reference = d.path().join("ref.ply");
+    resample(&input, &reference, &opts(60_000), &NoProgress).unwrap();
+    let want = std::fs::read(&reference).unwrap();
+    let job = || Job::Resample { input: input.clone() };
+    for (i, (parts, slabs, order)) in
+        [(1, 1, Order::Forward), (3, 4, Order::Reverse), (5, 2, Order::Shuffled(7)), (2, 9, Order::Shuffled(11)), (7, 40, Order::Reverse)].into_iter().enumerate()
+    {
+        let got = staged_bytes(d.path(), &format!("r{i}"), job(), &opts(60_000), parts, slabs, order);
+        assert!(got == want, "{parts} parts, {slabs} slabs, {order:?}: output bytes differ");
+    }
+    // The strict rule is a variant of the same stages.
+    let strict = ResampleOptions { signs: mint_core::signs::SignRule::Orient, ..opts(60_000) };
+    resample(&input, &reference, &strict, &NoProgress).unwrap();
+    let want = std::fs::read(&reference).unwrap();
+    let got = staged_bytes(d.path(), "strict", job(), &strict, 4, 3, Order::Shuffled(3));
+    assert!(got == want, "strict: output bytes differ");
+}
+
+#[test]
+fn staged_bool_and_csg_equal_one_process() {
+    let d = tempfile::tempdir().unwrap();
+    let a = write_mesh(d.path(), "a.ply", |s| drop(mint_gen::genus(1, 100_000, s).unwrap()));
+    let b = write_trimesh(d.path(), "b.ply", &box_mesh([-0.2, -0.3, -0.4], [0.9, 0.8, 0.7]));
+    let reference = d.path().join("ref.ply");
+    boolean(BoolOp::Difference, &a, &b, &reference, &opts(50_000), &NoProgress).unwrap();
+    let want = std::fs::read(&reference).unwrap();
+    let job = Job::Bool { op: "difference".into(), a: a.clone(), b: b.clone() };
+    let o = ResampleOptions { max_hole: None, ..opts(50_000) };
+    let got = staged_bytes(d.path(), "bool", job, &o, 3, 5, Order::Shuffled(5));
+    assert!(got == want, "bool: output bytes differ");
+
+    let scene_path = d.path().join("scene.json");
+    let text = r#"{ "union": [ { "difference": [ { "box": { "size": [2, 2, 2] }, "rotate": [0, 0, 30] }, { "sphere": { "radius": 1.2 } } ] },
+                              { "mesh": "a.ply", "scale": 0.5, "translate": [0.3, 0, 0] } ] }"#;
+    std::fs::write(&scene_path, text).unwrap();
+    let scene = parse_scene(text, &scene_path).unwrap();
+    csg(&scene, &scene_path.display().to_string(), &reference, &opts(50_000), &NoProgress).unwrap();
+    let want = std::fs::read(&reference).unwrap();
+    let got = staged_bytes(d.path(), "csg", Job::Csg { scene: scene_path.clone() }, &o, 2, 4, Order::Reverse);
+    assert!(got == want, "csg: output bytes differ");
+}
+
+#[test]
+fn parts_split_binary_stl_too_and_read_text_files_whole() {
+    let d = tempfile::tempdir().unwrap();
+    let ply = write_mesh(d.path(), "g.ply", |s| drop(mint_gen::genus(3, 150_000, s).unwrap()));
+    let reference = d.path().join("ref.ply");
+    resample(&ply, &reference, &opts(40_000), &NoProgress).unwrap();
+    let want = std::fs::read(&reference).unwrap();
+    for ext in ["stl", "obj"] {
+        let other = d.path().join(format!("g.{ext}"));
+        mint_io::convert(&ply, &other, Default::default(), Default::default(), &mut |_, _| {}).unwrap();
+        let plain = d.path().join(format!("plain-{ext}.ply"));
+        resample(&other, &plain, &opts(40_000), &NoProgress).unwrap();
+        let want_other = std::fs::read(&plain).unwrap();
+        let o = ResampleOptions { parts: 4, slabs: 3, work_dir: Some(d.path().join(format!("w-{ext}"))), ..opts(40_000) };
+        let out = d.path().join(format!("parts-{ext}.ply"));
+        resample(&other, &out, &o, &NoProgress).unwrap();
+        assert!(std::fs::read(&out).unwrap() == want_other, "{ext}: 4 parts differ from 1");
+        if ext == "stl" {
+            // An STL soup has other vertex ids but the same f32 positions:
+            // the same grid, crossings and output as the PLY.
+            assert!(want_other == want, "stl and ply outputs differ");
+        }
+    }
+}
+
+#[test]
+fn a_run_killed_at_random_moments_resumes_to_the_same_bytes() {
+    let d = tempfile::tempdir().unwrap();
+    let input = d.path().join("s.ply");
+    let st = std::process::Command::new(mint_bin()).args(["gen", "sphere"]).arg(&input).args(["--faces", "2000000"]).output().unwrap();
+    assert!(st.status.success());
+    let reference = d.path().join("ref.ply");
+    let args = |out: &Path, work: Option<&Path>| {
+        let mut c = std::process::Command::new(mint_bin());
+        c.arg("resample").arg(&input).arg(out).args(["--cells", "4000000", "--quiet", "--threads", "2"]);
+        if let Some(w) = work {
+            c.arg("--work").arg(w).args(["--parts", "6", "--slabs", "6"]);
+        }
+        c
+    };
+    let t = std::time::Instant::now();
+    assert!(args(&reference, None).status().unwrap().success());
+    let full = t.elapsed().as_secs_f64();
+    let want = std::fs::read(&reference).unwrap();
+    let mut rng = Rng(2026);
+    for round in 0..3 {
+        let work = d.path().join(format!("w{round}"));
+        let out = d.path().join(format!("o{round}.ply"));
+        let mut kills = 0;
+        for attempt in 0..40 {
+            let mut child = args(&out, Some(&work)).stdout(std::process::Stdio::null()).stderr(std::process::Stdio::null()).spawn().unwrap();
+            // A random moment within about one full run.
+            let wait = full * 1.3 * (rng.next() % 1000) as f64 / 1000.0;
+            std::thread::sleep(std::time::Duration::from_secs_f64(wait));
+            let finished = child.try_wait().unwrap().is_some();
+            if !finished && attempt < 6 {
+                child.kill().unwrap(); // SIGKILL
+                child.wait().unwrap();
+                kills += 1;
+                assert!(!out.exists() || std::fs::read(&out).unwrap() == want, "round {round}: a killed run left a partial output");
+                continue;
+            }
+            assert!(child.wait().unwrap().success(), "round {round}: the resumed run failed");
+            break;
+        }
+        assert!(kills >= 1, "round {round}: no run was killed before it ended");
+        assert!(std::fs::read(&out).unwrap() == want, "round {round} ({kills} kills): output bytes differ");
+        // Nothing half-written is left beside the output.
+        let debris: Vec<_> = std::fs::read_dir(d.path()).unwrap().flatten().filter(|e| e.file_name().to_string_lossy().contains(".mint-tmp")).collect();
+        assert!(debris.is_empty(), "{debris:?}");
+    }
+}
+
+/// Runs the mint binary; returns (success, stderr).
+fn mint(args: &[&std::ffi::OsStr]) -> (bool, String) {
+    let o = std::process::Command::new(mint_bin()).args(args).output().unwrap();
+    (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+}
+
+fn one_line_error(stderr: &str, needle: &str) {
+    let lines: Vec<&str> = stderr.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert_eq!(lines.len(), 1, "expected one line, got: {stderr}");
+    assert!(lines[0].starts_with("mint: error: ") && lines[0].contains(needle), "expected '{needle}' in: {stderr}");
+}
+
+#[test]
+fn a_bad_work_directory_gets_one_line_and_no_output() {
+    let d = tempfile::tempdir().unwrap();
+    // Four chunks of faces: every one of the 3 parts has some.
+    let input = write_mesh(d.path(), "g.ply", |s| drop(mint_gen::genus(1, 250_000, s).unwrap()));
+    let out = d.path().join("out.ply");
+    let work = d.path().join("work");
+    let os = |s: &str| std::ffi::OsString::from(s);
+    let plan_args: Vec<std::ffi::OsString> = vec![os("stage"), os("plan"), os("resample"), input.clone().into(), out.clone().into(), os("--cells"), os("20000"), os("--work"), work.clone().into(), os("--parts"), os("3"), os("--slabs"), os("2"), os("--quiet")];
+    let refs: Vec<&std::ffi::OsStr> = plan_args.iter().map(|s| s.as_os_str()).collect();
+    let (ok, err) = mint(&refs);
+    assert!(ok, "{err}");
+    let run = |stage: &str, task: u32| {
+        let o = std::process::Command::new(mint_bin()).args(["stage", "run"]).arg(&work).arg(stage).arg(task.to_string()).arg("--quiet").output().unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    // A stage whose inputs are incomplete.
+    let (ok, err) = run("discretize", 0);
+    assert!(!ok);
+    one_line_error(&err, "stage 'bounds' is not complete: tasks 0, 1, 2 of 3 not done");
+    for t in 0..3 {
+        assert!(run("bounds", t).0);
+    }
+    let (ok, err) = run("bounds", 1);
+    assert!(ok && err.contains("already done"), "{err}");
+    for t in 0..3 {
+        assert!(run("discretize", t).0);
+    }
+    // A missing part: remove one discretize task's directory.
+    let part = work.join("discretize").join("00001");
+    let saved = d.path().join("saved-part");
+    std::fs::rename(&part, &saved).unwrap();
+    let (ok, err) = run("census", 0);
+    assert!(!ok);
+    one_line_error(&err, "stage 'discretize' is not complete: task 1 of 3 not done");
+    std::fs::rename(&saved, &part).unwrap();
+    // Damaged shards (checksum): every census task reads part 1's shards.
+    let shards: Vec<PathBuf> = std::fs::read_dir(part.join("op-0")).unwrap().flatten().map(|e| e.path()).filter(|p| std::fs::metadata(p).unwrap().len() > 32).collect();
+    assert!(!shards.is_empty());
+    let good: Vec<Vec<u8>> = shards.iter().map(|p| std::fs::read(p).unwrap()).collect();
+    for (p, g) in shards.iter().zip(&good) {
+        let mut bad = g.clone();
+        bad[20] ^= 0x40;
+        std::fs::write(p, &bad).unwrap();
+    }
+    for t in 0..2 {
+        let (ok, err) = run("census", t);
+        assert!(!ok, "census {t}: a damaged shard went unnoticed");
+        one_line_error(&err, "checksum");
+    }
+    for (p, g) in shards.iter().zip(&good) {
+        std::fs::write(p, g).unwrap();
+    }
+    let result = part.join("result.json");
+    let good_result = std::fs::read(&result).unwrap();
+    let mut bad_result = good_result.clone();
+    let at = bad_result.len() - 10;
+    bad_result[at] = if bad_result[at] == b'1' { b'2' } else { b'1' };
+    std::fs::write(&result, &bad_result).unwrap();
+    let (ok, err) = run("census", 0);
+    assert!(!ok);
+    one_line_error(&err, "damaged task result");
+    std::fs::write(&result, &good_result).unwrap();
+    // The input changed after planning.
+    let original = std::fs::read(&input).unwrap();
+    let mut touched = original.clone();
+    let n = touched.len();
+    touched[n - 3] ^= 1;
+    std::fs::write(&input, &touched).unwrap();
+    let (ok, err) = run("census", 0);
+    assert!(!ok);
+    one_line_error(&err, "this input changed since the run was planned");
+    // Same size and content but a new time: still refused (a plan trusts only its fingerprint).
+    std::fs::write(&input, &original).unwrap();
+    let (ok, err) = run("census", 0);
+    assert!(!ok);
+    one_line_error(&err, "changed");
+    // Re-plan after putting the file back as planned is impossible (mtime);
+    // a new plan in the same directory is refused with the reason.
+    let (ok, err) = mint(&refs);
+    assert!(!ok);
+    one_line_error(&err, "is not the file this run was planned for");
+    // Other options for the same directory.
+    let mut other: Vec<std::ffi::OsString> = plan_args.clone();
+    other[6] = os("30000");
+    let refs2: Vec<&std::ffi::OsStr> = other.iter().map(|s| s.as_os_str()).collect();
+    let (ok, err) = mint(&refs2);
+    assert!(!ok);
+    one_line_error(&err, "planned");
+    // A plan from another version.
+    let plan_path = work.join("plan.json");
+    let text = std::fs::read_to_string(&plan_path).unwrap();
+    let json = text.split_once('\n').unwrap().1;
+    let mut v: serde_json::Value = serde_json::from_str(json).unwrap();
+    v["version"] = 999.into();
+    std::fs::write(&plan_path, mint_pipeline::workdir::checked_json(&v)).unwrap();
+    let (ok, err) = run("census", 0);
+    assert!(!ok);
+    one_line_error(&err, "a plan of format 999");
+    assert!(!out.exists(), "no output after errors");
+    // Not a work directory at all.
+    let (ok, err) = run_in(d.path());
+    assert!(!ok);
+    one_line_error(&err, "not a work directory");
+}
+
+fn run_in(dir: &Path) -> (bool, String) {
+    let o = std::process::Command::new(mint_bin()).args(["stage", "status"]).arg(dir).output().unwrap();
+    (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+}
+
+#[test]
+fn resample_with_a_work_directory_resumes_and_refuses_other_options() {
+    let d = tempfile::tempdir().unwrap();
+    let input = write_mesh(d.path(), "g.ply", |s| drop(mint_gen::genus(2, 80_000, s).unwrap()));
+    let work = d.path().join("w");
+    let out = d.path().join("o.ply");
+    let o = ResampleOptions { work_dir: Some(work.clone()), parts: 2, slabs: 3, ..opts(30_000) };
+    let s1 = resample(&input, &out, &o, &NoProgress).unwrap();
+    assert_eq!((s1.tasks_resumed, s1.tasks_run), (0, 2 + 2 + 3 + 3 + 3 + 1));
+    let bytes = std::fs::read(&out).unwrap();
+    // Again: everything is done; the output stays.
+    let s2 = resample(&input, &out, &o, &NoProgress).unwrap();
+    assert_eq!((s2.tasks_run, s2.output_faces), (0, s1.output_faces));
+    // The output was deleted: only the write stage runs again.
+    std::fs::remove_file(&out).unwrap();
+    let s3 = resample(&input, &out, &o, &NoProgress).unwrap();
+    assert_eq!(s3.tasks_run, 1);
+    assert!(std::fs::read(&out).unwrap() == bytes);
+    // Another memory budget and thread count: fine (same bytes).
+    let s4 = resample(&input, &out, &ResampleOptions { mem_bytes: 64 << 20, threads: 1, ..o.clone() }, &NoProgress);
+    assert!(s4.is_ok());
+    // Other grid options: refused, naming the option.
+    let e = resample(&input, &out, &ResampleOptions { size: GridSize::Cells(31_000), ..o.clone() }, &NoProgress).unwrap_err().to_string();
+    assert!(e.contains("cells") && e.contains("another work directory"), "{e}");
+    let e = resample(&input, &out, &ResampleOptions { slabs: 4, ..o.clone() }, &NoProgress).unwrap_err().to_string();
+    assert!(e.contains("3 slabs"), "{e}");
+}
