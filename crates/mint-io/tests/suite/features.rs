@@ -256,3 +256,68 @@ fn resolve_positions_off_gives_indices_only() {
     let (m, _) = read_all(&p, ReadOptions { resolve_positions: false, ..ReadOptions::default() }).unwrap();
     assert_eq!(m.faces.len(), 6);
 }
+
+/// Triangles with a flag before the index list and a fixed-size property
+/// after it, so that a record is 1 + 1 + 3·4 + 4 bytes.
+fn triangles_with_extras(enc: &str, corners: &[usize]) -> Vec<u8> {
+    let vertex = El { name: "vertex", props: &["float x", "float y", "float z"], records: (0..9).map(|i| vec![n(i as f64), n(0.0), n((i * i) as f64)]).collect() };
+    let face = El {
+        name: "face",
+        props: &["uchar flags", "list uchar int vertex_indices", "float quality"],
+        records: corners.iter().enumerate().map(|(i, &k)| vec![n(i as f64), l(&(0..k).map(|c| ((i + c) % 9) as f64).collect::<Vec<_>>()), n(0.5)]).collect(),
+    };
+    ply_bytes(enc, &[], &[vertex, face])
+}
+
+fn read_range(p: &std::path::Path, first: u64, end: u64, chunk: usize) -> Result<Vec<[u32; 3]>, mint_io::Error> {
+    let mut r = MeshReader::open_range(p, ReadOptions { chunk_triangles: chunk, ..ReadOptions::default() }, first, end)?;
+    let mut out = Vec::new();
+    let mut c = mint_io::TriangleChunk::new();
+    while r.next_chunk(&mut c)? {
+        assert!(c.len() <= chunk);
+        out.extend_from_slice(&c.indices);
+    }
+    Ok(out)
+}
+
+#[test]
+fn binary_files_read_in_ranges_give_the_whole_file_in_order() {
+    let dir = tempfile::tempdir().unwrap();
+    for enc in ["binary_little_endian", "binary_big_endian"] {
+        let p = write_file(dir.path(), &format!("{enc}.ply"), &triangles_with_extras(enc, &[3; 11]));
+        let whole = read(&p).faces;
+        assert_eq!(whole.len(), 11);
+        let r = MeshReader::open(&p, ReadOptions::default()).unwrap();
+        assert_eq!(r.splittable_records(), Some(11));
+        for cuts in [vec![0u64, 11], vec![0, 4, 8, 11], vec![0, 0, 5, 5, 11], vec![0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]] {
+            for chunk in [1, 3, 65536] {
+                let mut got = Vec::new();
+                for w in cuts.windows(2) {
+                    got.extend(read_range(&p, w[0], w[1], chunk).unwrap());
+                }
+                assert_eq!(got, whole, "{enc} cuts {cuts:?} chunk {chunk}");
+            }
+        }
+        // A quad inside the range: one error naming the record, never a wrong split.
+        let q = write_file(dir.path(), &format!("quad-{enc}.ply"), &triangles_with_extras(enc, &[3, 3, 3, 4, 3, 3]));
+        assert!(read_range(&q, 0, 3, 2).is_ok());
+        let e = read_range(&q, 2, 5, 2).unwrap_err().to_string();
+        assert!(e.contains("record 3") && e.contains("4 corners"), "{e}");
+        // Beyond the end of a truncated body: refused up front.
+        let bytes = triangles_with_extras(enc, &[3; 11]);
+        let t = write_file(dir.path(), &format!("trunc-{enc}.ply"), &bytes[..bytes.len() - 5]);
+        assert!(MeshReader::open_range(&t, ReadOptions::default(), 0, 11).is_err());
+    }
+    // Text files cannot be split; binary STL can.
+    let a = write_file(dir.path(), "ascii.ply", &triangles_with_extras("ascii", &[3; 4]));
+    assert_eq!(MeshReader::open(&a, ReadOptions::default()).unwrap().splittable_records(), None);
+    let e = MeshReader::open_range(&a, ReadOptions::default(), 0, 2).unwrap_err().to_string();
+    assert!(e.contains("cannot be read in parts"), "{e}");
+    let stl = dir.path().join("t.stl");
+    let m = read(&dir.path().join("binary_little_endian.ply"));
+    super::util::write(&stl, Format::Stl, Default::default(), &m);
+    let whole = read(&stl).faces;
+    let mut got = read_range(&stl, 0, 6, 4).unwrap();
+    got.extend(read_range(&stl, 6, 11, 4).unwrap());
+    assert_eq!(got, whole);
+}
