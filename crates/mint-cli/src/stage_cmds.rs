@@ -170,6 +170,8 @@ fn print_status(st: &mint_pipeline::RunStatus) {
 
 pub fn cmd_slurm(a: SlurmArgs) -> Result<()> {
     let (plan, dir, json, quiet) = plan_of(&a.job)?;
+    // Jobs run wherever Slurm starts them: name the work directory absolutely.
+    let dir = abs(&dir);
     let mint = std::env::current_exe().context("finding the mint executable")?;
     let mut task_args = Vec::new();
     if let Some(n) = a.task_threads {

@@ -102,11 +102,12 @@ pub fn write_scripts(dir: &Path, plan: &Plan, o: &SlurmOptions) -> Result<Vec<St
         let log = sdir.join(format!("{}-%a.log", st.name));
         let dep = if i == 0 { String::new() } else { format!(" --dependency=afterok:<job id of {}> --kill-on-invalid-dep=yes", plan.stages[i - 1].name) };
         let extra: Vec<String> = o.task_args.iter().map(|a| quote(a)).collect();
+        let sbatch_extra: String = o.sbatch_args.iter().map(|a| format!(" {}", quote(a))).collect();
         let text = format!(
             "#!/bin/bash\n\
              # mint staged run, stage {i} '{name}': {n} task(s) of {plan}.\n\
              # Written by `mint slurm`. To submit by hand, in stage order:\n\
-             #   sbatch --parsable{dep} {script}\n\
+             #   sbatch --parsable{dep}{sbatch_extra} {script}\n\
              #SBATCH --job-name=mint-{name}\n\
              #SBATCH --array=0-{last}\n\
              #SBATCH --output={log}\n\
