@@ -49,8 +49,8 @@ pub struct Crossing {
 /// grid lines, calling `emit` once per crossing.
 ///
 /// Order of emission: family 0, 1, 2; within a family, by `v` then `u`.
-#[inline]
-pub fn discretize_triangle(p: &[[f64; 3]; 3], mut emit: impl FnMut(Crossing)) {
+#[inline(always)]
+pub fn discretize_triangle(p: &[[f64; 3]; 3], emit: impl FnMut(Crossing)) {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for q in p {
@@ -68,6 +68,14 @@ pub fn discretize_triangle(p: &[[f64; 3]; 3], mut emit: impl FnMut(Crossing)) {
     if !((has[1] && has[2]) || (has[2] && has[0]) || (has[0] && has[1])) {
         return;
     }
+    crossings(p, lo, hi, first, last, has, emit);
+}
+
+/// The lines a triangle's bounding box holds: exact tests per line. Kept
+/// out of line so that the common case above (no line inside the box: most
+/// triangles of a fine mesh on a coarser grid) inlines into callers' loops.
+#[inline(never)]
+fn crossings(p: &[[f64; 3]; 3], lo: [f64; 3], hi: [f64; 3], first: [f64; 3], last: [f64; 3], has: [bool; 3], mut emit: impl FnMut(Crossing)) {
     let signs = normal_signs(p);
     for d in 0..3 {
         let (u, v) = ((d + 1) % 3, (d + 2) % 3);

@@ -42,6 +42,7 @@ pub mod reader;
 mod stl;
 mod text;
 mod three_ds;
+pub mod visit;
 mod vrml;
 pub mod writer;
 
@@ -50,6 +51,7 @@ pub use convert::{convert, ConvertSummary};
 pub use error::{Error, ErrorKind, Position};
 pub use format::Format;
 pub use reader::{read_info, ElementInfo, MeshInfo, MeshReader, RangeGrid, ReadOptions, ReadStats, TriangleChunk, VertexPositions};
+pub use visit::{TriangleRecords, TriangleVisitor};
 pub use writer::{MeshWriter, WriteOptions, WriteSummary};
 
 #[cfg(test)]

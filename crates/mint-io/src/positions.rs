@@ -311,7 +311,7 @@ impl Emit<'_> {
 /// the coordinates examined one by one.
 #[inline(always)]
 pub(crate) fn check_finite(p: &[[f64; 3]; 3], t: &[u32; 3]) -> Result<(), Reject> {
-    let s: f64 = p.iter().flatten().sum();
+    let s = (p[0][0] + p[0][1] + p[0][2]) + (p[1][0] + p[1][1] + p[1][2]) + (p[2][0] + p[2][1] + p[2][2]);
     if s.is_finite() {
         return Ok(());
     }

@@ -200,6 +200,11 @@ pub(crate) trait FaceStream: Send {
     fn restrict(&mut self, _first: u64, _end: u64) -> Result<(), Error> {
         unreachable!("restrict called on a stream that cannot be split")
     }
+    /// Where the fixed-size face records are, for direct parallel access
+    /// ([`crate::visit::TriangleRecords`]); `None` unless splittable.
+    fn fixed_faces(&self) -> Result<Option<crate::visit::FixedFaces>, Error> {
+        Ok(None)
+    }
 }
 
 /// What a format module hands back from opening a file.
@@ -230,6 +235,39 @@ impl VertexPositions {
     #[inline]
     pub fn get(&self, i: u32) -> [f64; 3] {
         self.0.get(i)
+    }
+
+    /// The bounding box of vertices `first .. end` (clamped to `len()`),
+    /// `Ok(None)` for an empty range, or `Err((i, p))` for the first vertex
+    /// `i` whose position `p` is NaN or infinite. A tight loop for the
+    /// common layouts (little-endian f32 or f64 records).
+    pub fn bounds(&self, first: u32, end: u32) -> Result<Option<([f64; 3], [f64; 3])>, (u32, [f64; 3])> {
+        use crate::positions::PosKind;
+        let end = end.min(self.len());
+        if first >= end {
+            return Ok(None);
+        }
+        #[inline(always)]
+        fn scan(first: u32, end: u32, get: impl Fn(u32) -> [f64; 3]) -> Result<Option<([f64; 3], [f64; 3])>, (u32, [f64; 3])> {
+            let mut lo = [f64::INFINITY; 3];
+            let mut hi = [f64::NEG_INFINITY; 3];
+            for i in first..end {
+                let p = get(i);
+                if !(p[0] + p[1] + p[2]).is_finite() && !p.iter().all(|c| c.is_finite()) {
+                    return Err((i, p));
+                }
+                for d in 0..3 {
+                    lo[d] = lo[d].min(p[d]);
+                    hi[d] = hi[d].max(p[d]);
+                }
+            }
+            Ok(Some((lo, hi)))
+        }
+        match self.0.kind() {
+            PosKind::F32Le => scan(first, end, |i| self.0.get_f32le(i)),
+            PosKind::F64Le => scan(first, end, |i| self.0.get_f64le(i)),
+            PosKind::Other => scan(first, end, |i| self.0.get_other(i)),
+        }
     }
 }
 
@@ -318,6 +356,14 @@ impl MeshReader {
     /// else `None`.
     pub fn splittable_records(&self) -> Option<u64> {
         self.body.splittable_records()
+    }
+
+    /// A thread-safe handle that visits any range of this file's face
+    /// records directly from the map, with positions resolved, when the
+    /// file's records have one size (see [`MeshReader::splittable_records`]);
+    /// `None` otherwise. Several threads can visit disjoint ranges at once.
+    pub fn triangle_records(&self) -> Result<Option<crate::visit::TriangleRecords>, Error> {
+        Ok(self.body.fixed_faces()?.map(|f| crate::visit::TriangleRecords::new(self.path.clone(), self.positions.clone(), f)))
     }
 
     /// The file this reader reads.

@@ -252,6 +252,10 @@ impl FaceStream for StlBody {
         Ok(())
     }
 
+    fn fixed_faces(&self) -> Result<Option<crate::visit::FixedFaces>, Error> {
+        Ok(self.binary.then_some(crate::visit::FixedFaces::Soup { count: self.facets }))
+    }
+
     fn fill(&mut self, out: &mut Emit, _stats: &mut ReadStats) -> Result<bool, Error> {
         while self.next < self.facets && out.room() {
             let k = self.next as u32 * 3;

@@ -14,7 +14,7 @@ use mint_core::primitives::Transform;
 use mint_core::reconstruct::{crossing_to_intercept, SlabResult};
 use mint_core::signs::RepairStats;
 use mint_core::{discretize_triangle, FilterStats, Intercept};
-use mint_io::{MeshReader, TriangleChunk, VertexPositions};
+use mint_io::{MeshReader, TriangleChunk, TriangleRecords, TriangleVisitor, VertexPositions};
 use mint_store::{ShardWriter, StoreError};
 use std::path::Path;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -60,6 +60,26 @@ pub(crate) fn bounds(
                     let mut lo = [f64::INFINITY; 3];
                     let mut hi = [f64::NEG_INFINITY; 3];
                     let (a, b) = (first + (t * per).min(n), first + ((t + 1) * per).min(n));
+                    if xf.is_none() {
+                        // The common case: a tight loop in mint-io, in blocks for progress.
+                        let mut at = a;
+                        while at < b {
+                            let to = (at + (1 << 20)).min(b);
+                            match positions.bounds(at as u32, to as u32) {
+                                Ok(Some((l, h))) => {
+                                    for d in 0..3 {
+                                        lo[d] = lo[d].min(l[d]);
+                                        hi[d] = hi[d].max(h[d]);
+                                    }
+                                }
+                                Ok(None) => {}
+                                Err((i, p)) => return Err(PipelineError::NonFinite { path: path.to_path_buf(), index: i as u64, x: p[0], y: p[1], z: p[2] }),
+                            }
+                            progress.advance(to - at);
+                            at = to;
+                        }
+                        return Ok((lo, hi));
+                    }
                     for i in a..b {
                         let p = positions.get(i as u32);
                         if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
@@ -185,6 +205,165 @@ pub(crate) fn discretize_all(
     result?;
     progress.finish();
     Ok((faces, volumes))
+}
+
+/// Discretizes face records `first .. end` of a file read directly
+/// ([`TriangleRecords`]): `threads` workers take whole chunks of
+/// [`CHUNK_TRIANGLES`] records in turn and visit them straight from the map
+/// (no reader thread, no chunk buffers); one writer appends their records
+/// to `store`. Returns what [`discretize_all`] returns, chunk for chunk the
+/// same (`first` is a multiple of the chunk size, or 0).
+pub(crate) fn discretize_direct(
+    records: &TriangleRecords,
+    (first, end): (u64, u64),
+    grid: &Grid,
+    store: &mut ShardWriter,
+    threads: usize,
+    progress: &dyn Progress,
+    xf: Option<&Transform>,
+) -> Result<(u64, Vec<f64>), PipelineError> {
+    use crossbeam_channel::bounded;
+    let [_, nb, _] = grid.local_dims();
+    let local = LocalMap::new(grid);
+    let chunk = CHUNK_TRIANGLES as u64;
+    let chunks = end.saturating_sub(first).div_ceil(chunk);
+    let next = AtomicU64::new(0);
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
+    let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
+    progress.start(Phase::Discretize, end.saturating_sub(first));
+    let mut volumes = vec![0.0f64; chunks as usize];
+    let written: Result<(), StoreError> = std::thread::scope(|s| {
+        for _ in 0..threads {
+            let rec_tx = rec_tx.clone();
+            let (next, stop, failed, local) = (&next, &stop, &failed, &local);
+            s.spawn(move || loop {
+                let c = next.fetch_add(1, Ordering::Relaxed);
+                if c >= chunks || stop.load(Ordering::Relaxed) {
+                    return;
+                }
+                if progress.cancelled() {
+                    failed.lock().unwrap().get_or_insert(PipelineError::Cancelled);
+                    stop.store(true, Ordering::Relaxed);
+                    return;
+                }
+                let (a, b) = (first + c * chunk, (first + (c + 1) * chunk).min(end));
+                let mut recs = Vec::with_capacity(1024);
+                let mut volume = 0.0;
+                let visited = match (grid.slab_axis, xf) {
+                    (0, None) => visit_chunk::<0>(records, a, b, local, None, nb, &mut recs, &mut volume),
+                    (1, None) => visit_chunk::<1>(records, a, b, local, None, nb, &mut recs, &mut volume),
+                    (_, None) => visit_chunk::<2>(records, a, b, local, None, nb, &mut recs, &mut volume),
+                    (_, Some(t)) => visit_chunk::<3>(records, a, b, local, Some(t), nb, &mut recs, &mut volume),
+                };
+                if let Err(e) = visited {
+                    failed.lock().unwrap().get_or_insert(e.into());
+                    stop.store(true, Ordering::Relaxed);
+                    return;
+                }
+                progress.advance(b - a);
+                if rec_tx.send((c as usize, recs, volume)).is_err() {
+                    return; // the writer stopped on an error
+                }
+            });
+        }
+        drop(rec_tx);
+        let volumes = &mut volumes;
+        let stop = &stop;
+        s.spawn(move || -> Result<(), StoreError> {
+            for (seq, recs, volume) in rec_rx {
+                volumes[seq] = volume;
+                if let Err(e) = store.append(&recs) {
+                    stop.store(true, Ordering::Relaxed);
+                    return Err(e);
+                }
+            }
+            Ok(())
+        })
+        .join()
+        .expect("shard writer panicked")
+    });
+    if let Some(e) = failed.into_inner().unwrap() {
+        return Err(e);
+    }
+    written?;
+    progress.finish();
+    Ok((end.saturating_sub(first), volumes))
+}
+
+/// One chunk of the direct path: each triangle to local coordinates (the
+/// slab axis `S` a constant, so that the permutation costs nothing; `S = 3`:
+/// any axis, with a transform), its volume, its crossings.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn visit_chunk<const S: usize>(
+    records: &TriangleRecords,
+    a: u64,
+    b: u64,
+    local: &LocalMap,
+    xf: Option<&Transform>,
+    nb: u32,
+    recs: &mut Vec<Intercept>,
+    volume: &mut f64,
+) -> Result<(), mint_io::Error> {
+    let mut visitor = Chunk::<S> { local, xf, nb, recs, volume: 0.0 };
+    records.visit(a, b, &mut visitor)?;
+    *volume = visitor.volume;
+    Ok(())
+}
+
+/// What [`visit_chunk`] does with each triangle.
+struct Chunk<'a, const S: usize> {
+    local: &'a LocalMap,
+    xf: Option<&'a Transform>,
+    nb: u32,
+    recs: &'a mut Vec<Intercept>,
+    volume: f64,
+}
+
+impl<const S: usize> TriangleVisitor for Chunk<'_, S> {
+    #[inline(always)]
+    fn triangle(&mut self, p: &[[f64; 3]; 3]) {
+        triangle::<S>(p, self.local, self.xf, self.nb, self.recs, &mut self.volume)
+    }
+}
+
+/// One triangle: local coordinates, volume, crossings.
+#[inline(always)]
+fn triangle<const S: usize>(p: &[[f64; 3]; 3], local: &LocalMap, xf: Option<&Transform>, nb: u32, recs: &mut Vec<Intercept>, v: &mut f64) {
+    let (o, inv) = (local.origin, local.inv);
+    let map = |q: [f64; 3]| -> [f64; 3] {
+        match S {
+            // Local axes (a, b, s) = ((s + 1) % 3, (s + 2) % 3, s).
+            0 => [(q[1] - o[0]) * inv, (q[2] - o[1]) * inv, (q[0] - o[2]) * inv],
+            1 => [(q[2] - o[0]) * inv, (q[0] - o[1]) * inv, (q[1] - o[2]) * inv],
+            2 => [(q[0] - o[0]) * inv, (q[1] - o[1]) * inv, (q[2] - o[2]) * inv],
+            _ => local.map(xf.map_or(q, |t| t.apply_point(q))),
+        }
+    };
+    let l = [map(p[0]), map(p[1]), map(p[2])];
+    *v += signed_volume6(&l);
+    discretize_triangle(&l, |x| recs.push(crossing_to_intercept(&x, nb)));
+}
+
+/// [`Grid::to_local`] with its axes and scale taken out of the loop (the
+/// same arithmetic, so the same bits).
+struct LocalMap {
+    ax: [usize; 3],
+    origin: [f64; 3],
+    inv: f64,
+}
+
+impl LocalMap {
+    fn new(grid: &Grid) -> LocalMap {
+        let ax = grid.local_axes();
+        LocalMap { ax, origin: ax.map(|a| grid.origin[a]), inv: 1.0 / grid.cell }
+    }
+
+    #[inline(always)]
+    fn map(&self, p: [f64; 3]) -> [f64; 3] {
+        [(p[self.ax[0]] - self.origin[0]) * self.inv, (p[self.ax[1]] - self.origin[1]) * self.inv, (p[self.ax[2]] - self.origin[2]) * self.inv]
+    }
 }
 
 /// Six times the signed volume of the tetrahedron (origin, a, b, c).

@@ -24,7 +24,7 @@
 //! memory or task order.
 
 use crate::error::PipelineError;
-use crate::passes::{bounds, cancel_only, check_cancel, discretize_all, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, CHUNK_TRIANGLES, FIXED_RESERVE};
+use crate::passes::{bounds, cancel_only, check_cancel, discretize_all, discretize_direct, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, CHUNK_TRIANGLES, FIXED_RESERVE};
 use crate::plan::{OperandPlan, Plan};
 use crate::progress::{Phase, Progress};
 use crate::scene::{Operand, Scene};
@@ -492,37 +492,54 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
             continue;
         };
         let OperandPlan::Mesh { split_faces, .. } = &ctx.plan.operands[j] else { unreachable!() };
-        let mut reader = match split_faces {
-            Some(n) => {
-                let (a, b) = part_range(*n, ctx.plan.parts, task, CHUNK_TRIANGLES as u64);
-                if ctx.plan.parts == 1 {
-                    MeshReader::open(path, ctx.read_options())?
-                } else {
-                    MeshReader::open_range(path, ctx.read_options(), a, b)?
-                }
-            }
-            None if task == 0 => MeshReader::open(path, ctx.read_options())?,
+        let range = match split_faces {
+            Some(n) => part_range(*n, ctx.plan.parts, task, CHUNK_TRIANGLES as u64),
+            None if task == 0 => (0, u64::MAX),
             None => {
                 operands.push(None);
                 continue;
             }
         };
-        let expected = match split_faces {
-            Some(n) => {
-                let (a, b) = part_range(*n, ctx.plan.parts, task, CHUNK_TRIANGLES as u64);
-                b - a
-            }
-            None => reader.info().face_count.unwrap_or(0),
-        };
         let dir = out.join(format!("op-{j}"));
-        std::fs::create_dir(&dir).map_err(|source| PipelineError::Temp { path: dir.clone(), op: "creating a shard directory", source })?;
-        let mut writer = ShardWriter::create(&dir, ns + 1);
-        let (faces, chunk_volumes6) = discretize_all(&mut reader, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), expected)?;
+        let reader = MeshReader::open(path, ctx.read_options())?;
+        // Files with fixed-size records are read directly by every worker;
+        // others (and, as one part, files that turn out to hold polygons)
+        // stream through the reader.
+        let direct = match split_faces {
+            Some(_) => reader.triangle_records()?,
+            None => None,
+        };
+        let mut result = None;
+        if let Some(records) = &direct {
+            let mut writer = ShardWriter::create(&make_dir(&dir)?, ns + 1);
+            match discretize_direct(records, range, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j)) {
+                Ok(r) => result = Some((r, writer)),
+                Err(PipelineError::Io(e)) if ctx.plan.parts == 1 && e.kind() == mint_io::ErrorKind::Unsupported => {
+                    drop(writer);
+                    std::fs::remove_dir_all(&dir).map_err(|source| PipelineError::Temp { path: dir.clone(), op: "removing a shard directory", source })?;
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        let ((faces, chunk_volumes6), writer) = match result {
+            Some(r) => r,
+            None => {
+                let mut reader = if ctx.plan.parts > 1 && split_faces.is_some() { MeshReader::open_range(path, ctx.read_options(), range.0, range.1)? } else { reader };
+                let expected = if range.1 == u64::MAX { reader.info().face_count.unwrap_or(0) } else { range.1 - range.0 };
+                let mut writer = ShardWriter::create(&make_dir(&dir)?, ns + 1);
+                (discretize_all(&mut reader, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), expected)?, writer)
+            }
+        };
         let shards = writer.finish()?;
         operands.push(Some(MeshPart { faces, chunk_volumes6, shards }));
         check_cancel(ctx.progress)?;
     }
     Ok(DiscretizeResult { operands })
+}
+
+fn make_dir(dir: &Path) -> Result<PathBuf, PipelineError> {
+    std::fs::create_dir(dir).map_err(|source| PipelineError::Temp { path: dir.to_path_buf(), op: "creating a shard directory", source })?;
+    Ok(dir.to_path_buf())
 }
 
 fn census_task(ctx: &Ctx, task: u32) -> Result<CensusResult, PipelineError> {

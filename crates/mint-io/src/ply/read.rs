@@ -913,6 +913,44 @@ impl FaceStream for PlyBody {
         others_fixed.then_some(el.count)
     }
 
+    fn fixed_faces(&self) -> Result<Option<crate::visit::FixedFaces>, Error> {
+        let Some(count) = self.splittable_records() else { return Ok(None) };
+        // The face element's start: located already, or found by walking.
+        let (elem, start) = match self.pending.front() {
+            Some(&(e, start)) => (e, start),
+            None => {
+                let (mut e, mut at) = (self.next_elem, self.next_offset);
+                while !matches!(self.roles.get(e), Some(Role::Faces { .. })) {
+                    if e >= self.roles.len() {
+                        return Ok(None);
+                    }
+                    at = self.skip_element(e, at)?;
+                    e += 1;
+                }
+                (e, at)
+            }
+        };
+        let el = &self.header.elements[elem];
+        let Role::Faces { list, .. } = self.roles[elem] else { unreachable!() };
+        let PropType::List { count: cty, item: ity } = el.props[list].ty else { unreachable!() };
+        let size = |ps: &[Property]| -> usize { ps.iter().map(|p| if let PropType::Scalar(s) = p.ty { s.size() } else { 0 }).sum() };
+        let pre = size(&el.props[..list]);
+        let stride = pre + cty.size() + 3 * ity.size() + size(&el.props[list + 1..]);
+        let map = self.map.clone();
+        fixed_end(&self.ctx(map.bytes(), elem), start, stride, count)?;
+        Ok(Some(crate::visit::FixedFaces::Ply {
+            map,
+            element: el.name.clone(),
+            start,
+            stride,
+            pre,
+            cty,
+            ity,
+            be: self.header.encoding == Encoding::BinaryBe,
+            count,
+        }))
+    }
+
     fn restrict(&mut self, first: u64, end: u64) -> Result<(), Error> {
         self.start_next()?;
         let Some((elem, list, start)) = self.cur.as_ref().map(|c| (c.elem, c.list, c.pos)) else { return Ok(()) };

@@ -1,0 +1,186 @@
+//! Direct, parallel access to the triangles of files whose face records all
+//! have one size: binary PLY with one face element (every record must be a
+//! triangle; checked) and binary STL. A [`TriangleRecords`] is a cheap,
+//! thread-safe handle on the memory map; [`TriangleRecords::visit`] walks
+//! any range of records and hands each triangle's three positions to a
+//! closure, with no chunk buffers, channels or reader thread in between. The
+//! common layout (little-endian `uchar 3` + three 32-bit indices, f32 or
+//! f64 positions) has its own monomorphized loop; the rest read through the
+//! generic scalar readers.
+//!
+//! Every index is range-checked and every position checked finite, as the
+//! streaming reader does, with the same kind of located error.
+
+use crate::error::{Error, ErrorKind};
+use crate::mapped::Mapped;
+use crate::positions::{check_finite, PosKind, Positions, Reject, Scalar};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// What [`TriangleRecords::visit`] calls for every triangle. A trait rather
+/// than a closure so that an `#[inline(always)]` implementation is inlined
+/// into the visitor's loops (no call, no store-and-reload of the corners).
+pub trait TriangleVisitor {
+    /// One triangle: the positions of its three corners, in order.
+    fn triangle(&mut self, p: &[[f64; 3]; 3]);
+}
+
+impl<F: FnMut(&[[f64; 3]; 3])> TriangleVisitor for F {
+    #[inline(always)]
+    fn triangle(&mut self, p: &[[f64; 3]; 3]) {
+        self(p)
+    }
+}
+
+/// Where a file's fixed-size face records are (see `FaceStream::fixed_faces`).
+#[derive(Debug, Clone)]
+pub(crate) enum FixedFaces {
+    /// A PLY face element: `count` records of `stride` bytes from `start`,
+    /// each `pre` bytes of scalars, the list count (`cty`), three indices
+    /// (`ity`), then more scalars.
+    Ply { map: Arc<Mapped>, element: String, start: usize, stride: usize, pre: usize, cty: Scalar, ity: Scalar, be: bool, count: u64 },
+    /// Binary STL: facet `k` is vertices `3k, 3k + 1, 3k + 2`.
+    Soup { count: u64 },
+}
+
+/// A thread-safe handle on a file's face records; see the module docs.
+#[derive(Debug, Clone)]
+pub struct TriangleRecords {
+    path: PathBuf,
+    positions: Positions,
+    faces: FixedFaces,
+}
+
+impl TriangleRecords {
+    pub(crate) fn new(path: PathBuf, positions: Positions, faces: FixedFaces) -> TriangleRecords {
+        TriangleRecords { path, positions, faces }
+    }
+
+    /// Number of face records (each a triangle).
+    pub fn len(&self) -> u64 {
+        match &self.faces {
+            FixedFaces::Ply { count, .. } | FixedFaces::Soup { count } => *count,
+        }
+    }
+
+    /// True when there are no records.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn reject(&self, r: Reject, record: u64, element: &str, byte: Option<u64>) -> Error {
+        let e = match r {
+            Reject::Index(v) => {
+                Error::new(ErrorKind::Index, &self.path, format!("vertex index {v} is out of range (the file has {} vertices)", self.positions.count()))
+            }
+            Reject::NotFinite(v) => crate::ply::read::not_finite(&self.path, v, &self.positions),
+        };
+        let e = e.at_element(element).at_record(record);
+        match byte {
+            Some(b) => e.at_byte(b),
+            None => e,
+        }
+    }
+
+    /// Calls `f` with the three corner positions of every record in
+    /// `first .. end` (clamped to the records), in order. Fails on the first
+    /// record that is not a triangle, has an index out of range, or uses a
+    /// non-finite position, naming it.
+    #[inline(always)]
+    pub fn visit<V: TriangleVisitor>(&self, first: u64, end: u64, visitor: &mut V) -> Result<(), Error> {
+        let end = end.min(self.len());
+        if first >= end {
+            return Ok(());
+        }
+        match &self.faces {
+            FixedFaces::Soup { .. } => {
+                for k in first..end {
+                    let v = (3 * k) as u32;
+                    let t = [v, v + 1, v + 2];
+                    let p = [self.positions.get(t[0]), self.positions.get(t[1]), self.positions.get(t[2])];
+                    check_finite(&p, &t).map_err(|r| self.reject(r, k, "facet", Some(84 + 50 * k)))?;
+                    visitor.triangle(&p);
+                }
+                Ok(())
+            }
+            FixedFaces::Ply { map, element, start, stride, pre, cty, ity, be, .. } => {
+                let data = map.bytes();
+                let fast = !*be && *stride == 13 && *pre == 0 && *cty == Scalar::U8 && matches!(ity, Scalar::U32 | Scalar::I32);
+                match (fast, self.positions.kind()) {
+                    (true, PosKind::F32Le) => self.fast(data, *start, first, end, element, |i| self.positions.get_f32le(i), visitor),
+                    (true, PosKind::F64Le) => self.fast(data, *start, first, end, element, |i| self.positions.get_f64le(i), visitor),
+                    _ => {
+                        let nv = self.positions.count() as i64;
+                        for k in first..end {
+                            let at = start + k as usize * stride;
+                            let rec = &data[at..at + stride];
+                            let n = cty.read_i64(&rec[*pre..], *be);
+                            if n != 3 {
+                                return Err(self.not_triangle(n, k, element, at));
+                            }
+                            let mut t = [0u32; 3];
+                            for (c, slot) in t.iter_mut().enumerate() {
+                                let v = ity.read_i64(&rec[pre + cty.size() + c * ity.size()..], *be);
+                                if v < 0 || v >= nv {
+                                    return Err(self.reject(Reject::Index(v), k, element, Some(at as u64)));
+                                }
+                                *slot = v as u32;
+                            }
+                            let p = [self.positions.get(t[0]), self.positions.get(t[1]), self.positions.get(t[2])];
+                            check_finite(&p, &t).map_err(|r| self.reject(r, k, element, Some(at as u64)))?;
+                            visitor.triangle(&p);
+                        }
+                        Ok(())
+                    }
+                }
+            }
+        }
+    }
+
+    fn not_triangle(&self, n: i64, record: u64, element: &str, at: usize) -> Error {
+        Error::unsupported(&self.path, format!("a face with {n} corners: a file read in parts must hold only triangles (run it as one part, --parts 1)"))
+            .at_element(element)
+            .at_record(record)
+            .at_byte(at as u64)
+    }
+
+    /// The common layout: `uchar 3`, three little-endian 32-bit indices.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn fast(
+        &self,
+        data: &[u8],
+        start: usize,
+        first: u64,
+        end: u64,
+        element: &str,
+        fetch: impl Fn(u32) -> [f64; 3],
+        visitor: &mut impl TriangleVisitor,
+    ) -> Result<(), Error> {
+        let nv = self.positions.count();
+        let bytes = &data[start + first as usize * 13..start + end as usize * 13];
+        for (i, r) in bytes.chunks_exact(13).enumerate() {
+            let r: &[u8; 13] = r.try_into().unwrap();
+            let k = first + i as u64;
+            if r[0] != 3 {
+                return Err(self.not_triangle(r[0] as i64, k, element, start + k as usize * 13));
+            }
+            let t = [
+                u32::from_le_bytes([r[1], r[2], r[3], r[4]]),
+                u32::from_le_bytes([r[5], r[6], r[7], r[8]]),
+                u32::from_le_bytes([r[9], r[10], r[11], r[12]]),
+            ];
+            if t[0] >= nv || t[1] >= nv || t[2] >= nv {
+                let bad = t.iter().copied().find(|&v| v >= nv).unwrap();
+                // An i32 index read as u32: report it as the file wrote it.
+                let v = bad as i32 as i64;
+                let v = if v < 0 { v } else { bad as i64 };
+                return Err(self.reject(Reject::Index(v), k, element, Some((start + k as usize * 13) as u64)));
+            }
+            let p = [fetch(t[0]), fetch(t[1]), fetch(t[2])];
+            check_finite(&p, &t).map_err(|r| self.reject(r, k, element, Some((start + k as usize * 13) as u64)))?;
+            visitor.triangle(&p);
+        }
+        Ok(())
+    }
+}
