@@ -62,12 +62,15 @@ pub fn discretize_triangle(p: &[[f64; 3]; 3], emit: impl FnMut(Crossing)) {
     // Candidate integer range per axis for a perturbed lattice coordinate
     // q + δ inside [lo, hi]: q in [ceil(lo), ceil(hi) - 1].
     let first = [ceil(lo[0]), ceil(lo[1]), ceil(lo[2])];
-    let last = [ceil(hi[0]) - 1.0, ceil(hi[1]) - 1.0, ceil(hi[2]) - 1.0];
-    let has = [first[0] <= last[0], first[1] <= last[1], first[2] <= last[2]];
+    // first <= ceil(hi) - 1 is first < hi, first being an integer: one
+    // rounding per axis instead of two on the common path.
+    let has = [first[0] < hi[0], first[1] < hi[1], first[2] < hi[2]];
     // Fast reject: no family has a lattice point in its projected box.
     if !((has[1] && has[2]) || (has[2] && has[0]) || (has[0] && has[1])) {
         return;
     }
+    let last = [ceil(hi[0]) - 1.0, ceil(hi[1]) - 1.0, ceil(hi[2]) - 1.0];
+    debug_assert_eq!(has, [first[0] <= last[0], first[1] <= last[1], first[2] <= last[2]]);
     crossings(p, lo, hi, first, last, has, emit);
 }
 

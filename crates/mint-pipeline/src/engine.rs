@@ -17,8 +17,8 @@ use crate::passes::check_cancel;
 use crate::plan::{bool_op_name, Fingerprint, Job, OperandPlan, Plan};
 use crate::progress::Progress;
 use crate::scene::{Operand, Scene};
-use crate::stages::{run_stage_task, Ctx, DiscretizeResult, ReconstructResult};
-use crate::workdir::{checked_json, disk_bytes, is_done, read_result, task_dir, temp_tasks, write_atomic, TaskBuild, PLAN_FILE};
+use crate::stages::{run_stage_task, Ctx, DiscretizeResult};
+use crate::workdir::{checked_json, disk_bytes, is_done, task_dir, temp_tasks, write_atomic, TaskBuild, PLAN_FILE};
 use mint_core::robust::BoolOp;
 use mint_core::signs::SignRule;
 use mint_io::Format;
@@ -218,7 +218,7 @@ fn run_job(job: Job, scene: Option<Scene>, output: &Path, opts: &ResampleOptions
     s.seconds_bounds = sec("bounds");
     s.seconds_discretize = sec("discretize");
     s.seconds_census = sec("census");
-    s.seconds_reconstruct = sec("holes") + sec("reconstruct");
+    s.seconds_reconstruct = sec("reconstruct") + sec("reopen");
     s.seconds_write = sec("write");
     s.seconds_total = t_start.elapsed().as_secs_f64();
     s.work_dir = opts.work_dir.as_ref().map(|d| d.display().to_string());
@@ -280,7 +280,7 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
     s.open_cells = open.as_ref().map_or(0, |o| o.len() as u64);
     let (mut kept, mut removed) = (0, 0);
     for t in 0..plan.tasks("reconstruct") {
-        let r: ReconstructResult = read_result(&ctx.dir, "reconstruct", t)?;
+        let (_, r) = ctx.final_slab(t)?;
         s.slabs += r.sub_slabs;
         s.planned_slab_bytes = s.planned_slab_bytes.max(r.planned_slab_bytes);
         s.output_vertices += r.vertices;
@@ -331,7 +331,7 @@ pub fn summarize_dir(dir: &Path, progress: &dyn Progress) -> Result<ResampleSumm
         s.seconds_bounds = sec("bounds");
         s.seconds_discretize = sec("discretize");
         s.seconds_census = sec("census");
-        s.seconds_reconstruct = sec("holes") + sec("reconstruct");
+        s.seconds_reconstruct = sec("reconstruct") + sec("reopen");
         s.seconds_write = sec("write");
         s.seconds_total = prev.duration_since(start).map_or(0.0, |d| d.as_secs_f64());
     }

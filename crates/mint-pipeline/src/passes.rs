@@ -399,17 +399,6 @@ pub fn plan_slabs(counts: &[u64], first: u32, ns: u32, fixed: Option<u32>, budge
     slabs
 }
 
-/// A progress hook that only forwards cancellation (for hidden passes).
-pub(crate) fn cancel_only(p: &dyn Progress) -> impl Progress + '_ {
-    struct CancelOnly<'a>(&'a dyn Progress);
-    impl Progress for CancelOnly<'_> {
-        fn cancelled(&self) -> bool {
-            self.0.cancelled()
-        }
-    }
-    CancelOnly(p)
-}
-
 /// What one slab's reconstruction returns.
 pub(crate) type Done = (SlabResult, FilterStats, RepairStats);
 

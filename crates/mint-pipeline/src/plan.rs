@@ -215,7 +215,7 @@ pub struct StagePlan {
 }
 
 /// The stage names, in the order they run.
-pub const STAGES: [&str; 6] = ["bounds", "discretize", "census", "holes", "reconstruct", "write"];
+pub const STAGES: [&str; 6] = ["bounds", "discretize", "census", "reconstruct", "reopen", "write"];
 
 /// A staged run's plan; see the module docs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -272,10 +272,10 @@ impl Plan {
         if has_mesh && !strict {
             stages.push(StagePlan { name: "census".into(), tasks: slabs });
         }
-        if !strict && options.max_hole.is_some() {
-            stages.push(StagePlan { name: "holes".into(), tasks: slabs });
-        }
         stages.push(StagePlan { name: "reconstruct".into(), tasks: slabs });
+        if !strict && options.max_hole.is_some() {
+            stages.push(StagePlan { name: "reopen".into(), tasks: slabs });
+        }
         stages.push(StagePlan { name: "write".into(), tasks: 1 });
         Ok(Plan {
             format: PLAN_FORMAT.into(),

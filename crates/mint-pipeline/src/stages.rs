@@ -7,16 +7,21 @@
 //! | `bounds`      | parts  | a range of each mesh's vertices | its box (JSON)                         |
 //! | `discretize`  | parts  | a range of each mesh's faces  | shards per mesh, counts, chunk volumes   |
 //! | `census`      | slabs  | the slab's planes (all parts) | line census per mesh (JSON)              |
-//! | `holes`       | slabs  | the slab's planes             | hole-capping cell ids (`holes.bin`)      |
-//! | `reconstruct` | slabs  | the slab's planes             | `vertices.bin`, `faces.bin` (slab ids)   |
+//! | `reconstruct` | slabs  | the slab's planes             | `vertices.bin`, `faces.bin` (slab ids), hole-capping cells (`holes.bin`) |
+//! | `reopen`      | slabs  | every slab's hole cells; the slab's planes when a hole stays open | nothing, or the slab again with the open holes left open |
 //! | `write`       | 1      | every slab's vertices, faces  | the output, renamed into place           |
+//!
+//! `reopen` exists when holes wider than `--max-hole` stay open. The first
+//! reconstruction closes every hole; only when the hole groups (a global
+//! decision) leave some open is every slab reconstructed again with them
+//! open, exactly as one process would; otherwise the first result stands.
 //!
 //! The reduces, each deterministic and cheap, run in whichever task needs
 //! them: [`Ctx::grid`] (every bounds box → the grid), [`Ctx::inverted`]
 //! (chunk volumes in chunk order → the inside-out sign), [`Ctx::slab_ranges`]
 //! (per-plane counts → the slabs' layer ranges), [`Ctx::rules`] (line
 //! census → each mesh's sign rule), [`Ctx::open_cells`] (hole cells → the
-//! groups left open).
+//! groups left open), [`Ctx::final_slab`] (which pass's result each slab keeps).
 //!
 //! Every vertex id depends only on the grid and the input
 //! (`mint_core::reconstruct`), and the write stage concatenates slabs in
@@ -24,7 +29,7 @@
 //! memory or task order.
 
 use crate::error::PipelineError;
-use crate::passes::{bounds, cancel_only, check_cancel, discretize_all, discretize_direct, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, CHUNK_TRIANGLES, FIXED_RESERVE};
+use crate::passes::{bounds, check_cancel, discretize_all, discretize_direct, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, CHUNK_TRIANGLES, FIXED_RESERVE};
 use crate::plan::{OperandPlan, Plan};
 use crate::progress::{Phase, Progress};
 use crate::scene::{Operand, Scene};
@@ -76,12 +81,6 @@ pub struct CensusResult {
     pub operands: Vec<Option<Census>>,
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct HolesResult {
-    pub cells: u64,
-    pub file: FileSum,
-}
-
 /// What reconstruction repaired (see `mint_core::signs::RepairStats`).
 #[derive(Debug, Clone, Copy, Default, Serialize, Deserialize)]
 pub struct Repair {
@@ -106,6 +105,11 @@ pub struct ReconstructResult {
     pub filter_kept: u64,
     pub filter_removed: u64,
     pub repair: Repair,
+    /// First pass: the slab's hole-capping cells (`holes.bin`).
+    pub hole_cells: u64,
+    pub holes_file: Option<FileSum>,
+    /// `reopen`: no hole stays open, the first pass's result stands.
+    pub reused: bool,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -346,15 +350,17 @@ impl<'a> Ctx<'a> {
             return Ok(o);
         }
         let result = match self.plan.options.max_hole {
-            Some(k) if self.plan.has_stage("holes") => {
+            Some(k) if self.plan.has_stage("reopen") => {
                 let mut cells: Vec<u64> = Vec::new();
-                for t in 0..self.plan.tasks("holes") {
-                    let r: HolesResult = read_result(&self.dir, "holes", t)?;
-                    let path = crate::workdir::task_dir(&self.dir, "holes", t).join("holes.bin");
-                    read_records::<8>(&path, r.file, |b| {
-                        cells.push(u64::from_le_bytes(*b));
-                        Ok(())
-                    })?;
+                for t in 0..self.plan.tasks("reconstruct") {
+                    let r: ReconstructResult = read_result(&self.dir, "reconstruct", t)?;
+                    let path = crate::workdir::task_dir(&self.dir, "reconstruct", t).join("holes.bin");
+                    if let Some(sum) = r.holes_file {
+                        read_records::<8>(&path, sum, |b| {
+                            cells.push(u64::from_le_bytes(*b));
+                            Ok(())
+                        })?;
+                    }
                 }
                 let (set, stats) = open_cells(&mut cells, self.grid()?.local_dims(), k);
                 ((!set.is_empty()).then_some(set), stats)
@@ -362,6 +368,18 @@ impl<'a> Ctx<'a> {
             _ => (None, HoleStats::default()),
         };
         Ok(self.open.get_or_init(|| result))
+    }
+
+    /// The stage whose result slab `t` keeps, and that result: `reopen`'s
+    /// when it reconstructed the slab again, else `reconstruct`'s.
+    pub fn final_slab(&self, t: u32) -> Result<(&'static str, ReconstructResult), PipelineError> {
+        if self.plan.has_stage("reopen") {
+            let r: ReconstructResult = read_result(&self.dir, "reopen", t)?;
+            if !r.reused {
+                return Ok(("reopen", r));
+            }
+        }
+        Ok(("reconstruct", read_result(&self.dir, "reconstruct", t)?))
     }
 
     /// Every operand's raw intercepts for planes `k0 ..= k1` (the last one
@@ -449,8 +467,8 @@ pub fn run_stage_task(ctx: &Ctx, stage: &str, task: u32, build: &TaskBuild) -> R
         "bounds" => serde_json::to_value(bounds_task(ctx, task)?),
         "discretize" => serde_json::to_value(discretize_task(ctx, task, build.path())?),
         "census" => serde_json::to_value(census_task(ctx, task)?),
-        "holes" => serde_json::to_value(holes_task(ctx, task, build.path())?),
-        "reconstruct" => serde_json::to_value(reconstruct_task(ctx, task, build.path())?),
+        "reconstruct" => serde_json::to_value(reconstruct_task(ctx, task, build.path(), false)?),
+        "reopen" => serde_json::to_value(reconstruct_task(ctx, task, build.path(), true)?),
         "write" => serde_json::to_value(write_task(ctx)?),
         _ => return Err(PipelineError::stage(&ctx.dir, format!("no stage '{stage}'"))),
     };
@@ -567,36 +585,26 @@ fn census_task(ctx: &Ctx, task: u32) -> Result<CensusResult, PipelineError> {
     Ok(CensusResult { operands })
 }
 
-fn holes_task(ctx: &Ctx, task: u32, out: &Path) -> Result<HolesResult, PipelineError> {
-    ctx.prepare_slab_task()?;
-    let (a, b) = ctx.slab_ranges()?[task as usize];
-    let grid = ctx.grid()?;
-    let (rules, _) = ctx.rules()?;
-    let mut file = SumWriter::create(out.join("holes.bin"))?;
-    let mut cells = 0u64;
-    let compute = |k0: u32, k1: u32| -> Result<Done, PipelineError> {
-        let (mut res, rep) = reconstruct_slab_solids(grid, k0, ctx.operand_planes(k0, k1)?, rules, &ctx.scene.expr, None);
-        res.vertices = Vec::new();
-        res.faces = Vec::new();
-        Ok((res, FilterStats::default(), rep))
-    };
-    reconstruct_ordered(&ctx.sub_slabs(a, b)?, ctx.threads, &compute, &cancel_only(ctx.progress), &mut |res, _, _, _| {
-        for c in &res.hole_cells {
-            file.write(&c.to_le_bytes())?;
-        }
-        cells += res.hole_cells.len() as u64;
-        Ok(())
-    })?;
-    Ok(HolesResult { cells, file: file.finish()? })
-}
-
-fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path) -> Result<ReconstructResult, PipelineError> {
+/// Reconstructs slab `task`: the first pass (`reopen` false) closes every
+/// hole and records the hole-capping cells; the second (`reopen` true) runs
+/// only when some hole group stays open, and leaves those open.
+fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<ReconstructResult, PipelineError> {
     ctx.prepare_slab_task()?;
     let (a, b) = ctx.slab_ranges()?[task as usize];
     let grid = ctx.grid()?;
     let (rules, _) = ctx.rules()?;
     let strict = ctx.plan.strict();
-    let open = if strict { None } else { ctx.open_cells()?.0.as_ref() };
+    let open = if reopen {
+        match ctx.open_cells()?.0.as_ref() {
+            Some(set) => Some(set),
+            None => return Ok(ReconstructResult { layers: [a, b], reused: true, ..Default::default() }),
+        }
+    } else {
+        None
+    };
+    let collect_holes = !reopen && ctx.plan.has_stage("reopen");
+    let mut holes = if collect_holes { Some(SumWriter::create(out.join("holes.bin"))?) } else { None };
+    let mut hole_cells = 0u64;
     let max_listed = ctx.plan.options.max_listed;
     let subs = ctx.sub_slabs(a, b)?;
     let counts = ctx.plane_counts()?;
@@ -628,6 +636,12 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path) -> Result<ReconstructResul
     reconstruct_ordered(&subs, ctx.threads, &compute, ctx.progress, &mut |res, f, rep, layers| {
         filter += f;
         repair += rep;
+        if let Some(h) = holes.as_mut() {
+            for c in &res.hole_cells {
+                h.write(&c.to_le_bytes())?;
+            }
+            hole_cells += res.hole_cells.len() as u64;
+        }
         for v in &res.vertices {
             let mut bytes = [0u8; 24];
             for d in 0..3 {
@@ -654,6 +668,8 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path) -> Result<ReconstructResul
     })?;
     ctx.progress.finish();
     r.vertices_file = Some(vfile.finish()?);
+    r.hole_cells = hole_cells;
+    r.holes_file = holes.map(|h| h.finish()).transpose()?;
     r.faces_file = Some(ffile.finish()?);
     r.filter_kept = filter.kept;
     r.filter_removed = filter.removed;
@@ -671,12 +687,12 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
     let format = Format::from_path(output)?;
     let o = &ctx.plan.options;
     let write = WriteOptions { ascii: o.ascii, double: o.double, spill_dir: Some(ctx.dir.clone()) };
-    let slabs: Vec<ReconstructResult> = (0..ctx.plan.tasks("reconstruct")).map(|t| read_result(&ctx.dir, "reconstruct", t)).collect::<Result<_, _>>()?;
-    let total_faces: u64 = slabs.iter().map(|s| s.faces).sum();
+    let slabs: Vec<(&str, ReconstructResult)> = (0..ctx.plan.tasks("reconstruct")).map(|t| ctx.final_slab(t)).collect::<Result<_, _>>()?;
+    let total_faces: u64 = slabs.iter().map(|(_, s)| s.faces).sum();
     let mut writer = MeshWriter::create(output, format, write)?;
     ctx.progress.start(Phase::Write, total_faces);
-    for (t, s) in slabs.iter().enumerate() {
-        let path = crate::workdir::task_dir(&ctx.dir, "reconstruct", t as u32).join("vertices.bin");
+    for (t, (stage, s)) in slabs.iter().enumerate() {
+        let path = crate::workdir::task_dir(&ctx.dir, stage, t as u32).join("vertices.bin");
         read_records::<24>(&path, s.vertices_file.unwrap_or(FileSum { len: 0, crc32: 0 }), |b| {
             let c = |d: usize| f64::from_le_bytes(b[8 * d..8 * d + 8].try_into().unwrap());
             writer.write_vertex([c(0), c(1), c(2)])?;
@@ -686,8 +702,8 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
     }
     let mut offset = 0u64;
     let mut written = 0u64;
-    for (t, s) in slabs.iter().enumerate() {
-        let path = crate::workdir::task_dir(&ctx.dir, "reconstruct", t as u32).join("faces.bin");
+    for (t, (stage, s)) in slabs.iter().enumerate() {
+        let path = crate::workdir::task_dir(&ctx.dir, stage, t as u32).join("faces.bin");
         read_records::<12>(&path, s.faces_file.unwrap_or(FileSum { len: 0, crc32: 0 }), |b| {
             let id = |d: usize| (u32::from_le_bytes(b[4 * d..4 * d + 4].try_into().unwrap()) as u64 + offset) as u32;
             writer.write_face([id(0), id(1), id(2)])?;
