@@ -241,9 +241,21 @@ pub struct GenArgs {
     /// Write ASCII instead of binary (PLY/STL).
     #[arg(long)]
     pub ascii: bool,
+    /// Order of the vertices and faces in the file: as generated (spatially
+    /// coherent), or shuffled, as real scans often come (the same surface
+    /// and triangles; the torus is shuffled as it streams, at any size; other
+    /// shapes are shuffled in memory, up to 50M faces).
+    #[arg(long, value_enum, default_value_t = OrderArg::InOrder)]
+    pub order: OrderArg,
     /// Print what was generated as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OrderArg {
+    InOrder,
+    Shuffled,
 }
 
 #[derive(Args, Debug)]
@@ -838,18 +850,35 @@ fn cmd_distance(a: DistanceArgs) -> Result<()> {
     Ok(())
 }
 
+/// Generates `a.shape` into `w`: what was generated, and the scan's defects.
+fn cmd_gen_into(a: &GenArgs, w: &mut dyn mint_core::MeshSink) -> Result<(serde_json::Value, Option<mint_gen::ScanDefects>)> {
+    Ok(match a.shape {
+        Shape::Sphere => (serde_json::to_value(mint_gen::sphere([0.0; 3], 1.0, a.faces, w)?)?, None),
+        Shape::Torus => (serde_json::to_value(mint_gen::torus([0.0; 3], 1.0, 0.35, a.faces, w)?)?, None),
+        Shape::Genus => (serde_json::to_value(mint_gen::genus(a.genus, a.faces, w)?)?, None),
+        Shape::Components => (serde_json::to_value(mint_gen::components(a.faces, a.seed, w)?)?, None),
+        Shape::Scan => {
+            let d = mint_gen::scan_like(a.faces, a.seed, &mint_gen::ScanOptions::default(), w)?;
+            (serde_json::to_value(&d.counts)?, Some(d))
+        }
+    })
+}
+
 fn cmd_gen(a: GenArgs) -> Result<()> {
     let format = mint_io::Format::from_path(&a.output)?;
     let mut w = mint_io::MeshWriter::create(&a.output, format, WriteOptions { ascii: a.ascii, ..Default::default() })?;
-    let (generated, defects) = match a.shape {
-        Shape::Sphere => (serde_json::to_value(mint_gen::sphere([0.0; 3], 1.0, a.faces, &mut w)?)?, None),
-        Shape::Torus => (serde_json::to_value(mint_gen::torus([0.0; 3], 1.0, 0.35, a.faces, &mut w)?)?, None),
-        Shape::Genus => (serde_json::to_value(mint_gen::genus(a.genus, a.faces, &mut w)?)?, None),
-        Shape::Components => (serde_json::to_value(mint_gen::components(a.faces, a.seed, &mut w)?)?, None),
-        Shape::Scan => {
-            let d = mint_gen::scan_like(a.faces, a.seed, &mint_gen::ScanOptions::default(), &mut w)?;
-            (serde_json::to_value(&d.counts)?, Some(d))
+    let (generated, defects) = match (a.order, a.shape) {
+        (OrderArg::Shuffled, Shape::Torus) => (serde_json::to_value(mint_gen::torus_shuffled([0.0; 3], 1.0, 0.35, a.faces, a.seed, &mut w)?)?, None),
+        (OrderArg::Shuffled, _) => {
+            if a.faces > 50_000_000 {
+                bail!("--order shuffled: only the torus is shuffled as it streams; other shapes are shuffled in memory, up to 50,000,000 faces");
+            }
+            let mut m = mint_core::TriMesh::default();
+            let g = cmd_gen_into(&a, &mut m)?;
+            mint_gen::shuffle_mesh(&m, a.seed, &mut w)?;
+            g
         }
+        (OrderArg::InOrder, _) => cmd_gen_into(&a, &mut w)?,
     };
     let written = w.finish()?;
     if let Some(d) = &defects {
@@ -896,7 +925,7 @@ fn cmd_demo(a: DemoArgs) -> Result<()> {
     let input = dir.join("demo-genus3.ply");
     let output = dir.join("demo-genus3-resampled.ply");
     eprintln!("1/3 generating a genus-3 solid with about {} faces: {}", a.faces, input.display());
-    cmd_gen(GenArgs { shape: Shape::Genus, output: input.clone(), faces: a.faces, seed: 1, genus: 3, ascii: false, json: false })?;
+    cmd_gen(GenArgs { shape: Shape::Genus, output: input.clone(), faces: a.faces, seed: 1, genus: 3, ascii: false, order: OrderArg::InOrder, json: false })?;
     eprintln!("2/3 resampling it on about {} cells", a.cells);
     let s = resample_and_report(ResampleArgs {
         input: input.clone(),

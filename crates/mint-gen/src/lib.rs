@@ -10,6 +10,8 @@
 //! - [`torus()`] ([`torus`](mod@torus)): a torus around the z axis (genus 1).
 //! - [`genus()`] ([`plate`]): a thick plate with `n` square holes (genus `n`).
 //! - [`components()`] ([`balls`]): many small disjoint spheres on a lattice.
+//! - [`torus_shuffled()`] and [`shuffle_mesh()`] ([`shuffle`]): the same
+//!   meshes with vertices and faces in a pseudo-random order, as scans come.
 //! - [`scan_like()`] ([`scan`]): a noisy sphere with holes, flipped faces,
 //!   duplicated patches and non-manifold slivers at known sites, returning
 //!   [`ScanDefects`], which states the exact counts `mint_mesh::check`
@@ -28,6 +30,7 @@ pub mod error;
 pub mod plate;
 pub mod rng;
 pub mod scan;
+pub mod shuffle;
 pub mod sphere;
 pub mod surface;
 pub mod torus;
@@ -37,6 +40,7 @@ pub use error::GenError;
 pub use mint_core::{CountingSink, MeshSink, SinkError, TriMesh};
 pub use plate::{genus, Plate};
 pub use scan::{scan_like, ExpectedCheck, ScanDefects, ScanOptions};
+pub use shuffle::{shuffle_mesh, torus_shuffled, Permutation};
 pub use sphere::{sphere, SphereGrid};
 pub use surface::{ExactSurface, PlateSurface, ScanSurface, SphereSurface, TorusSurface};
 pub use torus::{torus, TorusGrid};

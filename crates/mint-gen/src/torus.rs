@@ -66,6 +66,87 @@ impl TorusGrid {
     }
 }
 
+/// A torus whose vertices and faces are computed from their index (trig
+/// tables of `O(U + W)`), for streaming in order ([`torus()`]) or in any
+/// order (`shuffle::torus_shuffled`).
+pub(crate) struct TorusMesh {
+    pub(crate) grid: TorusGrid,
+    center: [f64; 3],
+    major: f64,
+    minor: f64,
+    /// Around the axis: (cos u, sin u) per `i`.
+    around: Vec<(f64, f64)>,
+    /// Around the tube: (ρ, z) = (R + r cos v, r sin v) per `j`.
+    ring: Vec<(f64, f64)>,
+}
+
+impl TorusMesh {
+    pub(crate) fn new(center: [f64; 3], major: f64, minor: f64, target_faces: u64) -> Result<TorusMesh, GenError> {
+        positive("major", major)?;
+        positive("minor", minor)?;
+        finite3("center", center)?;
+        if minor >= major {
+            return Err(GenError::InvalidParameter {
+                name: "minor",
+                reason: format!("minor radius {minor} must be below the major radius {major}"),
+            });
+        }
+        let grid = TorusGrid::for_faces(target_faces, major, minor);
+        check_vertex_count(grid.vertices())?;
+        let (nu, nw) = (grid.around, grid.tube);
+        let ring = (0..nw)
+            .map(|j| {
+                let v = 2.0 * PI * f64::from(j) / f64::from(nw);
+                (major + minor * v.cos(), minor * v.sin())
+            })
+            .collect();
+        let around = (0..nu)
+            .map(|i| {
+                let u = 2.0 * PI * f64::from(i) / f64::from(nu);
+                (u.cos(), u.sin())
+            })
+            .collect();
+        Ok(TorusMesh { grid, center, major, minor, around, ring })
+    }
+
+    /// Vertex `i·W + j`.
+    #[inline]
+    pub(crate) fn vertex(&self, index: u32) -> [f64; 3] {
+        let (i, j) = (index / self.grid.tube, index % self.grid.tube);
+        let (cu, su) = self.around[i as usize];
+        let (rho, z) = self.ring[j as usize];
+        let c = self.center;
+        [c[0] + rho * cu, c[1] + rho * su, c[2] + z]
+    }
+
+    /// Face `2·(i·W + j) + k`: `(a, b, c)` for `k = 0`, `(a, c, d)` for `k = 1`.
+    #[inline]
+    pub(crate) fn face(&self, f: u64) -> [u32; 3] {
+        let (nu, nw) = (self.grid.around, self.grid.tube);
+        let q = (f / 2) as u32;
+        let (i, j) = (q / nw, q % nw);
+        let row = i * nw;
+        let next = if i + 1 == nu { 0 } else { row + nw };
+        let jn = if j + 1 == nw { 0 } else { j + 1 };
+        let (a, b, c, d) = (row + j, next + j, next + jn, row + jn);
+        if f % 2 == 0 {
+            [a, b, c]
+        } else {
+            [a, c, d]
+        }
+    }
+
+    pub(crate) fn generated(&self) -> Generated {
+        Generated {
+            vertices: self.grid.vertices(),
+            faces: self.grid.faces(),
+            components: 1,
+            genus: 1,
+            surface: ExactSurface::Torus(TorusSurface { center: self.center, major: self.major, minor: self.minor }),
+        }
+    }
+}
+
 /// Streams a torus around the axis through `center` parallel to z, with
 /// major radius `major`, minor radius `minor < major`, and about
 /// `target_faces` faces (see [`TorusGrid::for_faces`]). Closed, genus 1,
@@ -77,52 +158,14 @@ pub fn torus(
     target_faces: u64,
     sink: &mut dyn MeshSink,
 ) -> Result<Generated, GenError> {
-    positive("major", major)?;
-    positive("minor", minor)?;
-    finite3("center", center)?;
-    if minor >= major {
-        return Err(GenError::InvalidParameter {
-            name: "minor",
-            reason: format!("minor radius {minor} must be below the major radius {major}"),
-        });
+    let t = TorusMesh::new(center, major, minor, target_faces)?;
+    for i in 0..t.grid.vertices() as u32 {
+        sink.vertex(t.vertex(i))?;
     }
-    let g = TorusGrid::for_faces(target_faces, major, minor);
-    check_vertex_count(g.vertices())?;
-    let (nu, nw) = (g.around, g.tube);
-    let ring: Vec<(f64, f64)> = (0..nw)
-        .map(|j| {
-            let v = 2.0 * PI * f64::from(j) / f64::from(nw);
-            (major + minor * v.cos(), minor * v.sin())
-        })
-        .collect();
-    for i in 0..nu {
-        let u = 2.0 * PI * f64::from(i) / f64::from(nu);
-        let (cu, su) = (u.cos(), u.sin());
-        for &(rho, z) in &ring {
-            sink.vertex([center[0] + rho * cu, center[1] + rho * su, center[2] + z])?;
-        }
+    for f in 0..t.grid.faces() {
+        sink.face(t.face(f))?;
     }
-    for i in 0..nu {
-        let row = i * nw;
-        let next = if i + 1 == nu { 0 } else { row + nw };
-        for j in 0..nw {
-            let jn = if j + 1 == nw { 0 } else { j + 1 };
-            let (a, b, c, d) = (row + j, next + j, next + jn, row + jn);
-            sink.face([a, b, c])?;
-            sink.face([a, c, d])?;
-        }
-    }
-    Ok(Generated {
-        vertices: g.vertices(),
-        faces: g.faces(),
-        components: 1,
-        genus: 1,
-        surface: ExactSurface::Torus(TorusSurface {
-            center,
-            major,
-            minor,
-        }),
-    })
+    Ok(t.generated())
 }
 
 #[cfg(test)]
