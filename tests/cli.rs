@@ -308,3 +308,61 @@ fn align_leaves_out_a_scan_with_no_overlap_and_goes_on() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.lines().count() == 1 && err.contains(&format!("{}:1:", bad_set.display())), "{err}");
 }
+
+/// `check` welds identical positions first (STL soups, OBJ texture seams);
+/// `--no-weld` judges the indices as written.
+#[test]
+fn check_welds_stl_soups_and_obj_seams_and_no_weld_does_not() {
+    let d = tempfile::tempdir().unwrap();
+    let verdict = |args: &[&str]| -> serde_json::Value {
+        let mut a = vec!["check"];
+        a.extend_from_slice(args);
+        a.push("--json");
+        serde_json::from_str(&ok(&a)).unwrap()
+    };
+    // An STL cube: 12 facets, 36 corners, 8 points.
+    let cube = d.path().join("cube.stl");
+    let mut text = String::from("solid cube\n");
+    let c = |i: u32| [(i & 1) as f64, ((i >> 1) & 1) as f64, ((i >> 2) & 1) as f64];
+    for q in [[0u32, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]] {
+        for t in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+            text.push_str("facet normal 0 0 0\nouter loop\n");
+            for v in t {
+                let p = c(v);
+                text.push_str(&format!("vertex {} {} {}\n", p[0], p[1], p[2]));
+            }
+            text.push_str("endloop\nendfacet\n");
+        }
+    }
+    text.push_str("endsolid cube\n");
+    std::fs::write(&cube, text).unwrap();
+    let v = verdict(&[p(&cube)]);
+    assert_eq!((v["watertight"].as_bool(), v["welded_vertices"].as_u64(), v["vertices"].as_u64(), v["genus_total"].as_i64()), (Some(true), Some(28), Some(8), Some(0)));
+    let v = verdict(&[p(&cube), "--no-weld"]);
+    assert_eq!((v["watertight"].as_bool(), v["boundary_edges"].as_u64()), (Some(false), Some(36)));
+    // A binary STL torus.
+    let torus = d.path().join("t.ply");
+    ok(&["gen", "torus", p(&torus), "--faces", "20000"]);
+    let stl = d.path().join("t.stl");
+    ok(&["convert", p(&torus), p(&stl)]);
+    let v = verdict(&[p(&stl)]);
+    assert_eq!((v["watertight"].as_bool(), v["genus_total"].as_i64()), (Some(true), Some(1)));
+    assert_eq!(verdict(&[p(&stl), "--no-weld"])["watertight"].as_bool(), Some(false));
+    // An OBJ cube whose vertices are split at texture seams: each face has
+    // its own four corners with their own texture coordinates.
+    let obj = d.path().join("seams.obj");
+    let mut text = String::from("# cube with per-face vertices (texture seams)\n");
+    let mut k = 1;
+    for q in [[0u32, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]] {
+        for v in q {
+            let p = c(v);
+            text.push_str(&format!("v {} {} {}\nvt {} {}\n", p[0], p[1], p[2], v & 1, (v >> 1) & 1));
+        }
+        text.push_str(&format!("f {}/{} {}/{} {}/{} {}/{}\n", k, k, k + 1, k + 1, k + 2, k + 2, k + 3, k + 3));
+        k += 4;
+    }
+    std::fs::write(&obj, text).unwrap();
+    let v = verdict(&[p(&obj)]);
+    assert_eq!((v["watertight"].as_bool(), v["welded_vertices"].as_u64()), (Some(true), Some(16)));
+    assert_eq!(verdict(&[p(&obj), "--no-weld"])["watertight"].as_bool(), Some(false));
+}

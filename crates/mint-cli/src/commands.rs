@@ -188,6 +188,12 @@ pub struct CheckArgs {
     /// Exit with code 3 when the mesh is not watertight (for scripts).
     #[arg(long)]
     pub strict: bool,
+    /// Judge the indices as written. By default vertices at identical
+    /// positions are merged first, as MeshLab and trimesh do on import: STL
+    /// stores each triangle's corners separately and OBJ splits vertices at
+    /// texture seams, which would otherwise read as boundaries everywhere.
+    #[arg(long)]
+    pub no_weld: bool,
 }
 
 #[derive(Args, Debug)]
@@ -802,8 +808,10 @@ pub fn load_mesh(path: &std::path::Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>
 }
 
 fn cmd_check(a: CheckArgs) -> Result<()> {
-    let (positions, faces) = load_mesh(&a.file)?;
-    let r = mint_mesh::try_check(&positions, &faces).with_context(|| format!("{}", a.file.display()))?;
+    let (mut positions, mut faces) = load_mesh(&a.file)?;
+    let welded = if a.no_weld { 0 } else { mint_mesh::weld(&mut positions, &mut faces) };
+    let mut r = mint_mesh::try_check(&positions, &faces).with_context(|| format!("{}", a.file.display()))?;
+    r.welded_vertices = welded;
     if a.json {
         let mut v = serde_json::to_value(&r)?;
         v["file"] = a.file.display().to_string().into();
@@ -820,6 +828,9 @@ fn cmd_check(a: CheckArgs) -> Result<()> {
 fn print_check(name: &str, r: &mint_mesh::CheckReport) {
     println!("{name}: {}", if r.watertight { "watertight (closed, 2-manifold, consistently oriented)" } else { "NOT watertight" });
     println!("  vertices {} ({} unreferenced), faces {}", r.vertices, r.unreferenced_vertices, r.faces);
+    if r.welded_vertices > 0 {
+        println!("  welded {} vertices at identical positions into earlier ones (--no-weld judges the indices as written)", r.welded_vertices);
+    }
     if let (Some(lo), Some(hi)) = (r.bbox_min, r.bbox_max) {
         println!("  bbox [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
     }

@@ -121,6 +121,10 @@ pub struct CheckReport {
     pub signed_volume: f64,
     pub surface_area: f64,
     pub watertight: bool,
+    /// Vertices merged into an identical earlier position before judging
+    /// (`mint check` welds unless `--no-weld`; 0 when not welded).
+    #[serde(default)]
+    pub welded_vertices: u64,
 }
 
 /// Checks a mesh; see the [module docs](self) for what is measured.
@@ -209,6 +213,7 @@ pub fn try_check(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<CheckRepo
         euler_characteristic: referenced as i64 - c.edges as i64 + proper_faces as i64,
         closed_components: genera.len() as u64,
         genus_total: genera.iter().sum(),
+        welded_vertices: 0,
         genera,
         signed_volume: geom.volume6 / 6.0,
         surface_area: geom.area2 / 2.0,

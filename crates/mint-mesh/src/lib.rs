@@ -28,6 +28,7 @@ pub mod check;
 pub mod distance;
 pub mod error;
 pub mod rng;
+pub mod weld;
 
 pub use bvh::{closest_point_on_triangle, TriangleBvh};
 pub use check::{check, check_mesh, try_check, CheckReport};
@@ -37,3 +38,4 @@ pub use distance::{
 };
 pub use error::MeshError;
 pub use rng::SplitMix64;
+pub use weld::weld;
