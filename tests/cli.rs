@@ -366,3 +366,40 @@ fn check_welds_stl_soups_and_obj_seams_and_no_weld_does_not() {
     assert_eq!((v["watertight"].as_bool(), v["welded_vertices"].as_u64()), (Some(true), Some(16)));
     assert_eq!(verdict(&[p(&obj), "--no-weld"])["watertight"].as_bool(), Some(false));
 }
+
+/// `mint render`: a sphere's silhouette has the analytic area (orthographic
+/// camera), the bytes are the same on every run, and `--preview` writes the
+/// input and output side by side.
+#[test]
+fn render_draws_a_sphere_with_its_analytic_silhouette_and_the_same_bytes_every_time() {
+    let d = tempfile::tempdir().unwrap();
+    let s = d.path().join("s.ply");
+    ok(&["gen", "sphere", p(&s), "--faces", "200000"]);
+    for view in ["top", "front", "iso"] {
+        let png = d.path().join(format!("{view}.png"));
+        let j: serde_json::Value = serde_json::from_str(&ok(&["render", p(&s), p(&png), "--view", view, "--size", "400x300", "--json"])).unwrap();
+        // Radius 1 fitted into 45% of the smaller side: scale = 0.45 * 300 / extent.
+        let scale = j["scale"].as_f64().unwrap();
+        let want = std::f64::consts::PI * scale * scale;
+        let got = j["covered_pixels"].as_f64().unwrap();
+        assert!((got - want).abs() < 0.02 * want, "{view}: {got} pixels, analytic {want:.0}");
+        let again = d.path().join(format!("{view}-again.png"));
+        ok(&["render", p(&s), p(&again), "--view", view, "--size", "400x300", "--quiet"]);
+        assert!(std::fs::read(&png).unwrap() == std::fs::read(&again).unwrap(), "{view}: bytes differ between runs");
+        assert_eq!(&std::fs::read(&png).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
+    }
+    // Same bytes with one thread and with two (the rasterizer is single-threaded by design).
+    let one = d.path().join("one.png");
+    let o = mint().args(["render", p(&s), p(&one), "--quiet"]).env("RAYON_NUM_THREADS", "1").output().unwrap();
+    assert!(o.status.success());
+    let two = d.path().join("two.png");
+    ok(&["render", p(&s), p(&two), "--quiet"]);
+    assert!(std::fs::read(&one).unwrap() == std::fs::read(&two).unwrap());
+    // --preview: OUT.png beside the output.
+    let out = d.path().join("r.ply");
+    ok(&["resample", p(&s), p(&out), "--cells", "20000", "--preview", "--quiet"]);
+    assert!(d.path().join("r.png").is_file());
+    // A non-PNG name is refused before any work.
+    let o = run(&["render", p(&s), p(&d.path().join("x.jpg"))]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("PNG"));
+}

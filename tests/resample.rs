@@ -176,6 +176,12 @@ fn resample_under_limit(faces: u64) {
     let m = load(&out);
     let r = mint_mesh::check(&m.positions, &m.faces);
     assert!(r.watertight && r.genus_total == 0, "{r:?}");
+    // A picture of the input streams through the same limit.
+    let png = dir.path().join("in.png");
+    let o = std::process::Command::new("prlimit").arg("--data=268435456").arg(mint_bin()).arg("render").arg(&input).arg(&png).args(["--json", "--quiet"]).output().unwrap();
+    assert!(o.status.success(), "render under 256 MiB failed: {}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["triangles"].as_u64(), Some(faces));
 }
 
 #[test]

@@ -30,6 +30,8 @@ pub enum Phase {
     Contours,
     /// Cutting a mesh into sections (units: bytes of the input).
     Slice,
+    /// Drawing a mesh's triangles (units: faces).
+    Render,
 }
 
 impl Phase {
@@ -47,6 +49,7 @@ impl Phase {
             Phase::Sections => "sections",
             Phase::Contours => "contours",
             Phase::Slice => "slice",
+            Phase::Render => "render",
         }
     }
 }

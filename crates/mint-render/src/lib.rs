@@ -1,0 +1,418 @@
+//! `mint render`: pictures of meshes of any size. A streaming z-buffer
+//! rasterizer: each triangle is projected and rasterized on its own, in file
+//! order, so memory is the framebuffer (about 7 bytes per pixel) whatever
+//! the mesh size. One pass over the vertices finds the box that frames the
+//! picture; one pass over the faces draws them.
+//!
+//! - [`Camera`]: an orthographic view along one of seven directions, fitted
+//!   to a box ([`View`]); orthographic so that areas in the picture are areas
+//!   on the mesh, scaled.
+//! - [`Canvas`]: depth and colour per pixel; [`Canvas::triangle`] fills the
+//!   pixels whose centres a triangle covers (closed edge test, so a surface
+//!   tiled by triangles leaves no gaps between them), nearest first.
+//! - Shading: flat Lambert from each face's normal and a fixed light above
+//!   and to the left of the viewer; faces seen from behind (inside-out parts,
+//!   the inside seen through holes) in a distinct orange.
+//! - [`render_files`]: several meshes side by side under one camera
+//!   (`--preview`: input and output), each view a tile; `View::All` tiles
+//!   the six axis views and the iso view. Encoded as PNG (the `png` crate).
+//!
+//! Deterministic: one thread, f64 arithmetic, triangles in file order, and a
+//! depth test with a fixed tie rule (the first triangle drawn at a depth
+//! keeps the pixel), so the bytes do not depend on the machine's threads.
+
+use mint_core::progress::{Phase, Progress};
+use mint_io::{MeshReader, ReadOptions, TriangleChunk};
+use std::path::{Path, PathBuf};
+
+/// Why rendering failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// Reading a mesh failed (bad input…).
+    #[error(transparent)]
+    Io(#[from] mint_io::Error),
+    /// Writing the picture failed.
+    #[error("{path}: {message}")]
+    Write { path: PathBuf, message: String },
+    /// An option is out of range; the message says which.
+    #[error("{0}")]
+    Option(String),
+    /// The meshes have no finite vertex to frame.
+    #[error("{path}: nothing to draw (no vertices with finite coordinates)")]
+    Empty { path: PathBuf },
+    /// The user interrupted; nothing was written.
+    #[error("interrupted; no output written")]
+    Cancelled,
+}
+
+/// Where the camera looks from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum View {
+    /// From (+1, −1, +1): right, front and top at once.
+    Iso,
+    /// From −y (x right, z up).
+    Front,
+    /// From +y.
+    Back,
+    /// From −x.
+    Left,
+    /// From +x.
+    Right,
+    /// From +z (x right, y up).
+    Top,
+    /// From −z.
+    Bottom,
+    /// The six above and iso, tiled.
+    All,
+}
+
+impl View {
+    /// The single views `self` stands for, in tile order.
+    pub fn singles(self) -> Vec<View> {
+        match self {
+            View::All => vec![View::Iso, View::Front, View::Right, View::Top, View::Back, View::Left, View::Bottom],
+            v => vec![v],
+        }
+    }
+
+    /// Unit direction the camera looks along, and the up direction.
+    fn frame(self) -> ([f64; 3], [f64; 3]) {
+        let s = 1.0 / 3f64.sqrt();
+        match self {
+            View::Iso | View::All => ([-s, s, -s], [0.0, 0.0, 1.0]),
+            View::Front => ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0]),
+            View::Back => ([0.0, -1.0, 0.0], [0.0, 0.0, 1.0]),
+            View::Left => ([1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+            View::Right => ([-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]),
+            View::Top => ([0.0, 0.0, -1.0], [0.0, 1.0, 0.0]),
+            View::Bottom => ([0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
+        }
+    }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+fn unit(a: [f64; 3]) -> [f64; 3] {
+    let n = dot(a, a).sqrt();
+    [a[0] / n, a[1] / n, a[2] / n]
+}
+
+/// An orthographic camera: world point → (pixel x, pixel y, depth).
+#[derive(Debug, Clone, Copy)]
+pub struct Camera {
+    dir: [f64; 3],
+    right: [f64; 3],
+    up: [f64; 3],
+    center: [f64; 3],
+    /// Pixels per world unit.
+    pub scale: f64,
+    width: u32,
+    height: u32,
+}
+
+impl Camera {
+    /// Looks at the box `lo..hi` from `view`, fitting its projection into
+    /// `width × height` pixels with a 5% margin.
+    pub fn fit(view: View, lo: [f64; 3], hi: [f64; 3], width: u32, height: u32) -> Camera {
+        let (dir, up0) = view.frame();
+        let right = unit(cross(dir, up0));
+        let up = cross(right, dir);
+        let center = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])];
+        let (mut ex, mut ey) = (0.0f64, 0.0f64);
+        for i in 0..8 {
+            let c = [if i & 1 == 0 { lo[0] } else { hi[0] }, if i & 2 == 0 { lo[1] } else { hi[1] }, if i & 4 == 0 { lo[2] } else { hi[2] }];
+            let d = sub(c, center);
+            ex = ex.max(dot(d, right).abs());
+            ey = ey.max(dot(d, up).abs());
+        }
+        let sx = if ex > 0.0 { 0.45 * width as f64 / ex } else { f64::INFINITY };
+        let sy = if ey > 0.0 { 0.45 * height as f64 / ey } else { f64::INFINITY };
+        let mut scale = sx.min(sy);
+        if !scale.is_finite() {
+            scale = 1.0;
+        }
+        Camera { dir, right, up, center, scale, width, height }
+    }
+
+    /// Pixel coordinates (x right, y down) and depth (larger is farther).
+    #[inline]
+    pub fn project(&self, p: [f64; 3]) -> [f64; 3] {
+        let d = sub(p, self.center);
+        [
+            0.5 * self.width as f64 + dot(d, self.right) * self.scale,
+            0.5 * self.height as f64 - dot(d, self.up) * self.scale,
+            dot(d, self.dir),
+        ]
+    }
+
+    /// The direction the camera looks along.
+    pub fn direction(&self) -> [f64; 3] {
+        self.dir
+    }
+}
+
+/// A depth buffer and an RGB picture.
+pub struct Canvas {
+    pub width: u32,
+    pub height: u32,
+    depth: Vec<f32>,
+    rgb: Vec<[u8; 3]>,
+    /// Pixels covered by at least one triangle.
+    pub covered: u64,
+}
+
+/// The background colour.
+pub const BACKGROUND: [u8; 3] = [250, 250, 250];
+const FRONT: [f64; 3] = [0.55, 0.68, 0.85];
+const BACK: [f64; 3] = [0.95, 0.55, 0.15];
+
+impl Canvas {
+    pub fn new(width: u32, height: u32) -> Canvas {
+        let n = width as usize * height as usize;
+        Canvas { width, height, depth: vec![f32::INFINITY; n], rgb: vec![BACKGROUND; n], covered: 0 }
+    }
+
+    /// Draws one triangle seen by `cam`, flat-shaded.
+    #[inline]
+    pub fn triangle(&mut self, cam: &Camera, p: &[[f64; 3]; 3]) {
+        let n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
+        let nn = dot(n, n).sqrt();
+        if !(nn > 0.0) {
+            return; // zero area (or non-finite): nothing to see
+        }
+        let n = [n[0] / nn, n[1] / nn, n[2] / nn];
+        let facing = dot(n, cam.dir);
+        let front = facing < 0.0;
+        // Light from above-left of the viewer; faces seen from behind are
+        // lit as if their normal pointed at the viewer.
+        let light = unit([-cam.dir[0] + 0.5 * cam.up[0] - 0.4 * cam.right[0], -cam.dir[1] + 0.5 * cam.up[1] - 0.4 * cam.right[1], -cam.dir[2] + 0.5 * cam.up[2] - 0.4 * cam.right[2]]);
+        let ns = if front { n } else { [-n[0], -n[1], -n[2]] };
+        let lambert = dot(ns, light).max(0.0);
+        let base = if front { FRONT } else { BACK };
+        let k = 0.25 + 0.75 * lambert;
+        let color = base.map(|c| (255.0 * (c * k).min(1.0)).round() as u8);
+        self.fill(cam, p, color);
+    }
+
+    /// Fills the pixels whose centres `p` covers (edges included), keeping
+    /// the nearest depth; the first triangle at a depth keeps the pixel.
+    #[inline]
+    pub fn fill(&mut self, cam: &Camera, p: &[[f64; 3]; 3], color: [u8; 3]) {
+        let q = [cam.project(p[0]), cam.project(p[1]), cam.project(p[2])];
+        let (w, h) = (self.width as f64, self.height as f64);
+        let minx = q[0][0].min(q[1][0]).min(q[2][0]);
+        let maxx = q[0][0].max(q[1][0]).max(q[2][0]);
+        let miny = q[0][1].min(q[1][1]).min(q[2][1]);
+        let maxy = q[0][1].max(q[1][1]).max(q[2][1]);
+        // Pixel centres i + 0.5 inside [min, max].
+        let x0 = (minx - 0.5).ceil().max(0.0);
+        let x1 = (maxx - 0.5).floor().min(w - 1.0);
+        let y0 = (miny - 0.5).ceil().max(0.0);
+        let y1 = (maxy - 0.5).floor().min(h - 1.0);
+        if !(x0 <= x1 && y0 <= y1) {
+            return;
+        }
+        let area = (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[1][1] - q[0][1]) * (q[2][0] - q[0][0]);
+        if area == 0.0 || !area.is_finite() {
+            return;
+        }
+        let edge = |a: [f64; 3], b: [f64; 3], x: f64, y: f64| (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0]);
+        for yi in y0 as u32..=y1 as u32 {
+            let y = yi as f64 + 0.5;
+            for xi in x0 as u32..=x1 as u32 {
+                let x = xi as f64 + 0.5;
+                let w0 = edge(q[1], q[2], x, y) / area;
+                let w1 = edge(q[2], q[0], x, y) / area;
+                let w2 = edge(q[0], q[1], x, y) / area;
+                if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                    continue;
+                }
+                let z = (w0 * q[0][2] + w1 * q[1][2] + w2 * q[2][2]) as f32;
+                let i = yi as usize * self.width as usize + xi as usize;
+                if z < self.depth[i] {
+                    if self.depth[i] == f32::INFINITY {
+                        self.covered += 1;
+                    }
+                    self.depth[i] = z;
+                    self.rgb[i] = color;
+                }
+            }
+        }
+    }
+
+    /// Copies `other` into this canvas with its top-left corner at (x, y).
+    pub fn blit(&mut self, other: &Canvas, x: u32, y: u32) {
+        for row in 0..other.height.min(self.height.saturating_sub(y)) {
+            for col in 0..other.width.min(self.width.saturating_sub(x)) {
+                let src = row as usize * other.width as usize + col as usize;
+                let dst = (y + row) as usize * self.width as usize + (x + col) as usize;
+                self.rgb[dst] = other.rgb[src];
+            }
+        }
+    }
+
+    /// The RGB bytes, row by row.
+    pub fn rgb_bytes(&self) -> Vec<u8> {
+        self.rgb.iter().flatten().copied().collect()
+    }
+
+    /// Encodes the picture as PNG into `path`, through a temporary file
+    /// beside it renamed at the end.
+    pub fn write_png(&self, path: &Path) -> Result<(), RenderError> {
+        let err = |e: String| RenderError::Write { path: path.to_path_buf(), message: e };
+        let mut bytes = Vec::new();
+        {
+            let mut enc = png::Encoder::new(&mut bytes, self.width, self.height);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            let mut w = enc.write_header().map_err(|e| err(e.to_string()))?;
+            w.write_image_data(&self.rgb_bytes()).map_err(|e| err(e.to_string()))?;
+        }
+        let mut file = mint_io::AtomicFile::create(path).map_err(RenderError::Io)?;
+        use std::io::Write;
+        file.write_all(&bytes).map_err(|e| err(format!("writing: {e}")))?;
+        file.commit().map_err(RenderError::Io)?;
+        Ok(())
+    }
+}
+
+/// Options of [`render_files`].
+#[derive(Debug, Clone)]
+pub struct RenderOptions {
+    /// Size of one tile (one view of one mesh), in pixels. Default 1200×900.
+    pub width: u32,
+    pub height: u32,
+    /// The view, or all of them. Default iso.
+    pub view: View,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions { width: 1200, height: 900, view: View::Iso }
+    }
+}
+
+/// What a render drew.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct RenderSummary {
+    pub output: String,
+    pub width: u32,
+    pub height: u32,
+    pub triangles: u64,
+    /// Pixels covered by the meshes, over all tiles.
+    pub covered_pixels: u64,
+    /// Pixels per world unit of the camera.
+    pub scale: f64,
+    pub seconds: f64,
+}
+
+/// Renders `inputs` side by side (one column each, one row per view), all
+/// under the cameras fitted to their joint bounding box, into `output`.
+pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress: &dyn Progress) -> Result<RenderSummary, RenderError> {
+    let t = std::time::Instant::now();
+    if o.width == 0 || o.height == 0 || o.width > 16384 || o.height > 16384 {
+        return Err(RenderError::Option(format!("--size {}x{}: each side must be 1 to 16384 pixels", o.width, o.height)));
+    }
+    let views = o.view.singles();
+    if (inputs.len() * views.len()) as u64 * o.width as u64 * o.height as u64 > 1 << 28 {
+        return Err(RenderError::Option("the picture would exceed 268 million pixels; choose a smaller --size".into()));
+    }
+    // 1. The joint box, from the vertex maps.
+    let read = ReadOptions { chunk_triangles: 1 << 16, spill_dir: None, resolve_positions: true };
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for path in inputs {
+        let r = MeshReader::open(path, read.clone())?;
+        let pos = r.positions();
+        progress.start(Phase::Bounds, pos.len() as u64);
+        let mut at = 0u32;
+        while at < pos.len() {
+            let to = at.saturating_add(1 << 20).min(pos.len());
+            match pos.bounds(at, to) {
+                Ok(Some((l, h))) => {
+                    for d in 0..3 {
+                        lo[d] = lo[d].min(l[d]);
+                        hi[d] = hi[d].max(h[d]);
+                    }
+                }
+                Ok(None) => {}
+                Err((i, _)) => {
+                    return Err(RenderError::Io(mint_io::Error::new(mint_io::ErrorKind::Value, path, format!("vertex {i} has a non-finite coordinate"))))
+                }
+            }
+            progress.advance((to - at) as u64);
+            at = to;
+        }
+        progress.finish();
+    }
+    if !(lo[0] <= hi[0]) {
+        return Err(RenderError::Empty { path: inputs.first().map(|p| p.to_path_buf()).unwrap_or_default() });
+    }
+    // 2. Every triangle of every input into its tiles.
+    let mut picture = Canvas::new(o.width * inputs.len() as u32, o.height * views.len() as u32);
+    let mut summary = RenderSummary { output: output.display().to_string(), width: picture.width, height: picture.height, ..Default::default() };
+    for (col, path) in inputs.iter().enumerate() {
+        let cams: Vec<Camera> = views.iter().map(|&v| Camera::fit(v, lo, hi, o.width, o.height)).collect();
+        summary.scale = cams[0].scale;
+        let mut tiles: Vec<Canvas> = views.iter().map(|_| Canvas::new(o.width, o.height)).collect();
+        let mut r = MeshReader::open(path, read.clone())?;
+        progress.start(Phase::Render, r.info().face_count.unwrap_or(0));
+        let mut chunk = TriangleChunk::new();
+        while r.next_chunk(&mut chunk)? {
+            if progress.cancelled() {
+                return Err(RenderError::Cancelled);
+            }
+            for p in &chunk.positions {
+                for (tile, cam) in tiles.iter_mut().zip(&cams) {
+                    tile.triangle(cam, p);
+                }
+            }
+            summary.triangles += chunk.len() as u64;
+            progress.advance(chunk.len() as u64);
+        }
+        progress.finish();
+        for (row, tile) in tiles.iter().enumerate() {
+            summary.covered_pixels += tile.covered;
+            picture.blit(tile, col as u32 * o.width, row as u32 * o.height);
+        }
+    }
+    picture.write_png(output)?;
+    summary.seconds = t.elapsed().as_secs_f64();
+    Ok(summary)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_square_tiled_by_two_triangles_covers_every_pixel_once_without_gaps() {
+        let cam = Camera::fit(View::Top, [0.0, 0.0, 0.0], [1.0, 1.0, 0.0], 100, 100);
+        let mut c = Canvas::new(100, 100);
+        let (a, b, cc, d) = ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]);
+        c.triangle(&cam, &[a, b, cc]);
+        c.triangle(&cam, &[a, cc, d]);
+        // The square spans 90% of the tile: 90 x 90 pixel centres.
+        assert_eq!(c.covered, 90 * 90);
+    }
+
+    #[test]
+    fn back_faces_get_the_back_colour() {
+        let cam = Camera::fit(View::Top, [0.0, 0.0, 0.0], [1.0, 1.0, 0.0], 10, 10);
+        let mut up = Canvas::new(10, 10);
+        up.triangle(&cam, &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]);
+        let mut down = Canvas::new(10, 10);
+        down.triangle(&cam, &[[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]);
+        let i = 8 * 10 + 2; // a pixel near the right angle
+        assert_ne!(up.rgb[i], BACKGROUND);
+        assert!(down.rgb[i][0] > down.rgb[i][2], "back faces are orange: {:?}", down.rgb[i]);
+        assert!(up.rgb[i][2] > up.rgb[i][0], "front faces are blue: {:?}", up.rgb[i]);
+    }
+}
