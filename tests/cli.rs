@@ -403,3 +403,33 @@ fn render_draws_a_sphere_with_its_analytic_silhouette_and_the_same_bytes_every_t
     let o = run(&["render", p(&s), p(&d.path().join("x.jpg"))]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("PNG"));
 }
+
+/// `mint decimate`: the face target within 2%, a closed input gives a
+/// closed output of the same genus, and the error falls as the target grows.
+#[test]
+fn decimate_hits_its_target_keeps_closed_inputs_closed_and_errs_less_with_more_faces() {
+    let d = tempfile::tempdir().unwrap();
+    let mut last_error = f64::INFINITY;
+    for (shape, genus) in [("torus", 1), ("genus", 3), ("sphere", 0)] {
+        let input = d.path().join(format!("{shape}.ply"));
+        ok(&["gen", shape, p(&input), "--faces", "200000"]);
+        last_error = f64::INFINITY;
+        for target in [2_000u64, 10_000, 40_000] {
+            let out = d.path().join(format!("{shape}-{target}.ply"));
+            let j: serde_json::Value = serde_json::from_str(&ok(&["decimate", p(&input), p(&out), "--faces", &target.to_string(), "--json"])).unwrap();
+            let got = j["output_faces"].as_u64().unwrap();
+            assert!(got.abs_diff(target) as f64 <= 0.02 * target as f64, "{shape} {target}: {got} faces");
+            assert_eq!(j["output_watertight"], true, "{shape} {target}: {j}");
+            let c: serde_json::Value = serde_json::from_str(&ok(&["check", p(&out), "--json", "--no-weld"])).unwrap();
+            assert_eq!((c["watertight"].as_bool(), c["genus_total"].as_i64()), (Some(true), Some(genus)), "{shape} {target}");
+            let dist = ok(&["distance", p(&input), p(&out), "--json"]);
+            let v: serde_json::Value = serde_json::from_str(&dist).unwrap();
+            let mean = v["b_to_a"]["mean"].as_f64().unwrap();
+            assert!(mean < last_error, "{shape}: mean error {mean} at {target} faces is not below {last_error}");
+            last_error = mean;
+        }
+    }
+    // A target below what a closed surface can have is refused.
+    let o = run(&["decimate", p(&d.path().join("torus.ply")), p(&d.path().join("x.ply")), "--faces", "3"]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("at least 4"));
+}

@@ -48,6 +48,17 @@ its vertices are memory-mapped and its faces streamed. The output is identical f
 Examples:\n  mint resample scan.ply clean.ply --cells 10000000\n  \
 mint resample huge.ply out.ply --cell-size 0.5 --mem 1G --tmp /scratch --json")]
     Resample(ResampleArgs),
+    /// Decimate a mesh of any size to a target face count: resample out of
+    /// core, then simplify in core; watertight when the input is closed.
+    #[command(long_about = "Decimate a mesh of any size to about --faces N faces.\n\n\
+Two stages. Out of core: Marching Intersections resampling to an intermediate mesh of about \
+--intermediate M faces (default 4 N), with the cell size chosen from the input's surface area (one \
+streaming pass); this drops detail smaller than a cell and closes holes, within --mem. In core: \
+meshoptimizer's quadric edge-collapse simplifier to N faces. The result is checked: when the \
+resampling is closed and 2-manifold, so is the output (the simplifier's target is relaxed rather than \
+hand over a worse mesh, and the summary says so).\n\n\
+Examples:\n  mint decimate scan.ply small.ply --faces 1000000\n  mint decimate huge.ply lod.ply --faces 50000 --intermediate 400000 --mem 2G --json")]
+    Decimate(DecimateArgs),
     /// Boolean of two meshes on one grid (union, intersection, difference),
     /// computed on the grid's intersection lists: out of core, watertight.
     #[command(name = "bool")]
@@ -204,6 +215,45 @@ pub struct CheckArgs {
     /// texture seams, which would otherwise read as boundaries everywhere.
     #[arg(long)]
     pub no_weld: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct DecimateArgs {
+    /// Input mesh (any format mint reads, any size).
+    pub input: PathBuf,
+    /// Output mesh; the format follows the extension.
+    pub output: PathBuf,
+    /// Faces of the output.
+    #[arg(long)]
+    pub faces: u64,
+    /// Faces of the intermediate resampling [default: 4 × --faces].
+    #[arg(long, value_name = "M")]
+    pub intermediate: Option<u64>,
+    /// Largest simplification error, as a fraction of the mesh's extent
+    /// [default: 1, i.e. the face target decides].
+    #[arg(long, value_name = "E", default_value_t = 1.0)]
+    pub error: f32,
+    /// Heap budget of the out-of-core stage, e.g. 2G [default: a quarter of RAM].
+    #[arg(long, value_parser = parse_bytes)]
+    pub mem: Option<u64>,
+    /// Worker threads [default: all cores].
+    #[arg(long, default_value_t = 0, hide_default_value = true)]
+    pub threads: usize,
+    /// Keep the resampling's stages here, to resume after a crash [default: temporary].
+    #[arg(long, value_name = "DIR")]
+    pub work: Option<PathBuf>,
+    /// Directory for temporary files [default: the output's directory].
+    #[arg(long)]
+    pub tmp: Option<PathBuf>,
+    /// Also write OUT.png beside the output: input and output side by side.
+    #[arg(long)]
+    pub preview: bool,
+    /// No progress bars and no summary.
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// Print the summary as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args, Debug)]
@@ -569,6 +619,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Check(a) => cmd_check(a),
         Command::Distance(a) => cmd_distance(a),
         Command::Render(a) => cmd_render(a),
+        Command::Decimate(a) => cmd_decimate(a),
         Command::Gen(a) => cmd_gen(a),
         Command::Demo(a) => cmd_demo(a),
         Command::Slice(a) => crate::contour_cmds::cmd_slice(a),
@@ -904,6 +955,50 @@ fn print_check(name: &str, r: &mint_mesh::CheckReport) {
     println!("  inconsistently oriented edges {}", r.inconsistently_oriented_edges);
     println!("  degenerate faces {} ({} with a repeated index), duplicate faces {}", r.degenerate_faces, r.collapsed_faces, r.duplicate_faces);
     println!("  Euler characteristic {}, signed volume {:.9}, area {:.9}", r.euler_characteristic, r.signed_volume, r.surface_area);
+}
+
+fn cmd_decimate(a: DecimateArgs) -> Result<()> {
+    let mem = a.mem.unwrap_or_else(default_mem);
+    let o = mint_pipeline::DecimateOptions {
+        target_faces: a.faces,
+        intermediate_faces: a.intermediate,
+        max_error: a.error,
+        resample: ResampleOptions { mem_bytes: mem, threads: a.threads, tmp_dir: a.tmp.clone(), work_dir: a.work.clone(), ..Default::default() },
+    };
+    let bars = Bars::new(a.quiet || a.json);
+    let s = mint_pipeline::decimate(&a.input, &a.output, &o, &bars)?;
+    if a.preview {
+        let png = preview_path(&a.output);
+        let ro = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso };
+        mint_render::render_files(&[a.input.as_path(), a.output.as_path()], &png, &ro, &bars)?;
+        if !a.quiet && !a.json {
+            eprintln!("preview: {} (input left, output right)", png.display());
+        }
+    }
+    if a.json {
+        let mut v = serde_json::to_value(&s)?;
+        v["mem_budget_bytes"] = mem.into();
+        v["peak_heap_bytes"] = alloc::peak_heap().into();
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else if !a.quiet {
+        eprintln!("decimated {} -> {}", s.input, s.output);
+        eprintln!("  input        {} faces, area {:.6}", s.input_faces, s.input_area);
+        eprintln!("  resampled    {} faces (asked {}), cells of {:.6}, {}", s.intermediate_faces, s.intermediate_faces_asked, s.cell_size, if s.intermediate_watertight { "watertight" } else { "NOT watertight" });
+        eprintln!("  simplified   {} faces (target {}), {} vertices, error {:.2e} of the extent", s.output_faces, s.target_faces, s.output_vertices, s.simplify_error);
+        eprintln!(
+            "  output       {}{}",
+            if s.output_watertight { "watertight (closed, 2-manifold, consistently oriented)" } else { "NOT watertight" },
+            if s.relaxed > 0 { format!("; target relaxed {} times to keep it so", s.relaxed) } else { String::new() }
+        );
+        eprintln!(
+            "  time         {:.2}s (area {:.2}s, resample {:.2}s, simplify {:.2}s, write {:.2}s), peak heap {}",
+            s.seconds_total, s.seconds_area, s.seconds_resample, s.seconds_simplify, s.seconds_write, human_bytes(alloc::peak_heap())
+        );
+    }
+    if s.intermediate_watertight && !s.output_watertight {
+        eprintln!("mint: warning: the output is less clean than the resampling (see the summary)");
+    }
+    Ok(())
 }
 
 fn cmd_render(a: RenderArgs) -> Result<()> {

@@ -78,6 +78,22 @@ pub fn read_info(path: &Path) -> Result<MeshInfo, Error> {
     }
 }
 
+/// Reads a whole mesh into memory: every vertex position and every
+/// triangle (polygons fanned, strips unrolled, as the streaming reader
+/// delivers them). For the in-core tools (check, distance, simplify); the
+/// out-of-core pipelines stream instead. Nothing is reserved from the
+/// header's counts, so a lying header costs nothing before it is caught.
+pub fn read_mesh(path: &Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>), Error> {
+    let mut reader = MeshReader::open(path, ReadOptions { resolve_positions: false, ..Default::default() })?;
+    let positions: Vec<[f64; 3]> = (0..reader.vertex_count()).map(|i| reader.vertex(i)).collect();
+    let mut faces = Vec::new();
+    let mut chunk = TriangleChunk::new();
+    while reader.next_chunk(&mut chunk)? {
+        faces.extend_from_slice(&chunk.indices);
+    }
+    Ok((positions, faces))
+}
+
 /// Options of [`MeshReader::open`].
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ReadOptions {

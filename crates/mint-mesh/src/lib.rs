@@ -28,6 +28,7 @@ pub mod check;
 pub mod distance;
 pub mod error;
 pub mod rng;
+pub mod simplify;
 pub mod weld;
 
 pub use bvh::{closest_point_on_triangle, TriangleBvh};
@@ -38,4 +39,5 @@ pub use distance::{
 };
 pub use error::MeshError;
 pub use rng::SplitMix64;
+pub use simplify::{simplify, SimplifyOptions, SimplifyReport};
 pub use weld::weld;

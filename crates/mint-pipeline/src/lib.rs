@@ -13,8 +13,11 @@
 //!   slab planning, ordered reconstruction);
 //! - [`workdir`]: task directories, atomic commits, checksums;
 //! - [`slurm`]: submitting a plan to a Slurm cluster;
-//! - [`scene`]: the CSG scene format.
+//! - [`scene`]: the CSG scene format;
+//! - [`decimate`](mod@decimate): resampling to an intermediate size, then
+//!   meshoptimizer's simplifier to a face target.
 
+pub mod decimate;
 pub mod engine;
 pub mod error;
 pub mod options;
@@ -26,6 +29,7 @@ pub mod slurm;
 pub mod stages;
 pub mod workdir;
 
+pub use decimate::{decimate, DecimateOptions, DecimateSummary};
 pub use engine::{boolean, csg, plan_run, resample, run_task, status, summarize_dir, RunStatus, StageStatus, TaskOptions, TaskOutcome};
 pub use error::PipelineError;
 pub use options::{ResampleOptions, ResampleSummary};

@@ -500,3 +500,59 @@ mod tests {
         assert_eq!(plan_slabs(&counts, 0, 10, None, u64::MAX), vec![(0, 10)]);
     }
 }
+
+/// The total area of `path`'s triangles and their count, in one streaming
+/// pass (workers over fixed-size records when the file has them, else the
+/// reader), summed per chunk in chunk order (the same for any thread count).
+pub(crate) fn surface_area(path: &Path, threads: usize, progress: &dyn Progress) -> Result<(u64, f64), PipelineError> {
+    let read = mint_io::ReadOptions { chunk_triangles: CHUNK_TRIANGLES, spill_dir: None, resolve_positions: true };
+    let mut reader = MeshReader::open(path, read)?;
+    let area = |p: &[[f64; 3]; 3]| {
+        let (u, v) = ([p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]], [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]]);
+        let c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+        0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+    };
+    if let Some(records) = reader.triangle_records()? {
+        let n = records.len();
+        let chunks = n.div_ceil(CHUNK_TRIANGLES as u64);
+        progress.start(Phase::Bounds, n);
+        let next = AtomicU64::new(0);
+        let sums = Mutex::new(vec![0.0f64; chunks as usize]);
+        let failed: Mutex<Option<mint_io::Error>> = Mutex::new(None);
+        std::thread::scope(|s| {
+            for _ in 0..threads {
+                s.spawn(|| loop {
+                    let c = next.fetch_add(1, Ordering::Relaxed);
+                    if c >= chunks || progress.cancelled() || failed.lock().unwrap().is_some() {
+                        return;
+                    }
+                    let (a, b) = (c * CHUNK_TRIANGLES as u64, ((c + 1) * CHUNK_TRIANGLES as u64).min(n));
+                    let mut sum = 0.0;
+                    if let Err(e) = records.visit(a, b, &mut |p: &[[f64; 3]; 3]| sum += area(p)) {
+                        failed.lock().unwrap().get_or_insert(e);
+                        return;
+                    }
+                    sums.lock().unwrap()[c as usize] = sum;
+                    progress.advance(b - a);
+                });
+            }
+        });
+        if let Some(e) = failed.into_inner().unwrap() {
+            return Err(e.into());
+        }
+        check_cancel(progress)?;
+        progress.finish();
+        return Ok((n, sums.into_inner().unwrap().iter().sum()));
+    }
+    progress.start(Phase::Bounds, reader.info().face_count.unwrap_or(0));
+    let (mut faces, mut total) = (0u64, 0.0f64);
+    let mut chunk = TriangleChunk::new();
+    while reader.next_chunk(&mut chunk)? {
+        check_cancel(progress)?;
+        total += chunk.positions.iter().map(area).sum::<f64>();
+        faces += chunk.len() as u64;
+        progress.advance(chunk.len() as u64);
+    }
+    progress.finish();
+    Ok((faces, total))
+}

@@ -1,0 +1,209 @@
+//! [`simplify`]: in-core decimation of a triangle mesh to a face target by
+//! meshoptimizer's quadric edge collapse (the `meshopt` crate, the C++
+//! library games and graphics tools use), followed by a judgement of the
+//! result with [`crate::check`]: a closed, 2-manifold, consistently oriented
+//! input must give one too. When a collapse sequence breaks that (rare: the
+//! collapses are topology-checked, but not for every global configuration),
+//! the target is relaxed step by step towards the input size until the
+//! result is clean, and the report says so; a mesh worse than the input is
+//! never handed over silently.
+//!
+//! Memory: the input (positions as f32 for the simplifier: 12 bytes per
+//! vertex, and 12 bytes per face), the simplifier's own tables (about 60
+//! bytes per vertex and 24 per face, measured in docs/PERFORMANCE.md), and
+//! the result.
+
+use crate::check::{try_check, CheckReport};
+use crate::error::MeshError;
+
+/// Options of [`simplify`].
+#[derive(Debug, Clone)]
+pub struct SimplifyOptions {
+    /// The number of faces to reach (at most; a closed surface needs at
+    /// least 4).
+    pub target_faces: u64,
+    /// Stop early once the geometric error would exceed this fraction of the
+    /// mesh's extent. Default 1.0: the face target decides.
+    pub max_error: f32,
+}
+
+impl Default for SimplifyOptions {
+    fn default() -> Self {
+        SimplifyOptions { target_faces: 1000, max_error: 1.0 }
+    }
+}
+
+/// What [`simplify`] did.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SimplifyReport {
+    pub input_faces: u64,
+    pub output_faces: u64,
+    pub output_vertices: u64,
+    /// The simplifier's own error estimate, relative to the mesh extent.
+    pub error: f32,
+    /// Pairs of faces on the same three vertices with opposite orientations
+    /// (a handle or a thin part collapsed flat), removed together.
+    pub folded_pairs_removed: u64,
+    /// The input was closed, 2-manifold and consistently oriented.
+    pub input_watertight: bool,
+    /// So is the output.
+    pub output_watertight: bool,
+    /// Times the target was relaxed because a result was less clean than the input.
+    pub relaxed: u32,
+}
+
+/// Simplifies `positions`/`faces` to about `o.target_faces` faces; returns
+/// the new mesh (unreferenced vertices removed, order kept) and a report.
+pub fn simplify(positions: &[[f64; 3]], faces: &[[u32; 3]], o: &SimplifyOptions) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>, SimplifyReport), MeshError> {
+    let before = try_check(positions, faces)?;
+    let input_watertight = before.watertight;
+    let flat: Vec<f32> = positions.iter().flat_map(|p| p.map(|c| c as f32)).collect();
+    let bytes: &[u8] = unsafe_cast(&flat);
+    let adapter = meshopt::VertexDataAdapter::new(bytes, 12, 0).expect("12-byte f32 positions");
+    let indices: Vec<u32> = faces.iter().flatten().copied().collect();
+    let mut target = o.target_faces.min(faces.len() as u64);
+    let mut relaxed = 0;
+    loop {
+        let mut error = 0.0f32;
+        let mut out = meshopt::simplify(&indices, &adapter, (target * 3) as usize, o.max_error, meshopt::SimplifyOptions::None, Some(&mut error));
+        let mut removed = 0;
+        if input_watertight {
+            removed = drop_folded_pairs(&mut out);
+        }
+        let (p, f) = compact(positions, &out);
+        let after: CheckReport = try_check(&p, &f)?;
+        let clean = !input_watertight || after.watertight;
+        if clean || target >= faces.len() as u64 {
+            let report = SimplifyReport {
+                input_faces: faces.len() as u64,
+                output_faces: f.len() as u64,
+                output_vertices: p.len() as u64,
+                error,
+                folded_pairs_removed: removed,
+                input_watertight,
+                output_watertight: after.watertight,
+                relaxed,
+            };
+            return Ok((p, f, report));
+        }
+        // Less clean than the input: ask for fewer collapses.
+        relaxed += 1;
+        target = (target + target / 8 + 1).min(faces.len() as u64);
+    }
+}
+
+/// Removes pairs of faces on the same three vertices with opposite
+/// orientations: the flat remains of a handle or thin part the collapses
+/// squeezed shut. Each such pair is its own closed two-sided sheet; the rest
+/// of the surface does not use it, so removing both keeps the rest closed.
+/// Returns the pairs removed.
+fn drop_folded_pairs(indices: &mut Vec<u32>) -> u64 {
+    let n = indices.len() / 3;
+    let key = |f: usize| {
+        let mut t = [indices[3 * f], indices[3 * f + 1], indices[3 * f + 2]];
+        t.sort_unstable();
+        t
+    };
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_unstable_by_key(|&f| (key(f), f));
+    let mut drop = vec![false; n];
+    let mut pairs = 0;
+    let mut i = 0;
+    while i < n {
+        let mut j = i + 1;
+        while j < n && key(order[j]) == key(order[i]) {
+            j += 1;
+        }
+        // Exactly two faces on these vertices, of opposite orientation.
+        if j - i == 2 {
+            let (a, b) = (order[i], order[i + 1]);
+            let ta = [indices[3 * a], indices[3 * a + 1], indices[3 * a + 2]];
+            let tb = [indices[3 * b], indices[3 * b + 1], indices[3 * b + 2]];
+            let same = (0..3).any(|r| [tb[r], tb[(r + 1) % 3], tb[(r + 2) % 3]] == ta);
+            if !same {
+                drop[a] = true;
+                drop[b] = true;
+                pairs += 1;
+            }
+        }
+        i = j;
+    }
+    if pairs > 0 {
+        let kept: Vec<u32> = (0..n).filter(|&f| !drop[f]).flat_map(|f| [indices[3 * f], indices[3 * f + 1], indices[3 * f + 2]]).collect();
+        *indices = kept;
+    }
+    pairs
+}
+
+/// The f32 array as bytes (a plain reinterpretation: f32 has no padding and
+/// every bit pattern is a valid u8).
+fn unsafe_cast(v: &[f32]) -> &[u8] {
+    // SAFETY: u8 has alignment 1 and no invalid values; the length covers
+    // exactly the f32 elements.
+    unsafe { std::slice::from_raw_parts(v.as_ptr() as *const u8, std::mem::size_of_val(v)) }
+}
+
+/// The faces of `indices` with only their vertices, renumbered in order.
+fn compact(positions: &[[f64; 3]], indices: &[u32]) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    let mut map = vec![u32::MAX; positions.len()];
+    let mut p = Vec::new();
+    let f = indices
+        .chunks_exact(3)
+        .map(|t| {
+            [0, 1, 2].map(|k| {
+                let v = t[k] as usize;
+                if map[v] == u32::MAX {
+                    map[v] = p.len() as u32;
+                    p.push(positions[v]);
+                }
+                map[v]
+            })
+        })
+        .collect();
+    (p, f)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sphere(n: u32) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        // A UV sphere with poles: n rings, 2n segments.
+        let seg = 2 * n;
+        let mut p = vec![[0.0, 0.0, 1.0]];
+        for i in 1..n {
+            let t = std::f64::consts::PI * i as f64 / n as f64;
+            for j in 0..seg {
+                let u = 2.0 * std::f64::consts::PI * j as f64 / seg as f64;
+                p.push([t.sin() * u.cos(), t.sin() * u.sin(), t.cos()]);
+            }
+        }
+        p.push([0.0, 0.0, -1.0]);
+        let south = p.len() as u32 - 1;
+        let ring = |i: u32, j: u32| 1 + (i - 1) * seg + j % seg;
+        let mut f = Vec::new();
+        for j in 0..seg {
+            f.push([0, ring(1, j), ring(1, j + 1)]);
+            f.push([south, ring(n - 1, j + 1), ring(n - 1, j)]);
+        }
+        for i in 1..n - 1 {
+            for j in 0..seg {
+                f.push([ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)]);
+                f.push([ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)]);
+            }
+        }
+        (p, f)
+    }
+
+    #[test]
+    fn a_sphere_simplifies_to_its_target_and_stays_closed() {
+        let (p, f) = sphere(60);
+        assert!(try_check(&p, &f).unwrap().watertight);
+        for target in [5000u64, 1000, 200] {
+            let (q, g, r) = simplify(&p, &f, &SimplifyOptions { target_faces: target, ..Default::default() }).unwrap();
+            assert!(r.output_watertight, "{target}: {r:?}");
+            assert!(g.len() as u64 <= target && g.len() as f64 >= 0.98 * target as f64, "{target}: {} faces", g.len());
+            assert_eq!(q.len() as u64, r.output_vertices);
+        }
+    }
+}
