@@ -882,6 +882,9 @@ fn cmd_validate(a: ValidateArgs) -> Result<()> {
         }
     }
     bars.finish();
+    for w in reader.warnings() {
+        eprintln!("mint: warning: {w}");
+    }
     let secs = t.elapsed().as_secs_f64();
     let bytes = std::fs::metadata(&a.file).map(|m| m.len()).unwrap_or(0);
     let tps = triangles as f64 / secs.max(1e-9);
@@ -918,6 +921,9 @@ pub fn load_mesh(path: &std::path::Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>
         if crate::progress::interrupted() {
             bail!("interrupted");
         }
+    }
+    for w in reader.warnings() {
+        eprintln!("mint: warning: {w}");
     }
     Ok((positions, faces))
 }

@@ -83,7 +83,8 @@ fn scan(data: &[u8]) -> (u64, u64, Vec<String>) {
     let mut comments = Vec::new();
     let mut leading = true;
     let mut lines = Lines::new(data, 0);
-    while let Some((_, line)) = lines.next_line() {
+    while let Some((_, line)) = lines.next_joined() {
+        let line = &line[..];
         match classify(line) {
             (Kind::Vertex, _) => nv += 1,
             (Kind::Face, _) => nf += 1,
@@ -127,7 +128,8 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     let mut comments = Vec::new();
     let mut leading = true;
     let mut lines = Lines::new(data, 0);
-    while let Some((at, line)) = lines.next_line() {
+    while let Some((at, line)) = lines.next_joined() {
+        let line = &line[..];
         let (kind, rest) = classify(line);
         match kind {
             Kind::Vertex => {
@@ -216,11 +218,11 @@ impl FaceStream for ObjBody {
                 }
                 self.next += 1;
             }
-            let Some((at, line)) = lines.next_line() else {
+            let Some((at, line)) = lines.next_joined() else {
                 self.pos = data.len();
                 return Ok(false);
             };
-            match classify(line) {
+            match classify(&line) {
                 (Kind::Vertex, _) => self.v_seen += 1,
                 (Kind::Face, rest) => {
                     self.parse_face(data, rest, nv, at)?;

@@ -195,6 +195,10 @@ pub struct ReadStats {
     /// Vertex positions written to a spill file (0 when they are read in
     /// place from a binary file).
     pub spilled_vertices: u64,
+    /// Bytes after the last declared PLY element, ignored as MeshLab and
+    /// trimesh ignore them (see [`MeshReader::warnings`]). Known once the
+    /// faces have been read.
+    pub ignored_trailing_bytes: u64,
 }
 
 /// The format-specific part of a reader: produces triangles into an
@@ -204,6 +208,10 @@ pub(crate) trait FaceStream: Send {
     fn fill(&mut self, out: &mut Emit, stats: &mut ReadStats) -> Result<bool, Error>;
     /// Bytes of the input consumed so far.
     fn bytes_done(&self) -> u64;
+    /// Bytes after the last declared element, ignored (PLY).
+    fn ignored_trailing_bytes(&self) -> u64 {
+        0
+    }
     /// The number of face records, when every record has the same size if
     /// it is a triangle, so that records `first .. end` can be read alone
     /// (binary PLY with one face element, binary STL). `None` otherwise.
@@ -464,6 +472,17 @@ impl MeshReader {
     /// Counters so far: triangles, skipped short faces, dropped degenerate
     /// strip triangles, spilled vertices.
     pub fn stats(&self) -> ReadStats {
-        self.stats
+        ReadStats { ignored_trailing_bytes: self.body.ignored_trailing_bytes(), ..self.stats }
+    }
+
+    /// What the reader accepted but a user should know, one line each,
+    /// naming the file (so far; complete once every face has been read).
+    pub fn warnings(&self) -> Vec<String> {
+        let mut w = Vec::new();
+        let n = self.body.ignored_trailing_bytes();
+        if n > 0 {
+            w.push(format!("{}: {n} bytes after the last element the header declares were ignored (the header counts may not match the body)", self.path.display()));
+        }
+        w
     }
 }

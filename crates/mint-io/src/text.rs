@@ -84,6 +84,33 @@ impl<'a> Lines<'a> {
     }
 }
 
+impl<'a> Lines<'a> {
+    /// The next logical line: like [`Lines::next_line`], but a line whose
+    /// last non-blank character is a backslash continues on the next one
+    /// (OBJ's line continuation); the pieces are joined with a space. Only
+    /// a continued line is copied.
+    pub(crate) fn next_joined(&mut self) -> Option<(usize, std::borrow::Cow<'a, [u8]>)> {
+        let (at, first) = self.next_line()?;
+        let continued = |l: &[u8]| {
+            let t = l.iter().rposition(|&b| b != b' ' && b != b'\t');
+            t.filter(|&i| l[i] == b'\\')
+        };
+        let Some(cut) = continued(first) else { return Some((at, std::borrow::Cow::Borrowed(first))) };
+        let mut joined = first[..cut].to_vec();
+        while let Some((_, next)) = self.next_line() {
+            joined.push(b' ');
+            match continued(next) {
+                Some(c) => joined.extend_from_slice(&next[..c]),
+                None => {
+                    joined.extend_from_slice(next);
+                    break;
+                }
+            }
+        }
+        Some((at, std::borrow::Cow::Owned(joined)))
+    }
+}
+
 /// Splits a line into whitespace-separated tokens.
 #[inline]
 pub(crate) fn words(line: &[u8]) -> impl Iterator<Item = &[u8]> {

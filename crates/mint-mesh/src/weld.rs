@@ -77,7 +77,7 @@ mod tests {
 
     #[test]
     fn signed_zeros_weld_and_nans_do_not() {
-        let mut p = vec![[0.0, 1.0, 2.0], [-0.0, 1.0, 2.0], [f64::NAN, 0.0, 0.0], [f64::NAN, 0.0, 0.0], [0.0, 1.0, 2.0 + 1e-16]];
+        let mut p = vec![[0.0, 1.0, 2.0], [-0.0, 1.0, 2.0], [f64::NAN, 0.0, 0.0], [f64::NAN, 0.0, 0.0], [0.0, 1.0, 2.0 + 1e-15]];
         let mut f = vec![[0, 1, 4], [2, 3, 4]];
         assert_eq!(weld(&mut p, &mut f), 1);
         assert_eq!(p.len(), 4);

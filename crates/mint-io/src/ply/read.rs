@@ -91,6 +91,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         finished: false,
         bytes_done: 0,
         range_only: false,
+        trailing: 0,
     };
     body.next_offset = body.header.body;
     let mut positions = Positions::empty();
@@ -472,6 +473,8 @@ pub(crate) struct PlyBody {
     bytes_done: u64,
     /// Only a range of one face element's records is read (see `restrict`).
     range_only: bool,
+    /// Bytes after the last element, ignored.
+    trailing: u64,
 }
 
 impl PlyBody {
@@ -618,38 +621,21 @@ impl PlyBody {
         }
         self.finished = true;
         self.bytes_done = self.map.bytes().len() as u64;
-        self.check_trailing(self.next_offset)
+        self.trailing = self.trailing_bytes(self.next_offset);
+        Ok(())
     }
 
-    /// Errors if anything but (for ascii) whitespace follows `end`.
-    fn check_trailing(&self, end: usize) -> Result<(), Error> {
+    /// Bytes after `end` that are data (for ascii: from the first token
+    /// on), which readers ignore as MeshLab and trimesh do; the reader
+    /// reports them as a warning.
+    fn trailing_bytes(&self, end: usize) -> u64 {
         let data = self.map.bytes();
-        let last = self.header.elements.last();
-        let (name, count) = last.map_or(("header", 0), |e| (e.name.as_str(), e.count));
-        let err = |msg: String, at: usize| {
-            let e = Error::format(&self.path, msg).at_element(name);
-            let e = if last.is_some() { e.at_record(count) } else { e };
-            if self.header.encoding == Encoding::Ascii {
-                e.at_line(line_of(data, at)).at_byte(at as u64)
-            } else {
-                e.at_byte(at as u64)
-            }
-        };
         if self.header.encoding == Encoding::Ascii {
             let mut t = Tokens::new(data, end);
-            if let Some((at, tok)) = t.next_tok() {
-                return Err(err(
-                    format!("unexpected data after the last element: {} (the header counts do not match the body)", show_token(tok)),
-                    at,
-                ));
-            }
-        } else if end < data.len() {
-            return Err(err(
-                format!("{} bytes of trailing data after the last element (the header counts do not match the body)", data.len() - end),
-                end,
-            ));
+            t.next_tok().map_or(0, |(at, _)| (data.len() - at) as u64)
+        } else {
+            data.len().saturating_sub(end) as u64
         }
-        Ok(())
     }
 
     /// Picks the next face element to stream, or finishes the walk.
@@ -992,5 +978,9 @@ impl FaceStream for PlyBody {
 
     fn bytes_done(&self) -> u64 {
         self.bytes_done
+    }
+
+    fn ignored_trailing_bytes(&self) -> u64 {
+        self.trailing
     }
 }

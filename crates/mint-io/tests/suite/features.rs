@@ -185,6 +185,20 @@ v 5 5 5\nf -1 -2 -3\nf 5/1 4/1 3/1\n";
 }
 
 #[test]
+fn obj_lines_continued_with_a_backslash() {
+    let dir = tempfile::tempdir().unwrap();
+    // A face split over three lines (one with a blank after the backslash,
+    // one with CRLF), and a vertex split over two.
+    let text = "v 0 0 0\nv 1 0 \\\n 0\nv 1 1 0\nv 0 1 0\nf 1 2 \\\r\n 3 \\ \n 4\nf 1 3 4\n";
+    let p = write_file(dir.path(), "c.obj", text.as_bytes());
+    let (m, _) = read_all(&p, ReadOptions::default()).unwrap();
+    assert_eq!(m.positions[1], [1.0, 0.0, 0.0]);
+    assert_eq!(m.faces, vec![[0, 1, 2], [0, 2, 3], [0, 2, 3]]);
+    let info = read_info(&p).unwrap();
+    assert_eq!((info.vertex_count, info.face_count), (4, Some(2)));
+}
+
+#[test]
 fn off_variants() {
     let dir = tempfile::tempdir().unwrap();
     // COFF: per-vertex colours; faces with colours; comments, blank lines.
