@@ -790,7 +790,7 @@ pub fn load_mesh(path: &std::path::Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>
     let mut reader = mint_io::MeshReader::open(path, mint_io::ReadOptions { resolve_positions: false, ..Default::default() })?;
     let n = reader.vertex_count();
     let positions: Vec<[f64; 3]> = (0..n).map(|i| reader.vertex(i)).collect();
-    let mut faces = Vec::with_capacity(reader.info().face_count.unwrap_or(0) as usize);
+    let mut faces = Vec::with_capacity(reader.face_capacity_hint());
     let mut chunk = mint_io::TriangleChunk::default();
     while reader.next_chunk(&mut chunk)? {
         faces.extend_from_slice(&chunk.indices);
