@@ -78,3 +78,51 @@ fn lying_face_counts_give_a_truncation_error_not_an_allocation_failure() {
         fails_with(&["distance", p(f), p(f), "--samples", "10"], &[name, "truncated"]);
     }
 }
+
+/// Runs `args`, killing the process after `secs` seconds: a hang fails the
+/// test instead of blocking the suite.
+fn run_within(args: &[&str], secs: u64) -> Output {
+    let mut child = mint().args(args).stdout(std::process::Stdio::piped()).stderr(std::process::Stdio::piped()).spawn().unwrap();
+    let t0 = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if t0.elapsed().as_secs() >= secs {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("mint {args:?} still running after {secs} s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// A tetrahedron at y = 1e308, and CSG scenes translating a mesh or a
+/// primitive by 1e308, used to hang in the exact search along the grid
+/// lines: now refused at once, naming the input and the coordinate.
+#[test]
+fn huge_coordinates_are_refused_up_front_naming_the_input_and_the_value() {
+    let d = tempfile::tempdir().unwrap();
+    let tet = d.path().join("far.ply");
+    std::fs::write(&tet, "ply\nformat ascii 1.0\nelement vertex 4\nproperty double x\nproperty double y\nproperty double z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n0 1e308 0\n1 1e308 0\n0 1e308 1\n0.3 1e308 0.3\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n").unwrap();
+    let sphere = d.path().join("s.ply");
+    ok(&["gen", "sphere", p(&sphere), "--faces", "2000"]);
+    let mesh_scene = d.path().join("far-mesh.json");
+    std::fs::write(&mesh_scene, format!("{{ \"mesh\": {:?}, \"translate\": [0, 1e308, 0] }}", p(&sphere))).unwrap();
+    let prim_scene = d.path().join("far-sphere.json");
+    std::fs::write(&prim_scene, "{ \"sphere\": { \"radius\": 1 }, \"translate\": [0, 1e308, 0] }").unwrap();
+    let out_dir = d.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    let out = out_dir.join("o.ply");
+    let cases: [(Vec<&str>, &str); 3] = [
+        (vec!["resample", p(&tet), p(&out), "--cells", "1000"], "far.ply"),
+        (vec!["csg", p(&mesh_scene), p(&out), "--cells", "1000"], "far-mesh.json"),
+        (vec!["csg", p(&prim_scene), p(&out), "--cells", "1000"], "far-sphere.json"),
+    ];
+    for (args, name) in cases {
+        let o = run_within(&args, 30);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(name) && err.contains("1e308") && err.contains("2^40"), "{err}");
+        assert!(entries(&out_dir).is_empty(), "{args:?} left {:?}", entries(&out_dir));
+    }
+}
