@@ -126,3 +126,34 @@ fn huge_coordinates_are_refused_up_front_naming_the_input_and_the_value() {
         assert!(entries(&out_dir).is_empty(), "{args:?} left {:?}", entries(&out_dir));
     }
 }
+
+/// CSG scenes: a half-space normal of [1e200, 0, 0] (used to panic), 10,000
+/// nested unions (used to overflow the stack), a sphere of radius 1e-100
+/// (used to give a face pointing at a vertex never written).
+#[test]
+fn hostile_scenes_are_meshed_or_refused_in_one_line() {
+    let d = tempfile::tempdir().unwrap();
+    let out_dir = d.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    let out = out_dir.join("o.ply");
+    let half = d.path().join("half.json");
+    std::fs::write(&half, "{ \"intersection\": [ { \"box\": { \"size\": [2, 2, 2] } },\n { \"halfspace\": { \"normal\": [1e200, 0, 0], \"offset\": 0 } } ] }").unwrap();
+    ok(&["csg", p(&half), p(&out), "--cells", "10000", "--quiet"]);
+    let c: serde_json::Value = serde_json::from_str(&ok(&["check", p(&out), "--json"])).unwrap();
+    assert_eq!(c["watertight"], true);
+    // The half box x <= 0.
+    assert!(c["bbox_max"][0].as_f64().unwrap() < 0.1 && c["bbox_min"][0].as_f64().unwrap() < -0.9, "{c}");
+    std::fs::remove_file(&out).unwrap();
+    let nested = d.path().join("nested.json");
+    let n = 10_000;
+    std::fs::write(&nested, "{ \"union\": [\n".repeat(n) + "{ \"sphere\": { \"radius\": 1 } }" + &" ] }".repeat(n)).unwrap();
+    fails_with(&["csg", p(&nested), p(&out), "--cells", "1000"], &["nested.json:", "256"]);
+    let tiny = d.path().join("tiny.json");
+    std::fs::write(&tiny, "{ \"sphere\": { \"radius\": 1e-100 } }").unwrap();
+    ok(&["csg", p(&tiny), p(&out), "--cells", "1000", "--quiet"]);
+    let c: serde_json::Value = serde_json::from_str(&ok(&["check", p(&out), "--json"])).unwrap();
+    assert_eq!(c["watertight"], true, "{c}");
+    assert_eq!(c["genus_total"], 0, "{c}");
+    std::fs::remove_file(&out).unwrap();
+    assert!(entries(&out_dir).is_empty(), "{:?}", entries(&out_dir));
+}
