@@ -157,3 +157,66 @@ fn hostile_scenes_are_meshed_or_refused_in_one_line() {
     std::fs::remove_file(&out).unwrap();
     assert!(entries(&out_dir).is_empty(), "{:?}", entries(&out_dir));
 }
+
+fn signal(pid: u32, sig: &str) {
+    let s = std::process::Command::new("kill").args([&format!("-{sig}"), &pid.to_string()]).status().unwrap();
+    assert!(s.success(), "kill -{sig} failed");
+}
+
+/// Starts `args`, waits `ms`, checks that it is still running (else the
+/// test proves nothing and fails), sends `sig`, and returns the output.
+fn interrupt(args: &[&str], ms: u64, sig: &str) -> Output {
+    let mut child = mint().args(args).stdout(std::process::Stdio::piped()).stderr(std::process::Stdio::piped()).spawn().unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(ms));
+    assert!(child.try_wait().unwrap().is_none(), "mint {args:?} finished before the signal: use a bigger input");
+    signal(child.id(), sig);
+    child.wait_with_output().unwrap()
+}
+
+/// SIGTERM and SIGHUP stop a run like Ctrl-C: exit 130, the work directory
+/// and the temporary output removed; `mint convert` stops too (it used to
+/// ignore Ctrl-C).
+#[test]
+fn sigterm_and_sighup_stop_cleanly_with_exit_130() {
+    let d = tempfile::tempdir().unwrap();
+    let input = d.path().join("in.ply");
+    ok(&["gen", "sphere", p(&input), "--faces", "2000000"]);
+    let out_dir = d.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    let out = out_dir.join("o.ply");
+    for sig in ["TERM", "HUP"] {
+        let o = interrupt(&["resample", p(&input), p(&out), "--cells", "20000000", "--quiet"], 200, sig);
+        assert_eq!(o.status.code(), Some(130), "SIG{sig}: {:?}: {}", o.status, String::from_utf8_lossy(&o.stderr));
+        assert!(entries(&out_dir).is_empty(), "SIG{sig} left {:?}", entries(&out_dir));
+    }
+    for (sig, name) in [("INT", "c.obj"), ("TERM", "c.ply"), ("HUP", "c.stl")] {
+        let o = interrupt(&["convert", p(&input), p(&out_dir.join(name)), "--ascii", "--quiet"], 100, sig);
+        assert_eq!(o.status.code(), Some(130), "convert, SIG{sig}: {:?}: {}", o.status, String::from_utf8_lossy(&o.stderr));
+        assert!(entries(&out_dir).is_empty(), "convert, SIG{sig} left {:?}", entries(&out_dir));
+    }
+}
+
+/// Under a file-size limit the write fails with "File too large" (SIGXFSZ
+/// is ignored) and nothing is left behind.
+#[test]
+fn a_file_size_limit_gives_file_too_large_and_no_debris() {
+    if std::process::Command::new("prlimit").arg("--version").output().is_err() {
+        eprintln!("skipping: prlimit (util-linux) is not installed");
+        return;
+    }
+    let d = tempfile::tempdir().unwrap();
+    let input = d.path().join("in.ply");
+    ok(&["gen", "sphere", p(&input), "--faces", "200000"]);
+    let out_dir = d.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    for args in [vec!["convert", p(&input), "OUT.obj", "--quiet"], vec!["resample", p(&input), "OUT.ply", "--cells", "1000000", "--quiet"]] {
+        let out = out_dir.join(args[2]);
+        let args: Vec<&str> = args.iter().map(|a| if a.starts_with("OUT") { p(&out) } else { a }).collect();
+        let o = std::process::Command::new("prlimit").arg("--fsize=200000").arg(env!("CARGO_BIN_EXE_mint")).args(&args).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {:?}: {err}", o.status);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains("File too large"), "{err}");
+        assert!(entries(&out_dir).is_empty(), "{args:?} left {:?}", entries(&out_dir));
+    }
+}

@@ -717,9 +717,10 @@ fn cmd_convert(a: ConvertArgs) -> Result<()> {
     let read = mint_io::ReadOptions { spill_dir: a.tmp.clone(), ..Default::default() };
     let write = WriteOptions { ascii: a.ascii, double: a.double, ..Default::default() };
     let mut last = 0u64;
-    let summary = mint_io::convert(&a.input, &a.output, read, write, &mut |done, _total| {
+    let summary = mint_io::convert_cancellable(&a.input, &a.output, read, write, &mut |done, _total| {
         bars.advance(done.saturating_sub(last));
-        last = done;
+        last = last.max(done);
+        !crate::progress::interrupted()
     })
     .with_context(|| format!("converting {} to {}", a.input.display(), a.output.display()))?;
     bars.finish();
