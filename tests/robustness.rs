@@ -220,3 +220,101 @@ fn a_file_size_limit_gives_file_too_large_and_no_debris() {
         assert!(entries(&out_dir).is_empty(), "{args:?} left {:?}", entries(&out_dir));
     }
 }
+
+/// An output that is an input (same path, `./` spelling, hard link,
+/// symbolic link) is refused by every command that writes from inputs,
+/// before anything is written; the input keeps its bytes.
+#[test]
+fn an_output_that_is_an_input_is_refused_and_the_input_kept() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    let scan = dir.join("scan.ply");
+    ok(&["gen", "sphere", p(&scan), "--faces", "2000"]);
+    let before = std::fs::read(&scan).unwrap();
+    let hard = dir.join("hard.ply");
+    std::fs::hard_link(&scan, &hard).unwrap();
+    let soft = dir.join("soft.ply");
+    std::os::unix::fs::symlink(&scan, &soft).unwrap();
+    let dotted = format!("{}/./scan.ply", p(dir));
+    let scene = dir.join("scene.json");
+    std::fs::write(&scene, "{ \"union\": [ { \"mesh\": \"scan.ply\" }, { \"sphere\": { \"radius\": 0.5 } } ] }").unwrap();
+    let pro = dir.join("scan.pro");
+    ok(&["slice", p(&scan), p(&pro), "--sections", "8", "--quiet"]);
+    let pro_before = std::fs::read(&pro).unwrap();
+    let work = dir.join("work");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["resample", p(&scan), p(&scan), "--cells", "1000"], "scan.ply"),
+        (vec!["resample", p(&scan), &dotted, "--cells", "1000"], "scan.ply"),
+        (vec!["resample", p(&scan), p(&hard), "--cells", "1000"], "hard.ply"),
+        (vec!["resample", p(&soft), p(&hard), "--cells", "1000"], "hard.ply"),
+        (vec!["convert", p(&scan), p(&hard)], "hard.ply"),
+        (vec!["bool", "union", p(&scan), p(&scan), p(&hard), "--cells", "1000"], "hard.ply"),
+        (vec!["csg", p(&scene), p(&hard), "--cells", "1000"], "hard.ply"),
+        (vec!["csg", p(&scene), p(&scene), "--cells", "1000"], "scene.json"),
+        (vec!["slice", p(&scan), p(&hard), "--sections", "4"], "hard.ply"),
+        (vec!["contours", p(&pro), p(&pro), "--method", "mc"], "scan.pro"),
+        (vec!["optimize", p(&scan), p(&soft), "--angle", "5"], "soft.ply"),
+        (vec!["stage", "plan", "resample", p(&scan), p(&hard), "--cells", "1000", "--work", p(&work)], "hard.ply"),
+    ];
+    for (args, out) in cases {
+        let err = fails_with(&args, &[out, "is the same file as the input", "write to another path"]);
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(std::fs::read(&scan).unwrap() == before, "{args:?} changed the input");
+    }
+    assert!(std::fs::read(&pro).unwrap() == pro_before);
+    // mint scan into the directory holding its input under a view's name.
+    let views = dir.join("views");
+    std::fs::create_dir(&views).unwrap();
+    let mesh = views.join("view_00.mesh.ply");
+    std::fs::copy(&scan, &mesh).unwrap();
+    fails_with(&["scan", p(&mesh), p(&views), "--views", "2"], &["view_00.mesh.ply", "is the same file as the input"]);
+    assert!(std::fs::read(&mesh).unwrap() == before);
+    assert_eq!(entries(&views), vec![mesh.clone()]);
+}
+
+/// An output that is an existing directory, or whose directory does not
+/// exist, fails at once (before the input is even read: a huge input would
+/// be discretized first otherwise).
+#[test]
+fn an_output_directory_fails_before_any_work() {
+    let d = tempfile::tempdir().unwrap();
+    let input = d.path().join("in.ply");
+    ok(&["gen", "sphere", p(&input), "--faces", "2000"]);
+    let out_dir = d.path().join("out");
+    std::fs::create_dir(&out_dir).unwrap();
+    let scene = d.path().join("scene.json");
+    std::fs::write(&scene, "{ \"sphere\": { \"radius\": 1 } }").unwrap();
+    let missing = d.path().join("nowhere").join("o.ply");
+    for out in [&out_dir, &missing] {
+        for args in [vec!["resample", p(&input), p(out), "--cells", "1000"], vec!["convert", p(&input), p(out)], vec!["csg", p(&scene), p(out), "--cells", "10"], vec!["optimize", p(&input), p(out), "--angle", "1"]] {
+            let name = out.file_name().unwrap().to_str().unwrap();
+            let err = fails_with(&args, &[name]);
+            assert!(err.contains("is a directory") || err.contains("does not exist"), "{args:?}: {err}");
+        }
+    }
+    assert!(entries(&out_dir).is_empty(), "{:?}", entries(&out_dir));
+}
+
+/// A flat input resamples to an empty mesh: exit 0, a warning saying why,
+/// and `warnings` in the JSON summary.
+#[test]
+fn a_flat_input_gives_an_empty_output_with_a_warning() {
+    let d = tempfile::tempdir().unwrap();
+    let flat = d.path().join("flat.ply");
+    std::fs::write(&flat, "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n").unwrap();
+    let out = d.path().join("o.ply");
+    let o = run(&["resample", p(&flat), p(&out), "--cells", "1000", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("warning") && err.contains("the output is empty") && err.contains("thinner than a cell"), "{err}");
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["output_faces"], 0);
+    let w = j["warnings"].as_array().unwrap();
+    assert_eq!(w.len(), 1);
+    assert!(w[0].as_str().unwrap().contains("the output is empty"), "{w:?}");
+    // A closed input has none.
+    let sphere = d.path().join("s.ply");
+    ok(&["gen", "sphere", p(&sphere), "--faces", "2000"]);
+    let j: serde_json::Value = serde_json::from_str(&ok(&["resample", p(&sphere), p(&out), "--cells", "1000", "--json"])).unwrap();
+    assert_eq!(j["warnings"], serde_json::json!([]));
+}
