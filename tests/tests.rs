@@ -2,9 +2,10 @@
 //! Heavy cases are `#[ignore]`d and run by hand; see each module.
 
 mod common;
-mod cli;
+pub mod cli;
 mod core_props;
 mod csg;
 mod resample;
+mod robustness;
 mod scans;
 mod stages;

@@ -709,6 +709,7 @@ pub(crate) fn resample_input(input: &std::path::Path, work: Option<&std::path::P
 
 pub(crate) fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::ResampleSummary> {
     let opts = resample_options(&a)?;
+    crate::paths::check_output(&a.output, &[&a.input])?;
     let mem = opts.mem_bytes;
     let tmp_root = a.tmp.clone().unwrap_or_else(|| a.output.parent().filter(|p| !p.as_os_str().is_empty()).map(PathBuf::from).unwrap_or_else(|| PathBuf::from(".")));
     let (input, _range_mesh) = resample_input(&a.input, a.work.as_deref(), &tmp_root)?;
@@ -731,8 +732,11 @@ pub(crate) fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::Resa
 pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, json: bool, quiet: bool, mem: u64) -> Result<()> {
     let peak_heap = alloc::peak_heap();
     let peak_rss = alloc::peak_rss();
+    let warnings = summary_warnings(summary);
+    print_warnings(&warnings);
     if json {
         let mut v = serde_json::to_value(summary)?;
+        v["warnings"] = warnings.into();
         v["mem_budget_bytes"] = mem.into();
         v["peak_heap_bytes"] = peak_heap.into();
         v["peak_rss_bytes"] = peak_rss.into();
@@ -832,15 +836,17 @@ fn cmd_info(a: InfoArgs) -> Result<()> {
 }
 
 fn cmd_convert(a: ConvertArgs) -> Result<()> {
+    crate::paths::check_output(&a.output, &[&a.input])?;
     let bars = Bars::new(a.quiet);
     use mint_pipeline::{Phase, Progress};
     bars.start(Phase::Write, 0);
     let read = mint_io::ReadOptions { spill_dir: a.tmp.clone(), ..Default::default() };
     let write = WriteOptions { ascii: a.ascii, double: a.double, ..Default::default() };
     let mut last = 0u64;
-    let summary = mint_io::convert(&a.input, &a.output, read, write, &mut |done, _total| {
+    let summary = mint_io::convert_cancellable(&a.input, &a.output, read, write, &mut |done, _total| {
         bars.advance(done.saturating_sub(last));
-        last = done;
+        last = last.max(done);
+        !crate::progress::interrupted()
     })
     .with_context(|| format!("converting {} to {}", a.input.display(), a.output.display()))?;
     bars.finish();
@@ -914,7 +920,7 @@ pub fn load_mesh(path: &std::path::Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>
     let mut reader = mint_io::MeshReader::open(path, mint_io::ReadOptions { resolve_positions: false, ..Default::default() })?;
     let n = reader.vertex_count();
     let positions: Vec<[f64; 3]> = (0..n).map(|i| reader.vertex(i)).collect();
-    let mut faces = Vec::with_capacity(reader.info().face_count.unwrap_or(0) as usize);
+    let mut faces = Vec::with_capacity(reader.face_capacity_hint());
     let mut chunk = mint_io::TriangleChunk::default();
     while reader.next_chunk(&mut chunk)? {
         faces.extend_from_slice(&chunk.indices);
@@ -1073,6 +1079,7 @@ fn cmd_gen_into(a: &GenArgs, w: &mut dyn mint_core::MeshSink) -> Result<(serde_j
 }
 
 fn cmd_gen(a: GenArgs) -> Result<()> {
+    crate::paths::check_output(&a.output, &[])?;
     let format = mint_io::Format::from_path(&a.output)?;
     let mut w = mint_io::MeshWriter::create(&a.output, format, WriteOptions { ascii: a.ascii, ..Default::default() })?;
     let (generated, defects) = match (a.order, a.shape) {
@@ -1211,9 +1218,35 @@ pub(crate) fn grid_options(g: &GridArgs) -> Result<ResampleOptions> {
     })
 }
 
+/// Warnings about a run that succeeded: an empty output, and why.
+pub(crate) fn summary_warnings(s: &mint_pipeline::ResampleSummary) -> Vec<String> {
+    let mut w = Vec::new();
+    if s.output_faces == 0 {
+        let why = if s.intercepts_found == 0 {
+            "no grid line crosses the surface (it is flat between grid lines or smaller than a cell; use smaller cells)"
+        } else if s.intercepts_kept == 0 {
+            "every crossing cancelled (the surface is thinner than a cell, or not closed)"
+        } else {
+            "no cell changes from outside to inside (the surface is thinner than a cell, not closed, or its holes were left open)"
+        };
+        w.push(format!("{}: the output is empty: {why}", s.output));
+    }
+    w
+}
+
+/// Prints the warnings on stderr, one line each (also with --quiet and --json).
+fn print_warnings(warnings: &[String]) {
+    for w in warnings {
+        eprintln!("mint: warning: {w}");
+    }
+}
+
 pub(crate) fn report(g: &GridArgs, s: &mint_pipeline::ResampleSummary) -> Result<()> {
+    let warnings = summary_warnings(s);
+    print_warnings(&warnings);
     if g.json {
         let mut v = serde_json::to_value(s)?;
+        v["warnings"] = warnings.into();
         v["peak_heap_bytes"] = alloc::peak_heap().into();
         v["peak_rss_bytes"] = alloc::peak_rss().into();
         println!("{}", serde_json::to_string_pretty(&v)?);
@@ -1229,6 +1262,7 @@ pub(crate) fn report(g: &GridArgs, s: &mint_pipeline::ResampleSummary) -> Result
 
 fn cmd_bool(a: BoolArgs) -> Result<()> {
     let opts = grid_options(&a.grid)?;
+    crate::paths::check_output(&a.output, &[&a.a, &a.b])?;
     let op = match a.op {
         BoolOpArg::Union => mint_core::robust::BoolOp::Union,
         BoolOpArg::Intersection => mint_core::robust::BoolOp::Intersection,
@@ -1241,9 +1275,22 @@ fn cmd_bool(a: BoolArgs) -> Result<()> {
 
 fn cmd_csg(a: CsgArgs) -> Result<()> {
     let opts = grid_options(&a.grid)?;
+    crate::paths::check_output(&a.output, &[&a.scene])?;
     let text = std::fs::read_to_string(&a.scene).with_context(|| format!("{}: cannot read the scene", a.scene.display()))?;
     let scene = mint_pipeline::parse_scene(&text, &a.scene)?;
+    crate::paths::check_output(&a.output, &scene_inputs(&a.scene, &scene))?;
     let bars = Bars::new(a.grid.quiet || a.grid.json);
     let s = mint_pipeline::csg(&scene, &a.scene.display().to_string(), &a.output, &opts, &bars)?;
     report(&a.grid, &s)
+}
+
+/// The files a scene reads: the scene file and its meshes.
+pub(crate) fn scene_inputs<'a>(path: &'a std::path::Path, scene: &'a mint_pipeline::Scene) -> Vec<&'a std::path::Path> {
+    let mut v = vec![path];
+    for op in &scene.operands {
+        if let mint_pipeline::scene::Operand::Mesh { path, .. } = op {
+            v.push(path.as_path());
+        }
+    }
+    v
 }

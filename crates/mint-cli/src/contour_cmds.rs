@@ -168,6 +168,10 @@ fn write_options(ascii: bool, double: bool) -> WriteOptions {
 }
 
 pub fn cmd_slice(a: SliceArgs) -> Result<()> {
+    crate::paths::check_output(&a.output, &[&a.input])?;
+    if let Some(st) = &a.stats {
+        crate::paths::check_output(st, &[&a.input, &a.output])?;
+    }
     let axis = a.axis as usize;
     let s = run::slice_file(&a.input, &a.output, a.sections, axis, &crate::progress::Bars::new(a.quiet || a.json))?;
     let MethodStats::Slice(d) = &s.details else { unreachable!() };
@@ -186,6 +190,10 @@ pub fn cmd_slice(a: SliceArgs) -> Result<()> {
 }
 
 pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
+    crate::paths::check_output(&a.output, &[&a.input])?;
+    if let Some(st) = &a.stats {
+        crate::paths::check_output(st, &[&a.input, &a.output])?;
+    }
     let method = match a.method {
         MethodArg::Mc => {
             if a.threshold.is_some() || a.open {
@@ -236,6 +244,10 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
 }
 
 pub fn cmd_optimize(a: OptimizeArgs) -> Result<()> {
+    crate::paths::check_output(&a.output, &[&a.input])?;
+    if let Some(st) = &a.stats {
+        crate::paths::check_output(st, &[&a.input, &a.output])?;
+    }
     let s = run::optimize_file(&a.input, &a.output, a.angle, write_options(a.ascii, a.double))?;
     let MethodStats::Optimize(d) = &s.details else { unreachable!() };
     let line = format!(

@@ -9,10 +9,19 @@ use std::sync::Mutex;
 
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
-/// Installs the Ctrl-C handler once. The first Ctrl-C asks the running
-/// pipeline to stop (it removes its temporary files and exits non-zero); a
-/// second one exits at once.
+/// Installs the Ctrl-C handler once. The first Ctrl-C (or SIGTERM, or
+/// SIGHUP: the `termination` feature of `ctrlc`) asks the running pipeline
+/// to stop (it removes its temporary files and exits with 130); a second
+/// one exits at once. SIGXFSZ is ignored, so that a file-size limit
+/// (`ulimit -f`, `prlimit --fsize`) makes the write fail with "File too
+/// large" and the temporary files are removed, instead of killing the
+/// process with its debris.
 pub fn install_ctrlc() {
+    // SAFETY: setting a signal's disposition to SIG_IGN at startup, before
+    // any thread exists, has no memory-safety preconditions.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
     let _ = ctrlc::set_handler(|| {
         if INTERRUPTED.swap(true, Ordering::SeqCst) {
             std::process::exit(130);

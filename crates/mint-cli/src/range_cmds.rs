@@ -167,16 +167,18 @@ pub struct ZipperArgs {
     pub json: bool,
 }
 
-fn load(set_path: &std::path::Path) -> Result<(ScanSet, Vec<ScanMesh>)> {
-    let set = ScanSet::read(set_path)?;
-    let scans = load_set(&set, set_path, &MeshOptions::default())?;
-    Ok((set, scans))
-}
-
 pub fn cmd_scan(a: ScanArgs) -> Result<()> {
     let (positions, faces) = crate::commands::load_mesh(&a.mesh)?;
     let opts = SynthOptions { views: a.views, resolution: a.resolution, noise: a.noise, seed: a.seed, max_angle_deg: a.max_angle };
     let scans = synthesize(&positions, &faces, &opts).with_context(|| format!("scanning {}", a.mesh.display()))?;
+    // Nothing written yet: refuse a run that would overwrite its input.
+    if a.out_dir.exists() && !a.out_dir.is_dir() {
+        bail!("{}: is not a directory; give a directory for the scans", a.out_dir.display());
+    }
+    let ext = if a.image_format == ImageFormat::Ply { "ply" } else { "rgrid" };
+    for name in ["scans.conf".to_string(), "scans-perturbed.conf".to_string()].into_iter().chain(scans.iter().flat_map(|sc| [format!("{}.{ext}", sc.name), format!("{}.mesh.ply", sc.name)])) {
+        crate::paths::check_not_input(&a.out_dir.join(name), &[&a.mesh])?;
+    }
     std::fs::create_dir_all(&a.out_dir).with_context(|| format!("{}: creating the output directory", a.out_dir.display()))?;
     let mut set = ScanSet::new(&a.out_dir);
     let comments = [format!("mint scan of {}", a.mesh.display())];
@@ -234,7 +236,11 @@ pub fn cmd_scan(a: ScanArgs) -> Result<()> {
 
 pub fn cmd_align(a: AlignArgs) -> Result<()> {
     let t = std::time::Instant::now();
-    let (set, scans) = load(&a.set)?;
+    let set = ScanSet::read(&a.set)?;
+    let mut inputs: Vec<&std::path::Path> = vec![&a.set];
+    inputs.extend(set.entries.iter().map(|e| e.path.as_path()));
+    crate::paths::check_output(&a.out_set, &inputs)?;
+    let scans = load_set(&set, &a.set, &MeshOptions::default())?;
     let opts = AlignOptions {
         distance: a.distance,
         start_distance: a.start_distance,
@@ -285,6 +291,9 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
 pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
     let t = std::time::Instant::now();
     let set = ScanSet::read(&a.set)?;
+    let mut inputs: Vec<&std::path::Path> = vec![&a.set];
+    inputs.extend(set.entries.iter().map(|e| e.path.as_path()));
+    crate::paths::check_output(&a.output, &inputs)?;
     let bars = crate::progress::Bars::new(a.json);
     let scans = mint_range::ScanFiles::open_with(&set, &a.set, &MeshOptions::default(), a.mem as usize, &bars)?;
     let poses: Vec<_> = set.entries.iter().map(|e| e.pose).collect();

@@ -89,6 +89,7 @@ fn job_of(c: &JobCommand) -> Result<(Job, ResampleOptions, PathBuf, bool, bool)>
         JobCommand::Resample(a) => {
             let opts = resample_options(a)?;
             let Some(work) = &a.work else { bail!("a staged run needs --work DIR (a directory every task can reach)") };
+            crate::paths::check_output(&a.output, &[&a.input])?;
             let (input, _) = resample_input(&a.input, Some(work), work)?;
             (Job::Resample { input: abs(&input) }, opts, a.output.clone(), a.json, a.quiet)
         }
@@ -98,9 +99,15 @@ fn job_of(c: &JobCommand) -> Result<(Job, ResampleOptions, PathBuf, bool, bool)>
                 BoolOpArg::Intersection => "intersection",
                 BoolOpArg::Difference => "difference",
             };
+            crate::paths::check_output(&a.output, &[&a.a, &a.b])?;
             (Job::Bool { op: op.into(), a: abs(&a.a), b: abs(&a.b) }, grid_options(&a.grid)?, a.output.clone(), a.grid.json, a.grid.quiet)
         }
-        JobCommand::Csg(a) => (Job::Csg { scene: abs(&a.scene) }, grid_options(&a.grid)?, a.output.clone(), a.grid.json, a.grid.quiet),
+        JobCommand::Csg(a) => {
+            let text = std::fs::read_to_string(&a.scene).with_context(|| format!("{}: cannot read the scene", a.scene.display()))?;
+            let scene = mint_pipeline::parse_scene(&text, &a.scene)?;
+            crate::paths::check_output(&a.output, &crate::commands::scene_inputs(&a.scene, &scene))?;
+            (Job::Csg { scene: abs(&a.scene) }, grid_options(&a.grid)?, a.output.clone(), a.grid.json, a.grid.quiet)
+        }
     })
 }
 

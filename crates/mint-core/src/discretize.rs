@@ -160,8 +160,10 @@ fn locate_along_line(
     };
     let mut cell = -ceil(-t); // floor
     // Walk to the cell whose lower node is below and upper node is above.
-    // The crossing lies within [lo, hi], so this ends within a few steps.
-    loop {
+    // The crossing lies within [lo, hi] and the estimate is within a cell
+    // or two of it, so this ends within a few steps.
+    let mut found = false;
+    for _ in 0..WALK_STEPS {
         if plane_side(p, signs, node(cell)) != below {
             cell -= 1.0;
             continue;
@@ -170,10 +172,48 @@ fn locate_along_line(
             cell += 1.0;
             continue;
         }
+        found = true;
         break;
+    }
+    if !found {
+        cell = bisect_crossing(|k| plane_side(p, signs, node(k)) == below, lo, hi, t);
     }
     let value = t.clamp(cell + MARGIN, cell + 1.0 - MARGIN);
     (cell as i64, value)
+}
+
+/// Steps of the walk from the estimate before [`bisect_crossing`] takes over
+/// (the estimate is rarely more than one cell off; a plane almost parallel
+/// to the line may put it farther).
+const WALK_STEPS: u32 = 16;
+
+/// The cell `k` with `below(k)` and `!below(k + 1)` in `[floor(lo) - 1,
+/// ceil(hi)]`, by bisection on the monotone `below` (the plane function is
+/// linear along the line): at most about 64 steps on any finite input. If
+/// `below` is not monotone there (it is for the exact predicates on finite
+/// grid coordinates within [`crate::grid::MAX_COORDINATE_CELLS`]), the
+/// estimate `t`'s cell clamped to `[lo, hi]`, deterministically.
+#[cold]
+#[inline(never)]
+fn bisect_crossing(below: impl Fn(f64) -> bool, lo: f64, hi: f64, t: f64) -> f64 {
+    let fallback = (-ceil(-t)).clamp(-ceil(-lo), (ceil(hi) - 1.0).max(-ceil(-lo)));
+    let (mut a, mut b) = (-ceil(-lo) - 1.0, ceil(hi));
+    if !(below(a) && !below(b)) {
+        return fallback;
+    }
+    // Invariant: below(a), !below(b), a < b.
+    while b - a > 1.0 {
+        let mid = -ceil(-(0.5 * a + 0.5 * b));
+        if !(a < mid && mid < b) {
+            return fallback; // coordinates too large for unit steps
+        }
+        if below(mid) {
+            a = mid;
+        } else {
+            b = mid;
+        }
+    }
+    a
 }
 
 #[cfg(test)]
@@ -184,6 +224,30 @@ mod tests {
         let mut out = Vec::new();
         discretize_triangle(&p, |c| out.push(c));
         out
+    }
+
+    /// The search along a line terminates on any finite input: the walk
+    /// gives way to bisection, and bisection to a deterministic clamp when
+    /// the coordinates are too large for unit steps (it used to loop
+    /// forever on grid coordinates of 1e293).
+    #[test]
+    fn the_search_along_a_line_always_terminates() {
+        assert_eq!(bisect_crossing(|k| k < 1000.5, 0.0, 2000.0, 3.0), 1000.0);
+        assert_eq!(bisect_crossing(|k| k < -7.5, -9.0, 2000.0, 3.0), -8.0);
+        // Not monotone as asked (never below): the estimate's cell, clamped.
+        assert_eq!(bisect_crossing(|_| false, 0.0, 20.0, 30.0), 19.0);
+        assert_eq!(bisect_crossing(|k| k < 1e30, 0.0, 1e300, 5.0), 5.0);
+        // A triangle far beyond the grid's range of exact unit steps.
+        let y = 1e293;
+        let t = [[0.5, y, 0.5], [3.5, y, 0.2], [0.2, y * (1.0 + f64::EPSILON), 3.5]];
+        let c = collect(t);
+        assert!(c.iter().all(|c| c.value.is_finite()));
+        // A very slanted triangle, whose estimate may be far from the crossing:
+        // the exact cell is still found.
+        let t = [[0.5, 0.5, 0.0], [1.5, 0.5, 1e6], [0.5, 1.5, 1e6 + 1e-3]];
+        for c in collect(t) {
+            assert!(c.value >= c.cell as f64 && c.value <= c.cell as f64 + 1.0);
+        }
     }
 
     #[test]

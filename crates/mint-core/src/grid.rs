@@ -37,6 +37,13 @@ pub enum GridError {
     /// The grid would have more nodes along a line family than record ids can
     /// address; use larger cells.
     TooManyCells { dims: [u64; 3], max_cross_section: u64 },
+    /// The box (with its padding) does not fit in f64 along `axis`: its
+    /// extent or its far side overflows.
+    ExtentOverflow { axis: Axis, min: f64, max: f64 },
+    /// A coordinate is so far from the origin, in cells, that grid
+    /// coordinates would lose the precision the exact predicates need
+    /// (see [`MAX_COORDINATE_CELLS`]).
+    CoordinateTooLarge { axis: Axis, value: f64, cell: f64 },
 }
 
 impl std::fmt::Display for GridError {
@@ -49,6 +56,17 @@ impl std::fmt::Display for GridError {
                 "grid of {}x{}x{} cells is too fine: a cross-section may have at most {} nodes; use larger cells",
                 dims[0], dims[1], dims[2], max_cross_section
             ),
+            GridError::ExtentOverflow { axis, min, max } => write!(
+                f,
+                "the bounding box from {min:e} to {max:e} along {} is too large for f64 arithmetic; scale the input down",
+                AXIS_NAMES[*axis]
+            ),
+            GridError::CoordinateTooLarge { axis, value, cell } => write!(
+                f,
+                "coordinate {value:e} along {} is more than 2^40 ({:.3e}) cells of {cell:e} from the origin, beyond the precision mint's exact predicates need: use larger cells, or translate the input towards the origin",
+                AXIS_NAMES[*axis],
+                MAX_COORDINATE_CELLS
+            ),
         }
     }
 }
@@ -58,6 +76,18 @@ impl std::error::Error for GridError {}
 /// The largest number of nodes in a cross-section orthogonal to the slab axis
 /// (record line ids have 30 bits).
 pub const MAX_CROSS_SECTION_NODES: u64 = 1 << 30;
+
+/// The largest |coordinate| / cell size a grid accepts, for the input's
+/// coordinates and the grid's own nodes: 2^40. Grid coordinates are then
+/// within 2^41 of the grid's nodes' integers, every integer node coordinate
+/// is exact in f64, and rounding a coordinate to f64 moves it by at most
+/// 2^-12 of a cell, so that the exact predicates see the mesh's shape at the
+/// grid's resolution. (A scan in metres at a UTM northing of 5·10^6 may still
+/// use cells of 5 µm.) Beyond it, the mesh is refused with
+/// [`GridError::CoordinateTooLarge`].
+pub const MAX_COORDINATE_CELLS: f64 = (1u64 << 40) as f64;
+
+const AXIS_NAMES: [&str; 3] = ["x", "y", "z"];
 
 /// A regular grid of cubic cells, with its slab axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -90,6 +120,9 @@ impl Grid {
             return Err(GridError::EmptyBounds);
         }
         let extent = [max[0] - min[0], max[1] - min[1], max[2] - min[2]];
+        if let Some(d) = (0..3).find(|&d| !extent[d].is_finite()) {
+            return Err(GridError::ExtentOverflow { axis: d, min: min[d], max: max[d] });
+        }
         let cell = match size {
             GridSize::CellSize(h) => {
                 if !(h.is_finite() && h > 0.0) {
@@ -99,13 +132,21 @@ impl Grid {
             }
             GridSize::Cells(n) => cell_size_for_count(extent, n.max(1)),
         };
+        for d in 0..3 {
+            for value in [min[d], max[d]] {
+                if !(value.abs() / cell <= MAX_COORDINATE_CELLS) {
+                    return Err(GridError::CoordinateTooLarge { axis: d, value, cell });
+                }
+            }
+        }
         let mut dims = [0u64; 3];
         let mut origin = [0.0; 3];
         for d in 0..3 {
             // Cells covering the extent, plus one of padding on each side.
             let inner = (extent[d] / cell).ceil().max(1.0) as u64;
             dims[d] = inner + 2;
-            let centre = 0.5 * (min[d] + max[d]);
+            // (Halves first: the sum may overflow; the result is the same.)
+            let centre = 0.5 * min[d] + 0.5 * max[d];
             origin[d] = centre - 0.5 * dims[d] as f64 * cell + offset[d] * cell;
             // An offset may push the box against the border: grow to keep the padding.
             if min[d] - origin[d] < 0.5 * cell {
@@ -114,6 +155,9 @@ impl Grid {
             }
             if origin[d] + dims[d] as f64 * cell - max[d] < 0.5 * cell {
                 dims[d] += 1;
+            }
+            if !(origin[d].is_finite() && (origin[d] + dims[d] as f64 * cell).is_finite()) {
+                return Err(GridError::ExtentOverflow { axis: d, min: min[d], max: max[d] });
             }
         }
         let slab_axis = slab_axis.unwrap_or_else(|| {
@@ -244,5 +288,30 @@ mod tests {
             Grid::around([0.0; 3], [f64::NAN; 3], GridSize::Cells(10), [0.0; 3], None),
             Err(GridError::EmptyBounds)
         );
+    }
+
+    /// Coordinates of 1e308, a box spanning the whole f64 range, or a
+    /// mesh 2^41 cells away from the origin are refused up front (they
+    /// used to hang the exact search along the grid lines).
+    #[test]
+    fn coordinates_beyond_the_predicates_precision_are_refused() {
+        let e = Grid::around([0.0, 1e308, 0.0], [1.0, 1e308, 1.0], GridSize::Cells(1000), [0.0; 3], None).unwrap_err();
+        assert!(matches!(e, GridError::CoordinateTooLarge { axis: 1, value, .. } if value == 1e308), "{e:?}");
+        assert!(e.to_string().contains("1e308 along y"), "{e}");
+        let e = Grid::around([-1e308; 3], [1e308; 3], GridSize::Cells(1000), [0.0; 3], None).unwrap_err();
+        assert_eq!(e, GridError::ExtentOverflow { axis: 0, min: -1e308, max: 1e308 });
+        let far = MAX_COORDINATE_CELLS * 2.0;
+        assert!(matches!(
+            Grid::around([far, 0.0, 0.0], [far + 1.0, 1.0, 1.0], GridSize::CellSize(1.0), [0.0; 3], None),
+            Err(GridError::CoordinateTooLarge { axis: 0, .. })
+        ));
+        // Just inside the bound: accepted.
+        let near = MAX_COORDINATE_CELLS / 2.0;
+        assert!(Grid::around([near, 0.0, 0.0], [near + 4.0, 1.0, 1.0], GridSize::CellSize(1.0), [0.0; 3], None).is_ok());
+        // A huge cell size whose padding overflows.
+        assert!(matches!(
+            Grid::around([0.0; 3], [1.0; 3], GridSize::CellSize(1e308), [0.0; 3], None),
+            Err(GridError::ExtentOverflow { .. })
+        ));
     }
 }

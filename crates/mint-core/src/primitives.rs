@@ -53,6 +53,32 @@ pub enum Shape {
     HalfSpace,
 }
 
+impl Shape {
+    /// The same shape with every length multiplied by `k`.
+    fn scaled(self, k: f64) -> Shape {
+        match self {
+            Shape::Sphere { radius } => Shape::Sphere { radius: radius * k },
+            Shape::Box { half } => Shape::Box { half: half.map(|h| h * k) },
+            Shape::Cylinder { radius, half_height } => Shape::Cylinder { radius: radius * k, half_height: half_height * k },
+            Shape::Cone { radius, height } => Shape::Cone { radius: radius * k, height: height * k },
+            Shape::Torus { major, minor } => Shape::Torus { major: major * k, minor: minor * k },
+            Shape::HalfSpace => Shape::HalfSpace,
+        }
+    }
+}
+
+/// The power of two `k` that brings the largest component of `d` into
+/// `[0.5, 2)`-ish (1 for a zero or non-finite `d`).
+fn pow2_scale(d: [f64; 3]) -> f64 {
+    let m = d.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    if !(m > 0.0 && m.is_finite()) {
+        return 1.0;
+    }
+    let e = m.log2().round().clamp(-1000.0, 1000.0) as i32;
+    // 2^-e, built in two steps so that neither factor is subnormal or infinite.
+    2f64.powi(-e / 2) * 2f64.powi(-e + e / 2)
+}
+
 /// An affine map `p ↦ m·p + t` (row-major 3×3 `m`), with its inverse.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Transform {
@@ -227,8 +253,17 @@ impl Primitive {
     pub fn intervals(&self, o: [f64; 3], d: [f64; 3], t_range: (f64, f64), step: f64) -> Intervals {
         let o = self.transform.inverse_point(o);
         let d = self.transform.inverse_vector(d);
+        // Work in units of the line's step (a grid cell in the shape's
+        // frame), scaled by a power of two: exact, so results are unchanged
+        // wherever nothing under- or overflows, and the quadrics' products
+        // (cell² · radius², ...) stay in range for shapes of any size. A
+        // sphere of radius 1e-100 used to underflow its discriminant to
+        // nonsense, and its lines to disagree on which nodes are inside.
+        let k = pow2_scale(d);
+        let (o, d) = (o.map(|x| x * k), d.map(|x| x * k));
+        let shape = self.shape.scaled(k);
         let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        match self.shape {
+        match shape {
             Shape::Sphere { radius } => quadric(dot(d, d), 2.0 * dot(o, d), dot(o, o) - radius * radius),
             Shape::Box { half } => {
                 let mut iv = slab(o[0], d[0], -half[0], half[0]);
@@ -397,6 +432,30 @@ impl Primitive {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A sphere of radius 1e-100 cut by lines a tenth of its radius apart
+    /// (its own grid) gives the unit sphere's intervals: the quadric's
+    /// products (1e-400) used to underflow.
+    #[test]
+    fn tiny_and_huge_shapes_cut_lines_like_unit_ones() {
+        for scale in [1e-100, 1e-200, 1e-300, 1e100, 1e200] {
+            let unit = Primitive::new(Shape::Sphere { radius: 1.0 }, Transform::default());
+            let tiny = Primitive::new(Shape::Sphere { radius: scale }, Transform::default());
+            let o = [-5.0, 0.3, 0.2];
+            let want = unit.intervals(o, [0.1, 0.0, 0.0], (-100.0, 100.0), 0.125);
+            let got = tiny.intervals(o.map(|x| x * scale), [0.1 * scale, 0.0, 0.0], (-100.0, 100.0), 0.125);
+            assert_eq!(want.len(), 1);
+            assert_eq!(got.len(), 1, "{scale}: {got:?}");
+            assert!((got[0].0 - want[0].0).abs() < 1e-9 && (got[0].1 - want[0].1).abs() < 1e-9, "{scale}: {got:?} vs {want:?}");
+        }
+        // Normal sizes: exactly the same numbers as without the scaling.
+        let s = Primitive::new(Shape::Sphere { radius: 0.7 }, Transform::default());
+        let iv = s.intervals([-3.0, 0.1, 0.2], [0.3, 0.0, 0.0], (-100.0, 100.0), 0.125);
+        let (o, d) = ([-3.0f64, 0.1, 0.2], [0.3f64, 0.0, 0.0]);
+        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let (a, b, c) = (dot(d, d), 2.0 * dot(o, d), dot(o, o) - 0.7 * 0.7);
+        assert_eq!(iv, quadric(a, b, c));
+    }
 
     #[test]
     fn a_sphere_line_enters_and_leaves_where_it_should() {

@@ -57,6 +57,23 @@ pub fn convert(
     write: WriteOptions,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<ConvertSummary, Error> {
+    convert_cancellable(input, output, read, write, &mut |done, total| {
+        progress(done, total);
+        true
+    })
+}
+
+/// [`convert`], stopping when `progress` returns `false` (polled after each
+/// chunk of triangles and every 2^20 vertices): the temporary output is
+/// removed and the error says "interrupted", naming the output.
+pub fn convert_cancellable(
+    input: &Path,
+    output: &Path,
+    read: ReadOptions,
+    write: WriteOptions,
+    progress: &mut dyn FnMut(u64, u64) -> bool,
+) -> Result<ConvertSummary, Error> {
+    let interrupted = || Error::new(ErrorKind::Io, output, "interrupted; no output written");
     // Output format from the name: refuse before touching anything.
     let output_format = Format::from_extension(output).ok_or_else(|| {
         Error::unsupported(output, "unknown output format: the file name must end in .ply, .obj, .stl, .off, .mesh, .raw, .wrl or .3ds")
@@ -73,6 +90,9 @@ pub fn convert(
     let nv = reader.vertex_count();
     let mut welded: HashMap<[u64; 3], u32> = HashMap::new();
     for i in 0..nv {
+        if i % (1 << 20) == 0 && !progress(0, total) {
+            return Err(interrupted());
+        }
         let p = reader.vertex(i);
         if !p.iter().all(|c| c.is_finite()) {
             return Err(Error::new(
@@ -99,9 +119,13 @@ pub fn convert(
             let t = if weld { t.map(|i| welded[&weld_key(reader.vertex(i))]) } else { *t };
             writer.write_face(t)?;
         }
-        progress(reader.bytes_done(), total);
+        if !progress(reader.bytes_done(), total) {
+            return Err(interrupted());
+        }
     }
-    progress(total, total);
+    if !progress(total, total) {
+        return Err(interrupted());
+    }
     // Finish: counts, sync, rename.
     let vertices_written = writer.vertices();
     let summary = writer.finish()?;

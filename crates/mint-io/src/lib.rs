@@ -47,7 +47,7 @@ mod vrml;
 pub mod writer;
 
 pub use atomic::AtomicFile;
-pub use convert::{convert, ConvertSummary};
+pub use convert::{convert, convert_cancellable, ConvertSummary};
 pub use error::{Error, ErrorKind, Position};
 pub use format::Format;
 pub use reader::{read_info, read_mesh, ElementInfo, MeshInfo, MeshReader, RangeGrid, ReadOptions, ReadStats, TriangleChunk, VertexPositions};

@@ -295,6 +295,18 @@ impl VertexPositions {
     }
 }
 
+/// The fewest bytes any format spends on one face record (binary PLY with
+/// a `uchar` count and `uchar` indices: 4 bytes).
+pub const MIN_FACE_RECORD_BYTES: u64 = 4;
+
+/// `count` records of at least `min_record_bytes` bytes each, capped by what
+/// `file_len` bytes can hold: the size to reserve for records a header
+/// announces (the header may lie; the file's size does not).
+pub fn capacity_hint(count: u64, file_len: u64, min_record_bytes: u64) -> usize {
+    let cap = count.min(file_len / min_record_bytes.max(1));
+    usize::try_from(cap).unwrap_or(usize::MAX)
+}
+
 /// A streaming mesh reader; see the module docs.
 pub struct MeshReader {
     path: PathBuf,
@@ -400,6 +412,17 @@ impl MeshReader {
         &self.info
     }
 
+    /// How many triangles to reserve room for before reading the faces:
+    /// the header's face count, capped by what the file can hold (every
+    /// face record takes at least [`MIN_FACE_RECORD_BYTES`] bytes, and a
+    /// strip or polygon at least one more byte per extra triangle), so a
+    /// header that lies about its counts cannot make a loader ask for more
+    /// memory than the file's size; the truncation is then reported by
+    /// [`MeshReader::next_chunk`] as for any short file.
+    pub fn face_capacity_hint(&self) -> usize {
+        capacity_hint(self.info.face_count.unwrap_or(0), self.bytes_total, MIN_FACE_RECORD_BYTES)
+    }
+
     /// Number of vertices (for STL: 3 per facet).
     pub fn vertex_count(&self) -> u32 {
         self.positions.count()
@@ -484,5 +507,55 @@ impl MeshReader {
             w.push(format!("{}: {n} bytes after the last element the header declares were ignored (the header counts may not match the body)", self.path.display()));
         }
         w
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A header announcing 2^32 - 1, 2^62 or 2^64 - 1 faces over a file of a
+    /// few hundred bytes: the hint stays within the file's size, and reading
+    /// reports the truncation (no allocation from the header's count).
+    #[test]
+    fn lying_face_counts_cap_the_reservation_by_the_file_size() {
+        assert_eq!(capacity_hint(u64::MAX, 400, 4), 100);
+        assert_eq!(capacity_hint(3, 400, 4), 3);
+        assert_eq!(capacity_hint(7, 400, 0), 7);
+        let d = tempfile::tempdir().unwrap();
+        for n in [u32::MAX as u64, 1u64 << 62, u64::MAX] {
+            for (name, el, list) in [("f.ply", "face", "uchar int"), ("s.ply", "tristrips", "int int")] {
+                let p = d.path().join(name);
+                let mut bytes = format!("ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement {el} {n}\nproperty list {list} vertex_indices\nend_header\n").into_bytes();
+                for v in [0f32, 0., 0., 1., 0., 0., 0., 1., 0.] {
+                    bytes.extend_from_slice(&v.to_le_bytes());
+                }
+                if el == "face" {
+                    bytes.push(3);
+                } else {
+                    bytes.extend_from_slice(&3i32.to_le_bytes());
+                }
+                for i in 0..3i32 {
+                    bytes.extend_from_slice(&i.to_le_bytes());
+                }
+                std::fs::write(&p, &bytes).unwrap();
+                let mut r = MeshReader::open(&p, ReadOptions::default()).unwrap();
+                assert!(r.face_capacity_hint() as u64 <= bytes.len() as u64 / MIN_FACE_RECORD_BYTES, "{el} {n}");
+                let mut chunk = TriangleChunk::new();
+                let mut err = None;
+                loop {
+                    match r.next_chunk(&mut chunk) {
+                        Ok(true) => continue,
+                        Ok(false) => break,
+                        Err(e) => {
+                            err = Some(e);
+                            break;
+                        }
+                    }
+                }
+                let e = err.unwrap_or_else(|| panic!("{el} {n}: no truncation error")).to_string();
+                assert!(e.contains("truncated file"), "{e}");
+            }
+        }
     }
 }

@@ -20,6 +20,13 @@ pub enum PipelineError {
     /// A vertex position is NaN or infinite.
     #[error("{path}: vertex {index} has a non-finite coordinate ({x}, {y}, {z})")]
     NonFinite { path: PathBuf, index: u64, x: f64, y: f64, z: f64 },
+    /// A computed output vertex is NaN or infinite: arithmetic on the
+    /// input's coordinates overflowed. Names the input, not the output.
+    #[error("{path}: an output vertex came out non-finite ({x}, {y}, {z}): the input's coordinates are too large for the grid's arithmetic; scale or translate the input towards the origin")]
+    NonFiniteResult { path: PathBuf, x: f64, y: f64, z: f64 },
+    /// A mesh vertex moved by the scene's transforms is NaN or infinite.
+    #[error("{path}: vertex {index} moved by the scene's transforms is non-finite ({x}, {y}, {z}): the scale or translation is too large")]
+    TransformOverflow { path: PathBuf, index: u64, x: f64, y: f64, z: f64 },
     /// The input has no triangles.
     #[error("{path}: the mesh has no triangles to resample")]
     Empty { path: PathBuf },

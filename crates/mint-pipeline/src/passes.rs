@@ -89,6 +89,9 @@ pub(crate) fn bounds(
                             Some(t) => t.apply_point(p),
                             None => p,
                         };
+                        if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
+                            return Err(PipelineError::TransformOverflow { path: path.to_path_buf(), index: i, x: p[0], y: p[1], z: p[2] });
+                        }
                         for d in 0..3 {
                             lo[d] = lo[d].min(p[d]);
                             hi[d] = hi[d].max(p[d]);

@@ -61,10 +61,22 @@ enum Value {
     Obj(Vec<(String, usize, Value)>),
 }
 
+/// The deepest nesting of nodes a scene may have (operators, transforms'
+/// nodes and `ref`s followed, counted from the root): deeper scenes are
+/// refused with one line naming the limit and the line, instead of
+/// overflowing the stack.
+pub const MAX_SCENE_DEPTH: usize = 256;
+
+/// The deepest nesting of JSON values (objects and arrays) the scene parser
+/// reads: room for [`MAX_SCENE_DEPTH`] nodes (an operator's node and its
+/// array are two levels each).
+pub const MAX_JSON_DEPTH: usize = 2 * MAX_SCENE_DEPTH + 8;
+
 struct Parser<'a> {
     s: &'a [u8],
     i: usize,
     line: usize,
+    depth: usize,
 }
 
 impl Parser<'_> {
@@ -84,6 +96,16 @@ impl Parser<'_> {
         Err((self.line, m.into()))
     }
     fn value(&mut self) -> Result<(usize, Value), (usize, String)> {
+        if self.depth >= MAX_JSON_DEPTH {
+            self.ws();
+            return self.err(format!("the scene nests JSON values deeper than {MAX_JSON_DEPTH} levels (mint's limit: at most {MAX_SCENE_DEPTH} nested nodes)"));
+        }
+        self.depth += 1;
+        let v = self.value_inner();
+        self.depth -= 1;
+        v
+    }
+    fn value_inner(&mut self) -> Result<(usize, Value), (usize, String)> {
         self.ws();
         let line = self.line;
         let Some(&c) = self.s.get(self.i) else { return self.err("unexpected end of file") };
@@ -191,6 +213,7 @@ struct Builder<'a> {
     defs: Vec<(String, usize, Value)>,
     operands: Vec<Operand>,
     stack: Vec<String>,
+    depth: usize,
 }
 
 impl Builder<'_> {
@@ -242,6 +265,16 @@ impl Builder<'_> {
     }
 
     fn node(&mut self, line: usize, v: &Value, outer: &Transform) -> Result<Expr, SceneError> {
+        if self.depth >= MAX_SCENE_DEPTH {
+            return self.err(line, format!("the scene nests nodes deeper than {MAX_SCENE_DEPTH} levels (mint's limit; refs count as they are followed)"));
+        }
+        self.depth += 1;
+        let e = self.node_inner(line, v, outer);
+        self.depth -= 1;
+        e
+    }
+
+    fn node_inner(&mut self, line: usize, v: &Value, outer: &Transform) -> Result<Expr, SceneError> {
         let Value::Obj(items) = v else { return self.err(line, "expected a node (an object)") };
         // Transform of this node: scale, then rotate x, y, z, then translate.
         let mut local = Transform::default();
@@ -250,7 +283,7 @@ impl Builder<'_> {
             match k.as_str() {
                 "scale" => {
                     let s = self.vec3(*l, k, x)?;
-                    local = Transform::scale(s).ok_or(()).or_else(|_| self.err(*l, "key 'scale': factors must be non-zero"))?.after(&local);
+                    local = Transform::scale(s).ok_or(()).or_else(|_| self.err(*l, format!("key 'scale': factors must be non-zero and their product within f64's range, got {s:?}")))?.after(&local);
                 }
                 "rotate" => {
                     let r = self.vec3(*l, k, x)?;
@@ -345,9 +378,18 @@ impl Builder<'_> {
                 let (ol, o) = self.field(l, k, x, "offset")?;
                 let n = self.vec3(nl, "normal", n)?;
                 let d = self.num(ol, "offset", o)?;
-                let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-                if !(len > 0.0) {
+                // Scaled by its largest component first, so that no square
+                // overflows or underflows (a normal of [1e200, 0, 0] is +x).
+                let big = n.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                if !(big > 0.0) {
                     return self.err(nl, "key 'normal': must not be zero");
+                }
+                let n = n.map(|v| v / big);
+                let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                // n·p <= d with |n| = big·len: the plane is at distance d / (big·len).
+                let dist = d / big / len;
+                if !dist.is_finite() {
+                    return self.err(ol, format!("key 'offset': {d} over a normal of length {:e} is not a finite distance", big * len));
                 }
                 let w = n.map(|v| v / len);
                 // An orthonormal frame (u, v, w): local z maps to the normal.
@@ -358,7 +400,9 @@ impl Builder<'_> {
                 let u = u.map(|x| x / ul);
                 let v = cross(w, u);
                 let m = [[u[0], v[0], w[0]], [u[1], v[1], w[1]], [u[2], v[2], w[2]]];
-                let frame = Transform::new(m, w.map(|x| x * d / len)).expect("orthonormal");
+                let Some(frame) = Transform::new(m, w.map(|x| x * dist)) else {
+                    return self.err(nl, format!("key 'normal': no orthonormal frame for {n:?}"));
+                };
                 Operand::Primitive(Primitive::new(Shape::HalfSpace, xf.after(&frame)))
             }
             _ => unreachable!(),
@@ -371,14 +415,14 @@ impl Builder<'_> {
 /// Parses a scene file's text. `path` names the file in errors; mesh paths
 /// are relative to its directory.
 pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
-    let mut p = Parser { s: text.as_bytes(), i: 0, line: 1 };
+    let mut p = Parser { s: text.as_bytes(), i: 0, line: 1, depth: 0 };
     let (line, root) = p.value().map_err(|(line, message)| SceneError { path: path.to_path_buf(), line, message })?;
     p.ws();
     if p.i < p.s.len() {
         return Err(SceneError { path: path.to_path_buf(), line: p.line, message: "unexpected text after the scene".into() });
     }
     let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut b = Builder { path, base, defs: Vec::new(), operands: Vec::new(), stack: Vec::new() };
+    let mut b = Builder { path, base, defs: Vec::new(), operands: Vec::new(), stack: Vec::new(), depth: 0 };
     let (node_line, node) = match &root {
         Value::Obj(items) if items.iter().any(|(k, _, _)| k == "scene") => {
             let mut scene = None;
@@ -431,5 +475,51 @@ mod tests {
         assert!(e.to_string().contains("no such file"), "{e}");
         let e = parse("{ \"sphere\": { \"radius\": 1 }, }").unwrap_err();
         assert!(e.to_string().starts_with("scene.json:1:"), "{e}");
+    }
+
+    /// A half-space normal of [1e200, 0, 0] is +x (it used to panic on a
+    /// non-invertible frame); a tiny one too.
+    #[test]
+    fn huge_and_tiny_halfspace_normals_are_normalized_safely() {
+        for (n, d) in [(1e200, 2e200), (1e-200, 2e-200), (3.0, 6.0)] {
+            let s = parse(&format!("{{ \"halfspace\": {{ \"normal\": [{n:e}, 0, 0], \"offset\": {d:e} }} }}")).unwrap();
+            let Operand::Primitive(p) = &s.operands[0] else { panic!() };
+            // The plane x = 2: its frame's origin maps to (2, 0, 0), local z to +x.
+            let o = p.transform.apply_point([0.0; 3]);
+            let z = p.transform.apply_point([0.0, 0.0, 1.0]);
+            assert!((o[0] - 2.0).abs() < 1e-12 && o[1].abs() < 1e-12 && o[2].abs() < 1e-12, "{n}: {o:?}");
+            assert!((z[0] - 3.0).abs() < 1e-12, "{n}: {z:?}");
+        }
+        let e = parse("{ \"halfspace\": { \"normal\": [1e-300, 0, 0],\n \"offset\": 1e300 } }").unwrap_err();
+        assert_eq!(e.line, 2, "{e}");
+    }
+
+    /// 10,000 nested unions, a deeply nested JSON array, and a chain of
+    /// 300 refs are refused naming the limit and the line (they used to
+    /// overflow the stack). Run on a thread with the main thread's stack.
+    #[test]
+    fn deep_nesting_is_refused_naming_the_limit() {
+        std::thread::Builder::new()
+            .stack_size(8 << 20)
+            .spawn(|| {
+                let n = 10_000;
+                let deep = "{ \"union\": [\n".repeat(n) + "{ \"sphere\": { \"radius\": 1 } }" + &" ] }".repeat(n);
+                let e = parse(&deep).unwrap_err();
+                assert!(e.to_string().contains(&MAX_SCENE_DEPTH.to_string()), "{e}");
+                assert!(e.line > 1, "{e}");
+                let e = parse(&("[".repeat(100_000) + &"]".repeat(100_000))).unwrap_err();
+                assert!(e.to_string().contains(&MAX_JSON_DEPTH.to_string()), "{e}");
+                let mut defs: Vec<String> = (0..300).map(|i| format!("\"d{i}\": {{ \"ref\": \"d{}\" }}", i + 1)).collect();
+                defs.push("\"d300\": { \"sphere\": { \"radius\": 1 } }".into());
+                let e = parse(&format!("{{ \"defs\": {{ {} }}, \"scene\": {{ \"ref\": \"d0\" }} }}", defs.join(",\n"))).unwrap_err();
+                assert!(e.to_string().contains(&MAX_SCENE_DEPTH.to_string()), "{e}");
+                // Just within the limit: parses.
+                let k = MAX_SCENE_DEPTH - 1;
+                let ok = "{ \"union\": [\n".repeat(k) + "{ \"sphere\": { \"radius\": 1 } }" + &" ] }".repeat(k);
+                parse(&ok).unwrap();
+            })
+            .unwrap()
+            .join()
+            .unwrap();
     }
 }

@@ -695,7 +695,11 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
         let path = crate::workdir::task_dir(&ctx.dir, stage, t as u32).join("vertices.bin");
         read_records::<24>(&path, s.vertices_file.unwrap_or(FileSum { len: 0, crc32: 0 }), |b| {
             let c = |d: usize| f64::from_le_bytes(b[8 * d..8 * d + 8].try_into().unwrap());
-            writer.write_vertex([c(0), c(1), c(2)])?;
+            let v = [c(0), c(1), c(2)];
+            if !v.iter().all(|x| x.is_finite()) {
+                return Err(PipelineError::NonFiniteResult { path: ctx.name(), x: v[0], y: v[1], z: v[2] });
+            }
+            writer.write_vertex(v)?;
             Ok(())
         })?;
         check_cancel(ctx.progress)?;
