@@ -970,6 +970,10 @@ fn print_check(name: &str, r: &mint_mesh::CheckReport) {
 }
 
 fn cmd_decimate(a: DecimateArgs) -> Result<()> {
+    crate::paths::check_output(&a.output, &[&a.input])?;
+    if a.preview {
+        crate::paths::check_output(&preview_path(&a.output), &[&a.input])?;
+    }
     let mem = a.mem.unwrap_or_else(default_mem);
     let o = mint_pipeline::DecimateOptions {
         target_faces: a.faces,
@@ -1018,6 +1022,8 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     if output.extension().is_none_or(|e| !e.eq_ignore_ascii_case("png")) {
         bail!("{}: the picture is written as PNG; name it OUT.png", output.display());
     }
+    let refs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
+    crate::paths::check_output(output, &refs)?;
     let view = match a.view {
         ViewArg::Iso => mint_render::View::Iso,
         ViewArg::Front => mint_render::View::Front,
@@ -1030,7 +1036,6 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     };
     let o = mint_render::RenderOptions { width: a.size.0, height: a.size.1, view };
     let bars = Bars::new(a.quiet || a.json);
-    let refs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
     let s = mint_render::render_files(&refs, output, &o, &bars)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&s)?);
