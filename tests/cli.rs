@@ -399,6 +399,23 @@ fn render_draws_a_sphere_with_its_analytic_silhouette_and_the_same_bytes_every_t
     let out = d.path().join("r.ply");
     ok(&["resample", p(&s), p(&out), "--cells", "20000", "--preview", "--quiet"]);
     assert!(d.path().join("r.png").is_file());
+    // Colour by distance: the sphere of radius 1.01 against the unit one is
+    // 0.01 away everywhere (within the facets' sagitta).
+    let big = d.path().join("big.ply");
+    let m = mint_io::read_mesh(&s).unwrap();
+    let mut w = mint_io::MeshWriter::create(&big, mint_io::Format::Ply, mint_io::WriteOptions { double: true, ..Default::default() }).unwrap();
+    for q in &m.0 {
+        w.write_vertex(q.map(|c| c * 1.01)).unwrap();
+    }
+    for f in &m.1 {
+        w.write_face(*f).unwrap();
+    }
+    w.finish().unwrap();
+    let dist = d.path().join("dist.png");
+    let j: serde_json::Value = serde_json::from_str(&ok(&["render", p(&big), p(&dist), "--ref", p(&s), "--color", "distance", "--size", "300x200", "--json"])).unwrap();
+    let (mean, max) = (j["distance_mean"].as_f64().unwrap(), j["distance_max"].as_f64().unwrap());
+    assert!((mean - 0.01).abs() < 0.001 && max < 0.0115, "mean {mean}, max {max}");
+    assert!(!run(&["render", p(&big), p(&dist), "--color", "distance"]).status.success(), "distance needs --ref");
     // A non-PNG name is refused before any work.
     let o = run(&["render", p(&s), p(&d.path().join("x.jpg"))]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("PNG"));

@@ -267,12 +267,26 @@ pub struct RenderArgs {
     /// Where the camera looks from.
     #[arg(long, value_enum, default_value_t = ViewArg::Iso)]
     pub view: ViewArg,
+    /// A reference mesh for `--color distance` (read in memory).
+    #[arg(long = "ref", value_name = "REF")]
+    pub reference: Option<PathBuf>,
+    /// shading: flat shading (back faces orange). distance: the distance
+    /// of each visible point to --ref, blue (0) to red (the largest), with
+    /// a colour bar: where a resampling or decimation lost detail.
+    #[arg(long, value_enum, default_value_t = ColorArg::Shading)]
+    pub color: ColorArg,
     /// No progress bars and no summary.
     #[arg(long, short)]
     pub quiet: bool,
     /// Print the summary as JSON on stdout.
     #[arg(long)]
     pub json: bool,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ColorArg {
+    Shading,
+    Distance,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -718,7 +732,7 @@ pub(crate) fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::Resa
     summary.input = a.input.display().to_string();
     if a.preview {
         let png = preview_path(&a.output);
-        let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso };
+        let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, distance_to: None };
         mint_render::render_files(&[input.as_path(), a.output.as_path()], &png, &o, &bars)?;
         if !a.quiet && !a.json {
             eprintln!("preview: {} (input left, output right)", png.display());
@@ -985,7 +999,7 @@ fn cmd_decimate(a: DecimateArgs) -> Result<()> {
     let s = mint_pipeline::decimate(&a.input, &a.output, &o, &bars)?;
     if a.preview {
         let png = preview_path(&a.output);
-        let ro = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso };
+        let ro = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, distance_to: None };
         mint_render::render_files(&[a.input.as_path(), a.output.as_path()], &png, &ro, &bars)?;
         if !a.quiet && !a.json {
             eprintln!("preview: {} (input left, output right)", png.display());
@@ -1034,13 +1048,25 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
         ViewArg::Bottom => mint_render::View::Bottom,
         ViewArg::All => mint_render::View::All,
     };
-    let o = mint_render::RenderOptions { width: a.size.0, height: a.size.1, view };
+    let distance_to = match (a.color, &a.reference) {
+        (ColorArg::Distance, Some(r)) => Some(r.clone()),
+        (ColorArg::Distance, None) => bail!("--color distance needs --ref REF, the mesh to measure against"),
+        (ColorArg::Shading, Some(_)) => bail!("--ref is used with --color distance"),
+        (ColorArg::Shading, None) => None,
+    };
+    if let Some(r) = &distance_to {
+        crate::paths::check_not_input(output, &[r.as_path()])?;
+    }
+    let o = mint_render::RenderOptions { width: a.size.0, height: a.size.1, view, distance_to };
     let bars = Bars::new(a.quiet || a.json);
     let s = mint_render::render_files(&refs, output, &o, &bars)?;
     if a.json {
         println!("{}", serde_json::to_string_pretty(&s)?);
     } else if !a.quiet {
         eprintln!("rendered {} triangles -> {} ({}x{}, {} pixels covered) in {:.2}s", s.triangles, s.output, s.width, s.height, s.covered_pixels, s.seconds);
+        if let (Some(max), Some(mean)) = (s.distance_max, s.distance_mean) {
+            eprintln!("  distance to the reference over the visible surface: mean {mean:.3e}, max {max:.3e} (the colour bar's top)");
+        }
     }
     Ok(())
 }
@@ -1178,7 +1204,7 @@ fn cmd_demo(a: DemoArgs) -> Result<()> {
         bail!("demo output is not a watertight genus-3 surface: this is a bug, please report it");
     }
     let png = a.picture.clone().unwrap_or_else(|| a.out.as_ref().map_or_else(|| PathBuf::from("mint-demo.png"), |d| d.join("mint-demo.png")));
-    let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso };
+    let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, distance_to: None };
     mint_render::render_files(&[input.as_path(), output.as_path()], &png, &o, &Bars::new(true))?;
     println!("demo ok: {} faces -> {} faces, watertight, genus 3", s.input_faces, s.output_faces);
     println!("picture: {} (input left, resampled right)", png.display());

@@ -164,6 +164,8 @@ pub struct Canvas {
     pub height: u32,
     depth: Vec<f32>,
     rgb: Vec<[u8; 3]>,
+    /// Lambert factor of the face that keeps each pixel (for recolouring).
+    shade: Vec<f32>,
     /// Pixels covered by at least one triangle.
     pub covered: u64,
 }
@@ -176,7 +178,7 @@ const BACK: [f64; 3] = [0.95, 0.55, 0.15];
 impl Canvas {
     pub fn new(width: u32, height: u32) -> Canvas {
         let n = width as usize * height as usize;
-        Canvas { width, height, depth: vec![f32::INFINITY; n], rgb: vec![BACKGROUND; n], covered: 0 }
+        Canvas { width, height, depth: vec![f32::INFINITY; n], rgb: vec![BACKGROUND; n], shade: vec![0.0; n], covered: 0 }
     }
 
     /// Draws one triangle seen by `cam`, flat-shaded.
@@ -198,13 +200,13 @@ impl Canvas {
         let base = if front { FRONT } else { BACK };
         let k = 0.25 + 0.75 * lambert;
         let color = base.map(|c| (255.0 * (c * k).min(1.0)).round() as u8);
-        self.fill(cam, p, color);
+        self.fill(cam, p, color, k as f32);
     }
 
     /// Fills the pixels whose centres `p` covers (edges included), keeping
     /// the nearest depth; the first triangle at a depth keeps the pixel.
     #[inline]
-    pub fn fill(&mut self, cam: &Camera, p: &[[f64; 3]; 3], color: [u8; 3]) {
+    pub fn fill(&mut self, cam: &Camera, p: &[[f64; 3]; 3], color: [u8; 3], shade: f32) {
         let q = [cam.project(p[0]), cam.project(p[1]), cam.project(p[2])];
         let (w, h) = (self.width as f64, self.height as f64);
         let minx = q[0][0].min(q[1][0]).min(q[2][0]);
@@ -242,8 +244,68 @@ impl Canvas {
                     }
                     self.depth[i] = z;
                     self.rgb[i] = color;
+                    self.shade[i] = shade;
                 }
             }
+        }
+    }
+
+    /// The world point seen at each covered pixel, with its index.
+    pub fn surface_points(&self, cam: &Camera) -> Vec<(usize, [f64; 3])> {
+        let mut v = Vec::new();
+        for (i, &z) in self.depth.iter().enumerate() {
+            if z.is_finite() {
+                let (x, y) = ((i % self.width as usize) as f64 + 0.5, (i / self.width as usize) as f64 + 0.5);
+                let (a, b) = ((x - 0.5 * self.width as f64) / cam.scale, (0.5 * self.height as f64 - y) / cam.scale);
+                let c = cam.center;
+                v.push((i, [0, 1, 2].map(|d| c[d] + a * cam.right[d] + b * cam.up[d] + z as f64 * cam.dir[d])));
+            }
+        }
+        v
+    }
+
+    /// Colours pixel `i` by `t` in [0, 1] on the distance scale, keeping its shading.
+    pub fn tint(&mut self, i: usize, t: f64) {
+        let c = colormap(t);
+        let k = self.shade[i] as f64;
+        self.rgb[i] = c.map(|x| (255.0 * (x * (0.35 + 0.65 * k)).min(1.0)).round() as u8);
+    }
+
+    /// Draws a vertical colour bar (low at the bottom) in the rectangle.
+    pub fn colour_bar(&mut self, x: u32, y: u32, w: u32, h: u32) {
+        for row in 0..h {
+            let t = 1.0 - row as f64 / (h.max(2) - 1) as f64;
+            let c = colormap(t).map(|x| (255.0 * x).round() as u8);
+            for col in 0..w {
+                let (px, py) = (x + col, y + row);
+                if px < self.width && py < self.height {
+                    self.rgb[py as usize * self.width as usize + px as usize] = c;
+                }
+            }
+        }
+    }
+
+    /// Writes `text` (digits, '.', 'e', '-', '+', '%') in a 3×5 pixel font
+    /// scaled by `s`, top-left at (x, y), in dark grey.
+    pub fn text(&mut self, x: u32, y: u32, s: u32, text: &str) {
+        let mut cx = x;
+        for ch in text.chars() {
+            let rows = glyph(ch);
+            for (r, bits) in rows.iter().enumerate() {
+                for c in 0..3 {
+                    if bits & (4 >> c) != 0 {
+                        for dy in 0..s {
+                            for dx in 0..s {
+                                let (px, py) = (cx + c * s + dx, y + r as u32 * s + dy);
+                                if px < self.width && py < self.height {
+                                    self.rgb[py as usize * self.width as usize + px as usize] = [40, 40, 40];
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            cx += 4 * s;
         }
     }
 
@@ -283,6 +345,38 @@ impl Canvas {
     }
 }
 
+/// A blue → cyan → yellow → red scale for `t` in [0, 1].
+pub fn colormap(t: f64) -> [f64; 3] {
+    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 1.0 };
+    let stops = [[0.15, 0.25, 0.85], [0.1, 0.75, 0.85], [0.95, 0.9, 0.2], [0.9, 0.15, 0.1]];
+    let f = t * 3.0;
+    let i = (f.floor() as usize).min(2);
+    let u = f - i as f64;
+    [0, 1, 2].map(|k| stops[i][k] * (1.0 - u) + stops[i + 1][k] * u)
+}
+
+/// Rows of a 3×5 glyph, top first, bit 2 the left column.
+fn glyph(c: char) -> [u8; 5] {
+    match c {
+        '0' => [7, 5, 5, 5, 7],
+        '1' => [2, 6, 2, 2, 7],
+        '2' => [7, 1, 7, 4, 7],
+        '3' => [7, 1, 7, 1, 7],
+        '4' => [5, 5, 7, 1, 1],
+        '5' => [7, 4, 7, 1, 7],
+        '6' => [7, 4, 7, 5, 7],
+        '7' => [7, 1, 1, 1, 1],
+        '8' => [7, 5, 7, 5, 7],
+        '9' => [7, 5, 7, 1, 7],
+        '.' => [0, 0, 0, 0, 2],
+        '-' => [0, 0, 7, 0, 0],
+        '+' => [0, 2, 7, 2, 0],
+        'e' => [0, 7, 7, 4, 7],
+        '%' => [5, 1, 2, 4, 5],
+        _ => [0; 5],
+    }
+}
+
 /// Options of [`render_files`].
 #[derive(Debug, Clone)]
 pub struct RenderOptions {
@@ -291,11 +385,15 @@ pub struct RenderOptions {
     pub height: u32,
     /// The view, or all of them. Default iso.
     pub view: View,
+    /// Colour the surface by its distance to this mesh (read in core, with
+    /// a BVH), on one scale for the whole picture, with a colour bar and
+    /// its top value at the right. Default `None`: shading only.
+    pub distance_to: Option<PathBuf>,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions { width: 1200, height: 900, view: View::Iso }
+        RenderOptions { width: 1200, height: 900, view: View::Iso, distance_to: None }
     }
 }
 
@@ -310,6 +408,10 @@ pub struct RenderSummary {
     pub covered_pixels: u64,
     /// Pixels per world unit of the camera.
     pub scale: f64,
+    /// With a distance reference: the largest and mean distance over the
+    /// covered pixels (the colour bar spans 0 to the largest).
+    pub distance_max: Option<f64>,
+    pub distance_mean: Option<f64>,
     pub seconds: f64,
 }
 
@@ -355,8 +457,20 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
     if !(lo[0] <= hi[0]) {
         return Err(RenderError::Empty { path: inputs.first().map(|p| p.to_path_buf()).unwrap_or_default() });
     }
-    // 2. Every triangle of every input into its tiles.
-    let mut picture = Canvas::new(o.width * inputs.len() as u32, o.height * views.len() as u32);
+    // 2. Every triangle of every input into its tiles (a strip on the right
+    // for the colour bar when colouring by distance).
+    let reference = match &o.distance_to {
+        Some(r) => {
+            let (p, f) = mint_io::read_mesh(r)?;
+            let bvh = mint_mesh::TriangleBvh::new(&p, &f).map_err(|e| RenderError::Option(format!("{}: {e}", r.display())))?;
+            Some(bvh)
+        }
+        None => None,
+    };
+    let bar = if reference.is_some() { 90 } else { 0 };
+    let mut picture = Canvas::new(o.width * inputs.len() as u32 + bar, o.height * views.len() as u32);
+    let mut distances: Vec<(usize, u32, u32, Vec<(usize, f64)>)> = Vec::new();
+    let mut stash: Vec<(u32, u32, Canvas)> = Vec::new();
     let mut summary = RenderSummary { output: output.display().to_string(), width: picture.width, height: picture.height, ..Default::default() };
     for (col, path) in inputs.iter().enumerate() {
         let cams: Vec<Camera> = views.iter().map(|&v| Camera::fit(v, lo, hi, o.width, o.height)).collect();
@@ -380,8 +494,35 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
         progress.finish();
         for (row, tile) in tiles.iter().enumerate() {
             summary.covered_pixels += tile.covered;
+            if let Some(bvh) = &reference {
+                let d: Vec<(usize, f64)> = tile.surface_points(&cams[row]).into_iter().map(|(i, q)| (i, bvh.nearest(q).0)).collect();
+                distances.push((row, col as u32, row as u32, d));
+            }
             picture.blit(tile, col as u32 * o.width, row as u32 * o.height);
         }
+        if reference.is_some() {
+            // Keep the tiles for recolouring on the common scale.
+            for (row, tile) in tiles.into_iter().enumerate() {
+                stash.push((col as u32, row as u32, tile));
+            }
+        }
+    }
+    if reference.is_some() {
+        let all: Vec<f64> = distances.iter().flat_map(|(_, _, _, d)| d.iter().map(|x| x.1)).filter(|x| x.is_finite()).collect();
+        let max = all.iter().copied().fold(0.0f64, f64::max);
+        let mean = if all.is_empty() { 0.0 } else { all.iter().sum::<f64>() / all.len() as f64 };
+        summary.distance_max = Some(max);
+        summary.distance_mean = Some(mean);
+        for ((_, _, _, d), (col, row, tile)) in distances.iter().zip(stash.iter_mut()) {
+            for &(i, x) in d {
+                tile.tint(i, if max > 0.0 { x / max } else { 0.0 });
+            }
+            picture.blit(tile, *col * o.width, *row * o.height);
+        }
+        let (x0, h) = (o.width * inputs.len() as u32 + 20, picture.height.saturating_sub(80).min(600));
+        picture.colour_bar(x0, 40, 24, h);
+        picture.text(x0 - 12, 20, 2, &format!("{max:.2e}"));
+        picture.text(x0 - 12, 50 + h, 2, "0");
     }
     picture.write_png(output)?;
     summary.seconds = t.elapsed().as_secs_f64();
