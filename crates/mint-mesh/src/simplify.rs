@@ -1,6 +1,7 @@
 //! [`simplify`]: in-core decimation of a triangle mesh to a face target by
 //! meshoptimizer's quadric edge collapse (the `meshopt` crate, the C++
-//! library games and graphics tools use), followed by a judgement of the
+//! library games and graphics tools use; `simplifyWithUpdate`, which moves
+//! each kept vertex to where the quadric error is least, in f32), followed by a judgement of the
 //! result with [`crate::check`]: a closed, 2-manifold, consistently oriented
 //! input must give one too. When a collapse sequence breaks that (rare: the
 //! collapses are topology-checked, but not for every global configuration),
@@ -57,15 +58,19 @@ pub struct SimplifyReport {
 pub fn simplify(positions: &[[f64; 3]], faces: &[[u32; 3]], o: &SimplifyOptions) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>, SimplifyReport), MeshError> {
     let before = try_check(positions, faces)?;
     let input_watertight = before.watertight;
-    let flat: Vec<f32> = positions.iter().flat_map(|p| p.map(|c| c as f32)).collect();
-    let bytes: &[u8] = unsafe_cast(&flat);
-    let adapter = meshopt::VertexDataAdapter::new(bytes, 12, 0).expect("12-byte f32 positions");
     let indices: Vec<u32> = faces.iter().flatten().copied().collect();
     let mut target = o.target_faces.min(faces.len() as u64);
     let mut relaxed = 0;
     loop {
         let mut error = 0.0f32;
-        let mut out = meshopt::simplify(&indices, &adapter, (target * 3) as usize, o.max_error, meshopt::SimplifyOptions::None, Some(&mut error));
+        // Edge collapses with the vertex placed where the quadric error is
+        // least (meshoptimizer's simplifyWithUpdate), not at an endpoint.
+        let mut moved: Vec<[f32; 3]> = positions.iter().map(|p| p.map(|c| c as f32)).collect();
+        let mut out = indices.clone();
+        let n = meshopt::simplify_with_update(&mut out, &mut moved, &mut [], &[], 0, None, (target * 3) as usize, o.max_error, meshopt::SimplifyOptions::None, Some(&mut error));
+        out.truncate(n);
+        let moved: Vec<[f64; 3]> = moved.iter().map(|p| p.map(f64::from)).collect();
+        let positions = &moved[..];
         let mut removed = 0;
         if input_watertight {
             removed = drop_folded_pairs(&mut out);
@@ -133,14 +138,6 @@ fn drop_folded_pairs(indices: &mut Vec<u32>) -> u64 {
         *indices = kept;
     }
     pairs
-}
-
-/// The f32 array as bytes (a plain reinterpretation: f32 has no padding and
-/// every bit pattern is a valid u8).
-fn unsafe_cast(v: &[f32]) -> &[u8] {
-    // SAFETY: u8 has alignment 1 and no invalid values; the length covers
-    // exactly the f32 elements.
-    unsafe { std::slice::from_raw_parts(v.as_ptr() as *const u8, std::mem::size_of_val(v)) }
 }
 
 /// The faces of `indices` with only their vertices, renumbered in order.

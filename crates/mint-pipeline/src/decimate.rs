@@ -1,7 +1,7 @@
 //! `decimate`: a giant mesh to a target face count, in two stages.
 //!
 //! 1. **Out of core.** Marching Intersections resampling (the staged engine)
-//!    to an intermediate mesh of about `M` faces (default `4 N`). The cell
+//!    to an intermediate mesh of about `M` faces (default `8 N`). The cell
 //!    size comes from the target: one streaming pass sums the triangles'
 //!    area `A`, and MI gives about `K · A / h²` faces for cells of size `h`
 //!    (`K` = [`FACES_PER_AREA_CELL`], measured), so `h = √(K·A/M)`. Overlapping
@@ -29,7 +29,7 @@ use std::time::Instant;
 /// MI output faces per `area / cell²`: measured 3.0 on spheres, 2.9 on tori
 /// and 2.0 on the genus-3 plate (large axis-aligned flats), from 10⁴ to 10⁶
 /// output faces. Flats therefore give fewer intermediate faces than asked;
-/// the default `M = 4 N` leaves room for that.
+/// the default `M = 8 N` leaves room for that.
 pub const FACES_PER_AREA_CELL: f64 = 3.0;
 
 /// Options of [`decimate`].
@@ -37,7 +37,7 @@ pub const FACES_PER_AREA_CELL: f64 = 3.0;
 pub struct DecimateOptions {
     /// Faces of the output.
     pub target_faces: u64,
-    /// Faces of the intermediate resampling (default `4 × target`).
+    /// Faces of the intermediate resampling (default `8 × target`: measured, see docs/PERFORMANCE.md).
     pub intermediate_faces: Option<u64>,
     /// Largest error the simplifier may reach, relative to the extent
     /// (default 1: the face target decides).
@@ -91,7 +91,7 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
         return Err(PipelineError::Empty { path: input.to_path_buf() });
     }
     let seconds_area = t.elapsed().as_secs_f64();
-    let m = o.intermediate_faces.unwrap_or(4 * o.target_faces).max(o.target_faces);
+    let m = o.intermediate_faces.unwrap_or(8 * o.target_faces).max(o.target_faces);
     let h = (FACES_PER_AREA_CELL * area / m as f64).sqrt();
     // 2. Resample into a temporary file beside the output (or in tmp).
     let t = Instant::now();
