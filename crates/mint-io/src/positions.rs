@@ -11,8 +11,10 @@
 //! without building an [`Error`](crate::Error) unless something is wrong
 //! (callers add the file position to a [`Reject`]).
 
+use std::path::Path;
 use std::sync::Arc;
 
+use crate::error::{Error, ErrorKind};
 use crate::mapped::Mapped;
 
 /// A PLY scalar type (also used for the fixed layouts of STL and spills).
@@ -341,6 +343,16 @@ pub(crate) fn check_finite(p: &[[f64; 3]; 3], t: &[u32; 3]) -> Result<(), Reject
         }
     }
     Ok(())
+}
+
+/// The error for a referenced vertex with a NaN or infinite coordinate.
+pub(crate) fn not_finite(path: &Path, v: u32, pos: &Positions) -> Error {
+    let p = pos.get(v);
+    Error::new(
+        ErrorKind::Value,
+        path,
+        format!("vertex {v} used by this face has a non-finite coordinate ({}, {}, {})", p[0], p[1], p[2]),
+    )
 }
 
 #[cfg(test)]

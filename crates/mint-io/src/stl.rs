@@ -22,7 +22,7 @@ use std::sync::Arc;
 use crate::error::{show_token, Error, ErrorKind};
 use crate::format::stl_looks_ascii;
 use crate::mapped::{Mapped, SpillFile};
-use crate::ply::read::not_finite;
+use crate::positions::not_finite;
 use crate::positions::{Emit, Layout, Positions, Reject, Scalar};
 use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
 use crate::text::{line_of, parse_f64, Tokens};

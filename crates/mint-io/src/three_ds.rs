@@ -32,7 +32,7 @@ use std::sync::Arc;
 
 use crate::error::{Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
-use crate::ply::read::not_finite;
+use crate::positions::not_finite;
 use crate::positions::{Emit, Positions, Reject};
 use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
 use crate::writer::{FormatWriter, OutFile, WriteOptions};

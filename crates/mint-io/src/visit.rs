@@ -13,7 +13,7 @@
 
 use crate::error::{Error, ErrorKind};
 use crate::mapped::Mapped;
-use crate::positions::{check_finite, PosKind, Positions, Reject, Scalar};
+use crate::positions::{check_finite, not_finite, PosKind, Positions, Reject, Scalar};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -73,7 +73,7 @@ impl TriangleRecords {
             Reject::Index(v) => {
                 Error::new(ErrorKind::Index, &self.path, format!("vertex index {v} is out of range (the file has {} vertices)", self.positions.count()))
             }
-            Reject::NotFinite(v) => crate::ply::read::not_finite(&self.path, v, &self.positions),
+            Reject::NotFinite(v) => not_finite(&self.path, v, &self.positions),
         };
         let e = e.at_element(element).at_record(record);
         match byte {

@@ -30,7 +30,7 @@ use std::sync::Arc;
 
 use crate::error::{show_token, Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
-use crate::ply::read::not_finite;
+use crate::positions::not_finite;
 use crate::positions::{Emit, Positions, Reject};
 use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
 use crate::text::{line_of, parse_f64, parse_i64};

@@ -32,7 +32,7 @@ use std::sync::Arc;
 use super::header::{parse, Element, Encoding, PlyHeader, PropType, Property};
 use crate::error::{show_token, Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
-use crate::positions::{check_finite, Emit, Layout, PosKind, Positions, Reject, Scalar};
+use crate::positions::{check_finite, not_finite, Emit, Layout, PosKind, Positions, Reject, Scalar};
 use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, RangeGrid, ReadStats};
 use crate::text::{line_of, parse_f64, parse_int, Tokens};
 use crate::Format;
@@ -412,16 +412,6 @@ impl Ctx<'_> {
         };
         self.at(e, record, rec_start)
     }
-}
-
-/// The error for a referenced vertex with a NaN or infinite coordinate.
-pub(crate) fn not_finite(path: &Path, v: u32, pos: &Positions) -> Error {
-    let p = pos.get(v);
-    Error::new(
-        ErrorKind::Value,
-        path,
-        format!("vertex {v} used by this face has a non-finite coordinate ({}, {}, {})", p[0], p[1], p[2]),
-    )
 }
 
 // ---------------------------------------------------------------------------
