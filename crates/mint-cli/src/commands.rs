@@ -6,10 +6,11 @@ use crate::progress::Bars;
 use crate::units::{human_bytes, parse_bytes};
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use mint_core::GridSize;
 use mint_io::WriteOptions;
 use mint_pipeline::{resample, ResampleOptions};
 use std::path::PathBuf;
+
+pub(crate) use crate::jobs::*;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -408,183 +409,6 @@ pub struct ValidateArgs {
     pub json: bool,
 }
 
-#[derive(Args, Debug, Clone)]
-pub struct ResampleArgs {
-    /// Input mesh (PLY, OBJ, STL or OFF).
-    pub input: PathBuf,
-    /// Output mesh; the format follows the extension. Written to a temporary
-    /// file beside it and renamed at the end, so it never exists half-written.
-    pub output: PathBuf,
-    /// About this many cubic cells over the input's bounding box
-    /// (the output has very roughly 2-6 faces per surface cell).
-    #[arg(long, conflicts_with = "cell_size", required_unless_present = "cell_size")]
-    pub cells: Option<u64>,
-    /// Cell edge length in input units (alternative to --cells).
-    #[arg(long)]
-    pub cell_size: Option<f64>,
-    /// Heap budget, e.g. 512M or 2G; it decides slab thickness, never the
-    /// input size [default: a quarter of RAM].
-    #[arg(long, value_parser = parse_bytes)]
-    pub mem: Option<u64>,
-    /// Worker threads [default: all cores]. The output is the same for any value.
-    #[arg(long, default_value_t = 0, hide_default_value = true)]
-    pub threads: usize,
-    /// Directory for temporary shards and spill files [default: the output's directory].
-    #[arg(long)]
-    pub tmp: Option<PathBuf>,
-    /// Axis along which the grid is cut into slabs.
-    #[arg(long, value_enum, default_value_t = AxisArg::Auto)]
-    pub axis: AxisArg,
-    /// Force slabs of K cell layers (for tests and tuning); without it, --mem decides.
-    #[arg(long, value_name = "K")]
-    pub slab: Option<u32>,
-    /// Keep the run's stages in DIR: a run killed at any moment (crash,
-    /// kill -9, reboot) resumes where it stopped when run again with the same
-    /// DIR, after checking that the inputs and options are the same. DIR is
-    /// kept at the end (remove it yourself). [default: a temporary directory,
-    /// removed at the end]
-    #[arg(long, value_name = "DIR")]
-    pub work: Option<PathBuf>,
-    /// Split the reading of the input's faces into P parts (one task each;
-    /// binary PLY and binary STL split, other formats are read whole by the
-    /// first part). The output is the same for any P.
-    #[arg(long, value_name = "P", default_value_t = 1)]
-    pub parts: u32,
-    /// Split the grid into S slabs (one reconstruction task each). The
-    /// output is the same for any S.
-    #[arg(long, value_name = "S", default_value_t = 1)]
-    pub slabs: u32,
-    /// How crossing signs become inside/outside. auto: robust; picks union
-    /// (orientation kept, overlapping scans merge) or parity (orientation
-    /// ignored, for flipped faces) from a census of all grid lines, and
-    /// always gives a closed surface, closing holes. orient: the original
-    /// paper's rule; cells that disagree are left open and counted.
-    #[arg(long, value_enum, default_value_t = SignsArg::Auto)]
-    pub signs: SignsArg,
-    /// Holes wider than K cells are left open, with a clean boundary loop
-    /// (robust sign rules only); smaller holes are closed.
-    #[arg(long, value_name = "K", default_value_t = 16)]
-    pub max_hole: u32,
-    /// Close every hole, whatever its size (for watertight output, e.g. 3D printing).
-    #[arg(long)]
-    pub close_all: bool,
-    /// Shift the grid by fractions of a cell, e.g. 0.5,0,0 [default: 0,0,0].
-    #[arg(long, value_parser = parse_triple, hide = true)]
-    pub grid_offset: Option<[f64; 3]>,
-    /// Write ASCII instead of binary (PLY/STL).
-    #[arg(long)]
-    pub ascii: bool,
-    /// Write vertex coordinates as f64 instead of f32.
-    #[arg(long)]
-    pub double: bool,
-    /// No progress bars and no summary (errors are still printed).
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the summary as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
-    /// Also write OUT.png beside the output: the input and the output side
-    /// by side, under the same camera (see `mint render`).
-    #[arg(long)]
-    pub preview: bool,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BoolOpArg {
-    Union,
-    Intersection,
-    Difference,
-}
-
-/// Grid, memory and output options shared by `bool` and `csg`.
-#[derive(Args, Debug, Clone)]
-pub struct GridArgs {
-    /// About this many cubic cells over the result's bounding box.
-    #[arg(long, conflicts_with = "cell_size", required_unless_present = "cell_size")]
-    pub cells: Option<u64>,
-    /// Cell edge length (alternative to --cells).
-    #[arg(long)]
-    pub cell_size: Option<f64>,
-    /// Heap budget, e.g. 512M or 2G [default: a quarter of RAM].
-    #[arg(long, value_parser = parse_bytes)]
-    pub mem: Option<u64>,
-    /// Worker threads [default: all cores]. The output is the same for any value.
-    #[arg(long, default_value_t = 0, hide_default_value = true)]
-    pub threads: usize,
-    /// Directory for temporary files [default: the output's directory].
-    #[arg(long)]
-    pub tmp: Option<PathBuf>,
-    /// Force slabs of K cell layers; without it, --mem decides.
-    #[arg(long, value_name = "K")]
-    pub slab: Option<u32>,
-    /// Keep the run's stages in DIR: a run killed at any moment (crash,
-    /// kill -9, reboot) resumes where it stopped when run again with the same
-    /// DIR, after checking that the inputs and options are the same. DIR is
-    /// kept at the end (remove it yourself). [default: a temporary directory,
-    /// removed at the end]
-    #[arg(long, value_name = "DIR")]
-    pub work: Option<PathBuf>,
-    /// Split the reading of the input's faces into P parts (one task each;
-    /// binary PLY and binary STL split, other formats are read whole by the
-    /// first part). The output is the same for any P.
-    #[arg(long, value_name = "P", default_value_t = 1)]
-    pub parts: u32,
-    /// Split the grid into S slabs (one reconstruction task each). The
-    /// output is the same for any S.
-    #[arg(long, value_name = "S", default_value_t = 1)]
-    pub slabs: u32,
-    /// Shift the grid by fractions of a cell, e.g. 0.5,0,0 [default: 0,0,0].
-    #[arg(long, value_parser = parse_triple, hide = true)]
-    pub grid_offset: Option<[f64; 3]>,
-    /// No progress bars and no summary.
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the summary as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
-}
-
-#[derive(Args, Debug, Clone)]
-pub struct BoolArgs {
-    /// union, intersection or difference (A minus B).
-    #[arg(value_enum)]
-    pub op: BoolOpArg,
-    /// First mesh (closed).
-    pub a: PathBuf,
-    /// Second mesh (closed).
-    pub b: PathBuf,
-    /// Output mesh.
-    pub output: PathBuf,
-    #[command(flatten)]
-    pub grid: GridArgs,
-}
-
-#[derive(Args, Debug, Clone)]
-pub struct CsgArgs {
-    /// Scene file (JSON).
-    pub scene: PathBuf,
-    /// Output mesh.
-    pub output: PathBuf,
-    #[command(flatten)]
-    pub grid: GridArgs,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SignsArg {
-    Auto,
-    Orient,
-    Union,
-    Parity,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum AxisArg {
-    Auto,
-    X,
-    Y,
-    Z,
-}
-
 #[derive(Args, Debug)]
 pub struct InfoArgs {
     /// Mesh file.
@@ -612,14 +436,6 @@ pub struct ConvertArgs {
     /// No progress bars.
     #[arg(long, short)]
     pub quiet: bool,
-}
-
-fn parse_triple(s: &str) -> Result<[f64; 3], String> {
-    let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|e| format!("'{s}': {e}"))?;
-    if v.len() != 3 {
-        return Err(format!("'{s}': expected three comma-separated numbers"));
-    }
-    Ok([v[0], v[1], v[2]])
 }
 
 pub fn run(cli: Cli) -> Result<()> {
@@ -651,76 +467,6 @@ fn cmd_resample(a: ResampleArgs) -> Result<()> {
     resample_and_report(a).map(|_| ())
 }
 
-/// The library options of `mint resample`'s arguments.
-pub(crate) fn resample_options(a: &ResampleArgs) -> Result<ResampleOptions> {
-    let size = match (a.cells, a.cell_size) {
-        (Some(n), None) => {
-            if n == 0 {
-                bail!("--cells must be at least 1");
-            }
-            GridSize::Cells(n)
-        }
-        (None, Some(h)) => GridSize::CellSize(h),
-        _ => bail!("give exactly one of --cells N or --cell-size H"),
-    };
-    Ok(ResampleOptions {
-        size,
-        mem_bytes: a.mem.unwrap_or_else(default_mem),
-        threads: a.threads,
-        tmp_dir: a.tmp.clone(),
-        axis: match a.axis {
-            AxisArg::Auto => None,
-            AxisArg::X => Some(0),
-            AxisArg::Y => Some(1),
-            AxisArg::Z => Some(2),
-        },
-        slab_layers: a.slab,
-        grid_offset: a.grid_offset.unwrap_or([0.0; 3]),
-        write: WriteOptions { ascii: a.ascii, double: a.double, ..Default::default() },
-        max_listed: 100,
-        signs: match a.signs {
-            SignsArg::Auto => mint_core::signs::SignRule::Auto,
-            SignsArg::Orient => mint_core::signs::SignRule::Orient,
-            SignsArg::Union => mint_core::signs::SignRule::Union,
-            SignsArg::Parity => mint_core::signs::SignRule::Parity,
-        },
-        max_hole: if a.close_all { None } else { Some(a.max_hole) },
-        work_dir: a.work.clone(),
-        parts: a.parts,
-        slabs: a.slabs,
-    })
-}
-
-/// The default heap budget: a quarter of RAM (2 GiB when RAM is unknown).
-pub(crate) fn default_mem() -> u64 {
-    alloc::total_ram().map(|r| r / 4).unwrap_or(2 << 30)
-}
-
-/// The mesh `mint resample` reads: the input itself, or, for a PLY range
-/// image, its triangulation (mint-range owns range images; the engine sees
-/// a mesh). With a work directory the triangulation is kept there, so that
-/// a resumed run finds the same file; otherwise it is a temporary file.
-pub(crate) fn resample_input(input: &std::path::Path, work: Option<&std::path::Path>, tmp: &std::path::Path) -> Result<(PathBuf, Option<tempfile::NamedTempFile>)> {
-    if let Some(dir) = work {
-        let kept = dir.join("range-image-mesh.ply");
-        if kept.is_file() {
-            return Ok((kept, None));
-        }
-        std::fs::create_dir_all(dir).with_context(|| format!("{}: creating the work directory", dir.display()))?;
-        return Ok(match mint_range::range_image_as_mesh(input, dir)? {
-            Some(t) => {
-                t.persist(&kept).map_err(|e| anyhow::anyhow!("{}: {}", kept.display(), e.error))?;
-                (kept, None)
-            }
-            None => (input.to_path_buf(), None),
-        });
-    }
-    Ok(match mint_range::range_image_as_mesh(input, tmp)? {
-        Some(t) => (t.path().to_path_buf(), Some(t)),
-        None => (input.to_path_buf(), None),
-    })
-}
-
 pub(crate) fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::ResampleSummary> {
     let opts = resample_options(&a)?;
     crate::paths::check_output(&a.output, &[&a.input])?;
@@ -740,74 +486,6 @@ pub(crate) fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::Resa
     }
     print_resample_summary(&summary, a.json, a.quiet, mem)?;
     Ok(summary)
-}
-
-/// Prints a resampling summary: JSON on stdout, or lines on stderr.
-pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, json: bool, quiet: bool, mem: u64) -> Result<()> {
-    let peak_heap = alloc::peak_heap();
-    let peak_rss = alloc::peak_rss();
-    let warnings = summary_warnings(summary);
-    print_warnings(&warnings);
-    if json {
-        let mut v = serde_json::to_value(summary)?;
-        v["warnings"] = warnings.into();
-        v["mem_budget_bytes"] = mem.into();
-        v["peak_heap_bytes"] = peak_heap.into();
-        v["peak_rss_bytes"] = peak_rss.into();
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !quiet {
-        let s = summary;
-        eprintln!("resampled {} -> {}", s.input, s.output);
-        eprintln!(
-            "  input        {} vertices, {} faces{}",
-            s.input_vertices,
-            s.input_faces,
-            if s.orientation_inverted { " (inside-out: signs reversed)" } else { "" }
-        );
-        eprintln!(
-            "  grid         {}x{}x{} cells of {:.6} (slabs along {}: {}, {} threads)",
-            s.grid_cells[0], s.grid_cells[1], s.grid_cells[2], s.cell_size, s.slab_axis, s.slabs, s.threads
-        );
-        eprintln!(
-            "  intercepts   {} found, {} removed, {} kept ({} of shards)",
-            s.intercepts_found,
-            s.intercepts_removed,
-            s.intercepts_kept,
-            human_bytes(s.shard_bytes)
-        );
-        eprintln!("  output       {} vertices, {} faces", s.output_vertices, s.output_faces);
-        if s.sign_rule == "orient" {
-            eprintln!("  signs        orient; non-canonical cells {} (left open)", s.non_canonical_cells);
-        } else {
-            eprintln!(
-                "  signs        {} ({} of {} lines winding-valid, {} odd); {} lines through holes, {} vertices synthesized, {} overlapping edges merged",
-                s.sign_rule, s.census_winding_valid, s.census_lines, s.census_odd, s.inconsistent_lines, s.synthesized_vertices, s.merged_edges
-            );
-            eprintln!("  holes        {} closed, {} left open ({} cells)", s.holes_closed, s.holes_left_open, s.open_cells);
-        }
-        eprintln!(
-            "  time         {:.2}s (bounds {:.2}s, discretize {:.2}s, reconstruct {:.2}s, write {:.2}s)",
-            s.seconds_total, s.seconds_bounds, s.seconds_discretize, s.seconds_reconstruct, s.seconds_write
-        );
-        if s.distributed {
-            eprintln!("  memory       per task: see each task's line (mint stage run) or its log");
-        } else {
-            eprintln!(
-                "  memory       peak heap {}, peak RSS {}, budget {}",
-                human_bytes(peak_heap),
-                peak_rss.map(human_bytes).unwrap_or_else(|| "?".into()),
-                human_bytes(mem)
-            );
-        }
-    }
-    if let Some(dir) = &summary.work_dir {
-        if !json && !quiet && summary.distributed {
-            eprintln!("  work dir     {dir} (remove it when you no longer need its results)");
-        } else if !json && !quiet {
-            eprintln!("  work dir     {dir} ({} tasks run, {} found done); remove it when you no longer need to resume", summary.tasks_run, summary.tasks_resumed);
-        }
-    }
-    Ok(())
 }
 
 fn cmd_info(a: InfoArgs) -> Result<()> {
@@ -927,25 +605,6 @@ fn cmd_validate(a: ValidateArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// Reads a whole mesh into memory (positions as f64).
-pub fn load_mesh(path: &std::path::Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>)> {
-    let mut reader = mint_io::MeshReader::open(path, mint_io::ReadOptions { resolve_positions: false, ..Default::default() })?;
-    let n = reader.vertex_count();
-    let positions: Vec<[f64; 3]> = (0..n).map(|i| reader.vertex(i)).collect();
-    let mut faces = Vec::with_capacity(reader.face_capacity_hint());
-    let mut chunk = mint_io::TriangleChunk::default();
-    while reader.next_chunk(&mut chunk)? {
-        faces.extend_from_slice(&chunk.indices);
-        if crate::progress::interrupted() {
-            bail!("interrupted");
-        }
-    }
-    for w in reader.warnings() {
-        eprintln!("mint: warning: {w}");
-    }
-    Ok((positions, faces))
 }
 
 fn cmd_check(a: CheckArgs) -> Result<()> {
@@ -1069,11 +728,6 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// `OUT.png` beside `output` (its extension replaced).
-pub(crate) fn preview_path(output: &std::path::Path) -> PathBuf {
-    output.with_extension("png")
 }
 
 fn cmd_distance(a: DistanceArgs) -> Result<()> {
@@ -1228,69 +882,6 @@ fn tempfile_dir() -> Result<TempDir> {
     Ok(TempDir(base))
 }
 
-pub(crate) fn grid_options(g: &GridArgs) -> Result<ResampleOptions> {
-    let size = match (g.cells, g.cell_size) {
-        (Some(n), None) if n > 0 => GridSize::Cells(n),
-        (None, Some(h)) => GridSize::CellSize(h),
-        _ => bail!("give exactly one of --cells N (N >= 1) or --cell-size H"),
-    };
-    Ok(ResampleOptions {
-        size,
-        mem_bytes: g.mem.unwrap_or_else(default_mem),
-        threads: g.threads,
-        tmp_dir: g.tmp.clone(),
-        slab_layers: g.slab,
-        grid_offset: g.grid_offset.unwrap_or([0.0; 3]),
-        work_dir: g.work.clone(),
-        parts: g.parts,
-        slabs: g.slabs,
-        max_hole: None,
-        ..Default::default()
-    })
-}
-
-/// Warnings about a run that succeeded: an empty output, and why.
-pub(crate) fn summary_warnings(s: &mint_pipeline::ResampleSummary) -> Vec<String> {
-    let mut w = Vec::new();
-    if s.output_faces == 0 {
-        let why = if s.intercepts_found == 0 {
-            "no grid line crosses the surface (it is flat between grid lines or smaller than a cell; use smaller cells)"
-        } else if s.intercepts_kept == 0 {
-            "every crossing cancelled (the surface is thinner than a cell, or not closed)"
-        } else {
-            "no cell changes from outside to inside (the surface is thinner than a cell, not closed, or its holes were left open)"
-        };
-        w.push(format!("{}: the output is empty: {why}", s.output));
-    }
-    w
-}
-
-/// Prints the warnings on stderr, one line each (also with --quiet and --json).
-fn print_warnings(warnings: &[String]) {
-    for w in warnings {
-        eprintln!("mint: warning: {w}");
-    }
-}
-
-pub(crate) fn report(g: &GridArgs, s: &mint_pipeline::ResampleSummary) -> Result<()> {
-    let warnings = summary_warnings(s);
-    print_warnings(&warnings);
-    if g.json {
-        let mut v = serde_json::to_value(s)?;
-        v["warnings"] = warnings.into();
-        v["peak_heap_bytes"] = alloc::peak_heap().into();
-        v["peak_rss_bytes"] = alloc::peak_rss().into();
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !g.quiet {
-        eprintln!("{} -> {}", s.input, s.output);
-        eprintln!("  grid         {}x{}x{} cells of {:.6} ({} slabs)", s.grid_cells[0], s.grid_cells[1], s.grid_cells[2], s.cell_size, s.slabs);
-        eprintln!("  input        {} mesh faces; operand signs: {}", s.input_faces, s.sign_rule);
-        eprintln!("  output       {} vertices, {} faces", s.output_vertices, s.output_faces);
-        eprintln!("  time         {:.2}s; peak heap {}", s.seconds_total, human_bytes(alloc::peak_heap()));
-    }
-    Ok(())
-}
-
 fn cmd_bool(a: BoolArgs) -> Result<()> {
     let opts = grid_options(&a.grid)?;
     crate::paths::check_output(&a.output, &[&a.a, &a.b])?;
@@ -1313,15 +904,4 @@ fn cmd_csg(a: CsgArgs) -> Result<()> {
     let bars = Bars::new(a.grid.quiet || a.grid.json);
     let s = mint_pipeline::csg(&scene, &a.scene.display().to_string(), &a.output, &opts, &bars)?;
     report(&a.grid, &s)
-}
-
-/// The files a scene reads: the scene file and its meshes.
-pub(crate) fn scene_inputs<'a>(path: &'a std::path::Path, scene: &'a mint_pipeline::Scene) -> Vec<&'a std::path::Path> {
-    let mut v = vec![path];
-    for op in &scene.operands {
-        if let mint_pipeline::scene::Operand::Mesh { path, .. } = op {
-            v.push(path.as_path());
-        }
-    }
-    v
 }

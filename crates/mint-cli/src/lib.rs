@@ -7,6 +7,7 @@
 pub mod alloc;
 mod commands;
 mod contour_cmds;
+mod jobs;
 mod paths;
 mod range_cmds;
 mod stage_cmds;

@@ -168,7 +168,7 @@ pub struct ZipperArgs {
 }
 
 pub fn cmd_scan(a: ScanArgs) -> Result<()> {
-    let (positions, faces) = crate::commands::load_mesh(&a.mesh)?;
+    let (positions, faces) = crate::jobs::load_mesh(&a.mesh)?;
     let opts = SynthOptions { views: a.views, resolution: a.resolution, noise: a.noise, seed: a.seed, max_angle_deg: a.max_angle };
     let scans = synthesize(&positions, &faces, &opts).with_context(|| format!("scanning {}", a.mesh.display()))?;
     // Nothing written yet: refuse a run that would overwrite its input.

@@ -3,7 +3,7 @@
 //! options are parsed by the same argument groups as `resample`, `bool` and
 //! `csg`, so a staged run accepts every option of a one-process run.
 
-use crate::commands::{default_mem, grid_options, print_resample_summary, resample_input, resample_options, BoolArgs, BoolOpArg, CsgArgs, ResampleArgs};
+use crate::jobs::{default_mem, grid_options, print_resample_summary, resample_input, resample_options, scene_inputs, BoolArgs, BoolOpArg, CsgArgs, ResampleArgs};
 use crate::progress::Bars;
 use crate::units::{human_bytes, parse_bytes};
 use anyhow::{bail, Context, Result};
@@ -105,7 +105,7 @@ fn job_of(c: &JobCommand) -> Result<(Job, ResampleOptions, PathBuf, bool, bool)>
         JobCommand::Csg(a) => {
             let text = std::fs::read_to_string(&a.scene).with_context(|| format!("{}: cannot read the scene", a.scene.display()))?;
             let scene = mint_pipeline::parse_scene(&text, &a.scene)?;
-            crate::paths::check_output(&a.output, &crate::commands::scene_inputs(&a.scene, &scene))?;
+            crate::paths::check_output(&a.output, &scene_inputs(&a.scene, &scene))?;
             (Job::Csg { scene: abs(&a.scene) }, grid_options(&a.grid)?, a.output.clone(), a.grid.json, a.grid.quiet)
         }
     })
