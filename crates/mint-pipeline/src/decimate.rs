@@ -91,7 +91,8 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
         return Err(PipelineError::Empty { path: input.to_path_buf() });
     }
     let seconds_area = t.elapsed().as_secs_f64();
-    let m = o.intermediate_faces.unwrap_or(8 * o.target_faces).max(o.target_faces);
+    // Never finer than the input itself: that adds no information.
+    let m = o.intermediate_faces.unwrap_or((8 * o.target_faces).min(faces)).max(o.target_faces);
     let h = (FACES_PER_AREA_CELL * area / m as f64).sqrt();
     // 2. Resample into a temporary file beside the output (or in tmp).
     let t = Instant::now();
