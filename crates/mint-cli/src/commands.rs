@@ -178,7 +178,7 @@ Examples:\n  mint zipper bun-aligned.conf bunny.ply\n  mint zipper bun-aligned.c
     #[command(subcommand, long_about = "Run resample, bool or csg as stages of separate tasks, for schedulers and clusters.\n\n\
 A staged run lives in a work directory DIR shared by every machine (NFS or the like). `mint stage plan` \
 writes DIR/plan.json: the inputs' fingerprints, the options, and the stages in order with their task \
-counts (bounds and discretize: one task per part of the input's faces; census, holes and reconstruct: \
+counts (bounds and discretize: one task per part of the input's faces; census, reconstruct and reopen: \
 one per slab of the grid; write: one). `mint stage run DIR STAGE TASK` runs one task; tasks of one stage \
 may run in any order, at the same time, on any machine, once the stages before are complete. A task's \
 result is written atomically with a checksum; running a finished task again does nothing. The last \
