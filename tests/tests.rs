@@ -7,5 +7,6 @@ mod core_props;
 mod csg;
 mod resample;
 mod robustness;
+mod same_bytes;
 mod scans;
 mod stages;
