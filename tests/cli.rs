@@ -388,13 +388,14 @@ fn render_draws_a_sphere_with_its_analytic_silhouette_and_the_same_bytes_every_t
         assert!(std::fs::read(&png).unwrap() == std::fs::read(&again).unwrap(), "{view}: bytes differ between runs");
         assert_eq!(&std::fs::read(&png).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
     }
-    // Same bytes with one thread and with two (the rasterizer is single-threaded by design).
+    // Same bytes on one, two and three threads (tiles merged by depth, then file order).
     let one = d.path().join("one.png");
-    let o = mint().args(["render", p(&s), p(&one), "--quiet"]).env("RAYON_NUM_THREADS", "1").output().unwrap();
-    assert!(o.status.success());
-    let two = d.path().join("two.png");
-    ok(&["render", p(&s), p(&two), "--quiet"]);
-    assert!(std::fs::read(&one).unwrap() == std::fs::read(&two).unwrap());
+    ok(&["render", p(&s), p(&one), "--quiet", "--threads", "1", "--view", "all", "--size", "200x150"]);
+    for t in ["2", "3"] {
+        let more = d.path().join(format!("t{t}.png"));
+        ok(&["render", p(&s), p(&more), "--quiet", "--threads", t, "--view", "all", "--size", "200x150"]);
+        assert!(std::fs::read(&one).unwrap() == std::fs::read(&more).unwrap(), "{t} threads: other bytes");
+    }
     // --preview: OUT.png beside the output.
     let out = d.path().join("r.ply");
     ok(&["resample", p(&s), p(&out), "--cells", "20000", "--preview", "--quiet"]);

@@ -277,6 +277,9 @@ pub struct RenderArgs {
     /// a colour bar: where a resampling or decimation lost detail.
     #[arg(long, value_enum, default_value_t = ColorArg::Shading)]
     pub color: ColorArg,
+    /// Worker threads [default: all cores]. The picture is the same for any value.
+    #[arg(long, default_value_t = 0, hide_default_value = true)]
+    pub threads: usize,
     /// No progress bars and no summary.
     #[arg(long, short)]
     pub quiet: bool,
@@ -479,7 +482,7 @@ pub(crate) fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::Resa
     summary.input = a.input.display().to_string();
     if a.preview {
         let png = preview_path(&a.output);
-        let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, distance_to: None };
+        let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, ..Default::default() };
         mint_render::render_files(&[input.as_path(), a.output.as_path()], &png, &o, &bars)?;
         if !a.quiet && !a.json {
             eprintln!("preview: {} (input left, output right)", png.display());
@@ -659,7 +662,7 @@ fn cmd_decimate(a: DecimateArgs) -> Result<()> {
     let s = mint_pipeline::decimate(&a.input, &a.output, &o, &bars)?;
     if a.preview {
         let png = preview_path(&a.output);
-        let ro = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, distance_to: None };
+        let ro = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, ..Default::default() };
         mint_render::render_files(&[a.input.as_path(), a.output.as_path()], &png, &ro, &bars)?;
         if !a.quiet && !a.json {
             eprintln!("preview: {} (input left, output right)", png.display());
@@ -717,7 +720,8 @@ fn cmd_render(a: RenderArgs) -> Result<()> {
     if let Some(r) = &distance_to {
         crate::paths::check_not_input(output, &[r.as_path()])?;
     }
-    let o = mint_render::RenderOptions { width: a.size.0, height: a.size.1, view, distance_to };
+    let threads = if a.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { a.threads };
+    let o = mint_render::RenderOptions { width: a.size.0, height: a.size.1, view, threads, distance_to };
     let bars = Bars::new(a.quiet || a.json);
     let s = mint_render::render_files(&refs, output, &o, &bars)?;
     if a.json {
@@ -859,7 +863,7 @@ fn cmd_demo(a: DemoArgs) -> Result<()> {
         bail!("demo output is not a watertight genus-3 surface: this is a bug, please report it");
     }
     let png = a.picture.clone().unwrap_or_else(|| a.out.as_ref().map_or_else(|| PathBuf::from("mint-demo.png"), |d| d.join("mint-demo.png")));
-    let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, distance_to: None };
+    let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, ..Default::default() };
     mint_render::render_files(&[input.as_path(), output.as_path()], &png, &o, &Bars::new(true))?;
     println!("demo ok: {} faces -> {} faces, watertight, genus 3", s.input_faces, s.output_faces);
     println!("picture: {} (input left, resampled right)", png.display());

@@ -17,9 +17,10 @@
 //!   (`--preview`: input and output), each view a tile; `View::All` tiles
 //!   the six axis views and the iso view. Encoded as PNG (the `png` crate).
 //!
-//! Deterministic: one thread, f64 arithmetic, triangles in file order, and a
-//! depth test with a fixed tie rule (the first triangle drawn at a depth
-//! keeps the pixel), so the bytes do not depend on the machine's threads.
+//! Deterministic: f64 arithmetic and a depth test with a fixed tie rule (the
+//! earliest triangle in file order at the nearest depth keeps the pixel).
+//! Worker threads draw whole chunks into tiles of their own, merged by that
+//! same rule, so the bytes do not depend on the number of threads.
 
 use mint_core::progress::{Phase, Progress};
 use mint_io::{MeshReader, ReadOptions, TriangleChunk};
@@ -166,6 +167,10 @@ pub struct Canvas {
     rgb: Vec<[u8; 3]>,
     /// Lambert factor of the face that keeps each pixel (for recolouring).
     shade: Vec<f32>,
+    /// Index in file order of the triangle that keeps each pixel.
+    index: Vec<u64>,
+    /// The index [`Canvas::triangle`] records for the next triangle.
+    pub order: u64,
     /// Pixels covered by at least one triangle.
     pub covered: u64,
 }
@@ -178,7 +183,7 @@ const BACK: [f64; 3] = [0.95, 0.55, 0.15];
 impl Canvas {
     pub fn new(width: u32, height: u32) -> Canvas {
         let n = width as usize * height as usize;
-        Canvas { width, height, depth: vec![f32::INFINITY; n], rgb: vec![BACKGROUND; n], shade: vec![0.0; n], covered: 0 }
+        Canvas { width, height, depth: vec![f32::INFINITY; n], rgb: vec![BACKGROUND; n], shade: vec![0.0; n], index: vec![u64::MAX; n], order: 0, covered: 0 }
     }
 
     /// Draws one triangle seen by `cam`, flat-shaded.
@@ -245,7 +250,25 @@ impl Canvas {
                     self.depth[i] = z;
                     self.rgb[i] = color;
                     self.shade[i] = shade;
+                    self.index[i] = self.order;
                 }
+            }
+        }
+    }
+
+    /// Takes from `other` (same size) every pixel it holds nearer, or at
+    /// the same depth from an earlier triangle.
+    pub fn merge(&mut self, other: &Canvas) {
+        for i in 0..self.depth.len() {
+            let (z, k) = (other.depth[i], other.index[i]);
+            if z < self.depth[i] || (z == self.depth[i] && k < self.index[i]) {
+                if self.depth[i] == f32::INFINITY {
+                    self.covered += 1;
+                }
+                self.depth[i] = z;
+                self.rgb[i] = other.rgb[i];
+                self.shade[i] = other.shade[i];
+                self.index[i] = k;
             }
         }
     }
@@ -385,6 +408,9 @@ pub struct RenderOptions {
     pub height: u32,
     /// The view, or all of them. Default iso.
     pub view: View,
+    /// Worker threads drawing triangles; the bytes are the same for any
+    /// number. Default: all cores.
+    pub threads: usize,
     /// Colour the surface by its distance to this mesh (read in core, with
     /// a BVH), on one scale for the whole picture, with a colour bar and
     /// its top value at the right. Default `None`: shading only.
@@ -393,7 +419,7 @@ pub struct RenderOptions {
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions { width: 1200, height: 900, view: View::Iso, distance_to: None }
+        RenderOptions { width: 1200, height: 900, view: View::Iso, threads: std::thread::available_parallelism().map_or(1, |n| n.get()), distance_to: None }
     }
 }
 
@@ -475,22 +501,66 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
     for (col, path) in inputs.iter().enumerate() {
         let cams: Vec<Camera> = views.iter().map(|&v| Camera::fit(v, lo, hi, o.width, o.height)).collect();
         summary.scale = cams[0].scale;
-        let mut tiles: Vec<Canvas> = views.iter().map(|_| Canvas::new(o.width, o.height)).collect();
         let mut r = MeshReader::open(path, read.clone())?;
         progress.start(Phase::Render, r.info().face_count.unwrap_or(0));
-        let mut chunk = TriangleChunk::new();
-        while r.next_chunk(&mut chunk)? {
-            if progress.cancelled() {
-                return Err(RenderError::Cancelled);
-            }
-            for p in &chunk.positions {
-                for (tile, cam) in tiles.iter_mut().zip(&cams) {
-                    tile.triangle(cam, p);
+        // Workers draw whole chunks into tiles of their own; the tiles are
+        // merged pixel by pixel keeping the nearest depth, and among equal
+        // depths the earliest triangle: what one thread drawing in file
+        // order keeps. So the bytes do not depend on the threads.
+        let threads = o.threads.max(1);
+        let (tx, rx) = crossbeam_channel::bounded::<(u64, TriangleChunk)>(2 * threads);
+        let (free_tx, free_rx) = crossbeam_channel::bounded::<TriangleChunk>(3 * threads);
+        let worker_tiles: Vec<Vec<Canvas>> = std::thread::scope(|scope| -> Result<Vec<Vec<Canvas>>, RenderError> {
+            let handles: Vec<_> = (0..threads)
+                .map(|_| {
+                    let (rx, free_tx, cams, views) = (rx.clone(), free_tx.clone(), &cams, &views);
+                    scope.spawn(move || {
+                        let mut tiles: Vec<Canvas> = views.iter().map(|_| Canvas::new(o.width, o.height)).collect();
+                        for (base, chunk) in rx {
+                            for (k, p) in chunk.positions.iter().enumerate() {
+                                for (tile, cam) in tiles.iter_mut().zip(cams) {
+                                    tile.order = base + k as u64;
+                                    tile.triangle(cam, p);
+                                }
+                            }
+                            let _ = free_tx.try_send(chunk);
+                        }
+                        tiles
+                    })
+                })
+                .collect();
+            drop(rx);
+            let read: Result<(), RenderError> = (|| {
+                let mut base = 0u64;
+                loop {
+                    if progress.cancelled() {
+                        return Err(RenderError::Cancelled);
+                    }
+                    let mut chunk = free_rx.try_recv().unwrap_or_default();
+                    if !r.next_chunk(&mut chunk)? {
+                        return Ok(());
+                    }
+                    let n = chunk.len() as u64;
+                    if tx.send((base, chunk)).is_err() {
+                        return Ok(());
+                    }
+                    base += n;
+                    progress.advance(n);
                 }
+            })();
+            drop(tx);
+            let tiles: Vec<Vec<Canvas>> = handles.into_iter().map(|h| h.join().expect("render worker panicked")).collect();
+            read?;
+            Ok(tiles)
+        })?;
+        let mut tiles: Vec<Canvas> = views.iter().map(|_| Canvas::new(o.width, o.height)).collect();
+        for wt in &worker_tiles {
+            for (tile, w) in tiles.iter_mut().zip(wt) {
+                tile.merge(w);
             }
-            summary.triangles += chunk.len() as u64;
-            progress.advance(chunk.len() as u64);
         }
+        drop(worker_tiles);
+        summary.triangles += r.stats().triangles;
         progress.finish();
         for (row, tile) in tiles.iter().enumerate() {
             summary.covered_pixels += tile.covered;
