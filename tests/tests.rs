@@ -4,6 +4,7 @@
 mod common;
 pub mod cli;
 mod core_props;
+mod fuzz_replay;
 mod csg;
 mod resample;
 mod robustness;

@@ -552,8 +552,12 @@ impl<R: BufRead> ProfileReader<R> {
         for c in &contours {
             let mut uv = Vec::with_capacity(c.points.len());
             let mut o = Vec::with_capacity(c.points.len());
-            for &p in &c.points {
+            for (k, &p) in c.points.iter().enumerate() {
                 let (q, s) = frame.project(p);
+                if !(q[0].is_finite() && q[1].is_finite() && s.is_finite()) {
+                    let l = c.lines.get(k).copied().unwrap_or(c.line);
+                    return Err(self.err(K::Syntax, l, format!("vertex ({}, {}, {}) is too large: its coordinates along the stack's axes overflow", p[0], p[1], p[2])).into());
+                }
                 uv.push(q);
                 o.push(s);
                 smin = smin.min(s);
@@ -740,6 +744,15 @@ mod tests {
             Err(ContourError::Profile(e)) => e,
             other => panic!("expected a profile error, got {other:?}"),
         }
+    }
+
+    /// Found by fuzzing: a vertex whose coordinates overflow in the stack
+    /// frame gave non-finite (u, v); now a one-line error naming its line.
+    #[test]
+    fn vertices_overflowing_the_stack_frame_are_refused() {
+        let e = err("pro\nsection\n4 2\n9e216 0. 2 1 1 -2 2");
+        assert_eq!(e.kind, K::Syntax);
+        assert!(e.to_string().contains("too large"), "{e}");
     }
 
     #[test]

@@ -44,11 +44,17 @@ pub enum Operand {
 
 /// A scene error: `file:line: message`.
 #[derive(Debug, thiserror::Error)]
-#[error("{path}:{line}: {message}")]
+#[error("{path}:{line}: {}", one_line(message))]
 pub struct SceneError {
     pub path: PathBuf,
     pub line: usize,
     pub message: String,
+}
+
+/// `s` with control characters escaped (`\n`, `\r`, `\u{0}`), so that an
+/// error quoting the scene's text stays one line.
+fn one_line(s: &str) -> String {
+    s.chars().map(|c| if c.is_control() { c.escape_default().to_string() } else { c.to_string() }).collect()
 }
 
 #[derive(Debug, Clone)]
@@ -450,6 +456,17 @@ mod tests {
 
     fn parse(s: &str) -> Result<Scene, SceneError> {
         parse_scene(s, Path::new("scene.json"))
+    }
+
+    /// Found by fuzzing: errors quoting the scene's text (a bad value, a
+    /// key) kept its newlines and control characters, so they took more
+    /// than one line.
+    #[test]
+    fn errors_quoting_the_text_stay_one_line() {
+        for text in ["{ \"sphere\": \u{0}\u{0} },\n  { \"", "{ \"translat\re\": [0, 0, 0] }", "{ \"union\": K\n [] }"] {
+            let e = parse(text).unwrap_err().to_string();
+            assert!(e.starts_with("scene.json:1: ") && !e.contains(['\n', '\r', '\0']), "{e:?}");
+        }
     }
 
     #[test]

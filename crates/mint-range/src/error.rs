@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 pub enum RangeError {
     /// A scan-set file (.conf or .aln) is malformed at `line` (1-based).
     /// Fix: correct that line; the message says what was expected.
-    #[error("{}:{line}: {message}", .path.display())]
+    #[error("{}:{line}: {}", .path.display(), .message.chars().map(|c| if c.is_control() { c.escape_default().to_string() } else { c.to_string() }).collect::<String>())]
     SetSyntax { path: PathBuf, line: usize, message: String },
     /// A scan listed in a set file does not exist or cannot be read.
     /// Fix: check the name in the set file; paths are relative to the set

@@ -1,0 +1,413 @@
+//! The bodies of mint's fuzz targets, in one place for both their users:
+//! the cargo-fuzz crate in `tools/fuzz` (nightly, libFuzzer, long runs by
+//! hand) and the stable replay test `tests/fuzz_replay.rs` (CI), which runs
+//! every file of `tools/fuzz/corpus/<target>/` and
+//! `tools/fuzz/regressions/<target>/` through [`run`], plus a short
+//! deterministic mutation smoke ([`mutate`]).
+//!
+//! A target takes any bytes. It fails by panicking: on a panic of the
+//! library, or when a check of the output's internal consistency fails.
+//! Errors (`Err`) are fine, as long as they keep the error contract of
+//! docs/INVARIANTS.md: one non-empty line naming the file.
+
+use std::cell::RefCell;
+use std::path::{Path, PathBuf};
+
+pub mod mutate;
+
+/// A target: its name (the directory under `corpus/` and `regressions/`,
+/// and the cargo-fuzz target) and its body.
+pub type Target = (&'static str, fn(&[u8]));
+
+/// Every target.
+pub const TARGETS: &[Target] = &[
+    ("read_ply", read_ply),
+    ("read_obj", read_obj),
+    ("read_stl", read_stl),
+    ("read_off", read_off),
+    ("read_mesh", read_mesh),
+    ("read_raw", read_raw),
+    ("read_wrl", read_wrl),
+    ("read_3ds", read_3ds),
+    ("read_pro", read_pro),
+    ("read_conf", read_conf),
+    ("read_aln", read_aln),
+    ("read_rgrid", read_rgrid),
+    ("parse_scene", parse_scene),
+    ("discretize", discretize),
+    ("resample", resample),
+];
+
+/// The target named `name`.
+pub fn target(name: &str) -> Option<fn(&[u8])> {
+    TARGETS.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
+}
+
+/// Runs target `name` on `data`; panics on an unknown name.
+pub fn run(name: &str, data: &[u8]) {
+    target(name).unwrap_or_else(|| panic!("no fuzz target named {name:?}"))(data)
+}
+
+thread_local! {
+    static DIR: RefCell<Option<tempfile::TempDir>> = const { RefCell::new(None) };
+}
+
+/// A scratch directory of this thread, made once, removed at exit; in
+/// memory (`/dev/shm`) when there is one, where the writers' `fsync`s cost
+/// nothing.
+fn scratch() -> PathBuf {
+    DIR.with(|d| {
+        let mut d = d.borrow_mut();
+        if d.is_none() {
+            let shm = Path::new("/dev/shm");
+            let b = tempfile::Builder::new().prefix("mint-fuzz").tempdir_in(if shm.is_dir() { shm.to_path_buf() } else { std::env::temp_dir() });
+            *d = Some(b.or_else(|_| tempfile::Builder::new().prefix("mint-fuzz").tempdir()).expect("a scratch directory"));
+        }
+        d.as_ref().unwrap().path().to_path_buf()
+    })
+}
+
+/// Writes `data` to `input.EXT` in the scratch directory.
+fn input_file(ext: &str, data: &[u8]) -> PathBuf {
+    let p = scratch().join(format!("input.{ext}"));
+    std::fs::write(&p, data).expect("write the fuzz input");
+    p
+}
+
+/// The error contract: one non-empty line that names the file.
+fn one_line_naming(e: &dyn std::fmt::Display, path: &Path) {
+    let s = e.to_string();
+    assert!(!s.trim().is_empty(), "empty error message");
+    assert!(!s.contains('\n') && !s.contains('\r'), "error of more than one line: {s:?}");
+    let name = path.file_name().unwrap().to_str().unwrap();
+    assert!(s.contains(name), "error does not name the file {name}: {s:?}");
+}
+
+// ---------------------------------------------------------------- readers
+
+/// Mesh readers through `mint_io::MeshReader`: open, stream every chunk
+/// (positions resolved), then `read_info`.
+fn mesh_reader(ext: &str, data: &[u8]) {
+    let path = input_file(ext, data);
+    // Small chunks: the chunk boundaries are exercised too.
+    let opts = mint_io::ReadOptions { chunk_triangles: 7, spill_dir: Some(scratch()), resolve_positions: true };
+    match mint_io::MeshReader::open(&path, opts) {
+        Err(e) => one_line_naming(&e, &path),
+        Ok(mut r) => {
+            let n = r.vertex_count();
+            if let Some(g) = r.range_grid() {
+                assert_eq!(g.cells.len() as u64, g.cols as u64 * g.rows as u64, "range grid of {}x{} with {} cells", g.cols, g.rows, g.cells.len());
+                for c in g.cells.iter().flatten() {
+                    assert!(*c < n, "range grid cell names vertex {c} of {n}");
+                }
+            }
+            let mut chunk = mint_io::TriangleChunk::new();
+            let mut total = 0u64;
+            loop {
+                match r.next_chunk(&mut chunk) {
+                    Err(e) => {
+                        one_line_naming(&e, &path);
+                        break;
+                    }
+                    Ok(false) => {
+                        assert!(chunk.is_empty(), "next_chunk gave false with a non-empty chunk");
+                        break;
+                    }
+                    Ok(true) => {
+                        assert!(chunk.len() <= 7, "chunk of {} triangles, asked for 7", chunk.len());
+                        assert_eq!(chunk.indices.len(), chunk.positions.len());
+                        for (t, p) in chunk.indices.iter().zip(&chunk.positions) {
+                            for k in 0..3 {
+                                assert!(t[k] < n, "triangle {t:?} names a vertex beyond {n}");
+                                let v = r.vertex(t[k]);
+                                assert!(p[k].iter().all(|c| c.is_finite()), "non-finite resolved position {:?}", p[k]);
+                                assert_eq!(v.map(f64::to_bits), p[k].map(f64::to_bits), "resolved position differs from vertex({})", t[k]);
+                            }
+                        }
+                        total += chunk.len() as u64;
+                    }
+                }
+            }
+            let _ = r.stats();
+            let _ = r.warnings();
+            assert!(total <= r.stats().triangles);
+        }
+    }
+    match mint_io::read_info(&path) {
+        Err(e) => one_line_naming(&e, &path),
+        Ok(info) => assert_eq!(Some(info.format), mint_io::Format::from_extension(&path)),
+    }
+}
+
+/// PLY: ascii, binary (both endians), faces, tristrips, range grids.
+pub fn read_ply(data: &[u8]) {
+    mesh_reader("ply", data)
+}
+/// Wavefront OBJ.
+pub fn read_obj(data: &[u8]) {
+    mesh_reader("obj", data)
+}
+/// STL, ascii and binary.
+pub fn read_stl(data: &[u8]) {
+    mesh_reader("stl", data)
+}
+/// OFF.
+pub fn read_off(data: &[u8]) {
+    mesh_reader("off", data)
+}
+/// The `.mesh` text format.
+pub fn read_mesh(data: &[u8]) {
+    mesh_reader("mesh", data)
+}
+/// Raw triangles.
+pub fn read_raw(data: &[u8]) {
+    mesh_reader("raw", data)
+}
+/// VRML 2.0.
+pub fn read_wrl(data: &[u8]) {
+    mesh_reader("wrl", data)
+}
+/// 3D Studio.
+pub fn read_3ds(data: &[u8]) {
+    mesh_reader("3ds", data)
+}
+
+/// Contour profiles (`.pro`, mint-contour), streamed section by section.
+pub fn read_pro(data: &[u8]) {
+    use mint_contour::profile::{ProfileOptions, ProfileReader};
+    let path = Path::new("input.pro");
+    let mut r = ProfileReader::new(data, path, ProfileOptions::default());
+    let mut last: Option<f64> = None;
+    let mut n = 0usize;
+    loop {
+        match r.next_section() {
+            Err(e) => {
+                one_line_naming(&e, path);
+                break;
+            }
+            Ok(None) => break,
+            Ok(Some(s)) => {
+                assert_eq!(s.index, n, "section index");
+                n += 1;
+                assert!(s.offset.is_finite(), "section offset {}", s.offset);
+                if let Some(l) = last {
+                    assert!(s.offset > l, "sections not in increasing order: {l} then {}", s.offset);
+                }
+                last = Some(s.offset);
+                for c in &s.contours {
+                    assert_eq!(c.points.len(), c.uv.len());
+                    assert!(c.points.len() >= 3, "a contour of {} points", c.points.len());
+                    assert!(c.points.iter().flatten().all(|x| x.is_finite()));
+                    assert!(c.uv.iter().flatten().all(|x| x.is_finite()));
+                }
+            }
+        }
+    }
+    if n > 0 {
+        assert!(r.frame().is_some(), "sections read but no stack frame");
+    }
+}
+
+fn scan_set(ext: &str, data: &[u8]) {
+    let path = input_file(ext, data);
+    match mint_range::ScanSet::read(&path) {
+        Err(e) => one_line_naming(&e, &path),
+        Ok(set) => {
+            assert!(!set.entries.is_empty(), "a set with no scans");
+            for e in &set.entries {
+                let p = &e.pose;
+                assert!(p.r.iter().flatten().chain(&p.t).all(|x| x.is_finite()), "non-finite pose of {}: {p:?}", e.file);
+                assert!(p.orthogonality_error() < 1e-6, "pose of {} not orthonormal: {p:?}", e.file);
+            }
+            // The text written back reads back to the same scans.
+            let format = mint_range::SetFormat::from_path(&path);
+            let again = scratch().join(format!("again.{ext}"));
+            std::fs::write(&again, set.to_text(format)).unwrap();
+            let back = mint_range::ScanSet::read(&again).unwrap_or_else(|e| panic!("the written set does not read back: {e}"));
+            assert_eq!(back.entries.len(), set.entries.len(), "scans written and read back");
+        }
+    }
+}
+
+/// Scan sets, `.conf`.
+pub fn read_conf(data: &[u8]) {
+    scan_set("conf", data)
+}
+/// Scan sets, `.aln`.
+pub fn read_aln(data: &[u8]) {
+    scan_set("aln", data)
+}
+
+/// `.rgrid` depth grids (mint-range), then triangulated.
+pub fn read_rgrid(data: &[u8]) {
+    let path = input_file("rgrid", data);
+    match mint_range::depth_grid::read_depth_grid(&path) {
+        Err(e) => one_line_naming(&e, &path),
+        Ok(im) => {
+            assert_eq!(im.cells.len() as u64, im.cols as u64 * im.rows as u64, "{}x{} grid with {} cells", im.cols, im.rows, im.cells.len());
+            let n = im.points.len();
+            for c in im.cells.iter().flatten() {
+                assert!((*c as usize) < n, "cell names point {c} of {n}");
+            }
+            assert!(im.points.iter().flatten().all(|x| x.is_finite()), "non-finite point");
+            for t in im.triangulate(f64::INFINITY) {
+                assert!(t.iter().all(|&i| (i as usize) < n), "triangle {t:?} beyond {n} points");
+            }
+        }
+    }
+}
+
+/// CSG scenes, parsed (not evaluated).
+pub fn parse_scene(data: &[u8]) {
+    let text = String::from_utf8_lossy(data);
+    let path = Path::new("scene.json");
+    match mint_pipeline::parse_scene(&text, path) {
+        Err(e) => {
+            one_line_naming(&e, path);
+            assert!(e.line >= 1, "error at line {}", e.line);
+        }
+        Ok(s) => {
+            assert!(!s.operands.is_empty(), "a scene without operands");
+        }
+    }
+}
+
+// ------------------------------------------------------------- geometry
+
+/// A coordinate on the lattice of multiples of 0.5 in [-4, 4] (17 values).
+fn lattice(b: u8) -> f64 {
+    (b % 17) as f64 * 0.5 - 4.0
+}
+
+/// `mint_core::discretize_triangle` on tetrahedra with vertices on a small
+/// lattice of half cells, where ties with grid lines and nodes are the
+/// rule. Every 12 bytes are one tetrahedron. Checks each crossing (family,
+/// value inside its cell by the margin, line and cell within the triangle's
+/// box, one crossing per line, one sign per family) and, for the closed
+/// tetrahedron, that every grid line crosses it 0 or 2 times, once in and
+/// once out, in this order along the line (outward faces), at the same cell
+/// when it is flat.
+pub fn discretize(data: &[u8]) {
+    use mint_core::{discretize_triangle, Crossing, MARGIN};
+    use std::collections::BTreeMap;
+    for bytes in data.chunks_exact(12).take(8) {
+        let p: Vec<[f64; 3]> = bytes.chunks_exact(3).map(|c| [lattice(c[0]), lattice(c[1]), lattice(c[2])]).collect();
+        let (a, b, c, d) = (p[0], p[1], p[2], p[3]);
+        let sub = |x: [f64; 3], y: [f64; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
+        let (u, v, w) = (sub(b, a), sub(c, a), sub(d, a));
+        // Exact: half-integers below 8 in magnitude.
+        let det = u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]);
+        // Consistently oriented; inward when det > 0.
+        let faces = [[a, b, c], [a, c, d], [a, d, b], [b, d, c]];
+        let mut lines: BTreeMap<(u8, i64, i64), Vec<Crossing>> = BTreeMap::new();
+        for t in &faces {
+            let mut lo = [f64::INFINITY; 3];
+            let mut hi = [f64::NEG_INFINITY; 3];
+            for q in t {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(q[k]);
+                    hi[k] = hi[k].max(q[k]);
+                }
+            }
+            let mut mine: Vec<Crossing> = Vec::new();
+            discretize_triangle(t, |x| mine.push(x));
+            for x in &mine {
+                let f = x.family as usize;
+                assert!(f < 3, "family {f}");
+                let (du, dv) = ((f + 1) % 3, (f + 2) % 3);
+                let cell = x.cell as f64;
+                assert!(x.value.is_finite() && x.value >= cell + MARGIN && x.value <= cell + 1.0 - MARGIN, "{t:?}: value {} outside cell {} by the margin", x.value, x.cell);
+                assert!(x.u as f64 >= lo[du].floor() && x.u as f64 <= hi[du].ceil(), "{t:?}: line u = {} outside the triangle's box", x.u);
+                assert!(x.v as f64 >= lo[dv].floor() && x.v as f64 <= hi[dv].ceil(), "{t:?}: line v = {} outside the triangle's box", x.v);
+                assert!(cell >= lo[f].floor() - 1.0 && cell <= hi[f].ceil(), "{t:?}: cell {} outside the triangle's box along {f}", x.cell);
+                assert!(mine.iter().filter(|y| (y.family, y.u, y.v) == (x.family, x.u, x.v)).count() == 1, "{t:?}: line {:?} crossed twice", (x.family, x.u, x.v));
+                assert!(mine.iter().all(|y| y.family != x.family || y.entering == x.entering), "{t:?}: two signs on family {f}");
+                lines.entry((x.family, x.u, x.v)).or_default().push(*x);
+            }
+        }
+        for (line, xs) in &lines {
+            let ins: Vec<&Crossing> = xs.iter().filter(|x| x.entering).collect();
+            let outs: Vec<&Crossing> = xs.iter().filter(|x| !x.entering).collect();
+            assert!(ins.len() == outs.len(), "tetrahedron {p:?} (det {det}): line {line:?} crossed {} times in, {} out", ins.len(), outs.len());
+            if det != 0.0 {
+                assert!(xs.len() == 2, "convex tetrahedron {p:?}: line {line:?} crossed {} times", xs.len());
+                let (i, o) = (ins[0].cell, outs[0].cell);
+                // Outward faces (det < 0): in, then out, walking towards +family.
+                let ok = if det < 0.0 { i <= o } else { o <= i };
+                assert!(ok, "tetrahedron {p:?} (det {det}): line {line:?} enters at cell {i}, leaves at cell {o}");
+            } else {
+                assert!(xs.iter().all(|x| x.cell == xs[0].cell), "flat tetrahedron {p:?}: line {line:?} crossed at cells {:?}", xs.iter().map(|x| x.cell).collect::<Vec<_>>());
+            }
+        }
+    }
+}
+
+/// A small resampling (`mint_pipeline::resample`, one thread, a few hundred
+/// cells) of a tiny mesh built from the bytes (vertices on a lattice of
+/// half units, faces by index): byte 0 picks the sign rule and the cell
+/// count, byte 1 the number of vertices, then 3 bytes per vertex and 3 per
+/// face. The output's faces name existing vertices and never repeat one; under the
+/// robust rules (Auto, Union, Parity; every hole closed) it is closed:
+/// every edge on exactly two faces, in opposite directions, and manifold.
+pub fn resample(data: &[u8]) {
+    use mint_core::signs::SignRule;
+    if data.len() < 2 {
+        return;
+    }
+    let rule = [SignRule::Auto, SignRule::Union, SignRule::Parity, SignRule::Orient][(data[0] & 3) as usize];
+    let cells = 64 + 64 * u64::from(data[0] >> 2 & 7);
+    let nv = (data[1] % 16) as usize + 3;
+    let rest = &data[2..];
+    if rest.len() < 3 * nv + 3 {
+        return;
+    }
+    let (vb, fb) = rest.split_at(3 * nv);
+    let faces: Vec<[usize; 3]> = fb.chunks_exact(3).take(64).map(|c| [c[0] as usize % nv, c[1] as usize % nv, c[2] as usize % nv]).collect();
+    let mut ply = format!("ply\nformat ascii 1.0\nelement vertex {nv}\nproperty double x\nproperty double y\nproperty double z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n", faces.len());
+    for c in vb.chunks_exact(3) {
+        ply += &format!("{} {} {}\n", lattice(c[0]), lattice(c[1]), lattice(c[2]));
+    }
+    for f in &faces {
+        ply += &format!("3 {} {} {}\n", f[0], f[1], f[2]);
+    }
+    let input = input_file("ply", ply.as_bytes());
+    let output = scratch().join("out.ply");
+    let _ = std::fs::remove_file(&output);
+    let opts = mint_pipeline::ResampleOptions {
+        size: mint_core::GridSize::Cells(cells),
+        threads: 1,
+        mem_bytes: 64 << 20,
+        tmp_dir: Some(scratch()),
+        signs: rule,
+        max_hole: None,
+        ..Default::default()
+    };
+    match mint_pipeline::resample(&input, &output, &opts, &mint_pipeline::NoProgress) {
+        Err(e) => {
+            let s = e.to_string();
+            assert!(!s.trim().is_empty() && !s.contains('\n'), "error not one line: {s:?}");
+            assert!(!output.exists(), "an error left the output behind: {s}");
+        }
+        Ok(_) => {
+            let (pos, faces) = mint_io::read_mesh(&output).unwrap_or_else(|e| panic!("the output does not read back: {e}"));
+            let rep = mint_mesh::try_check(&pos, &faces).unwrap_or_else(|e| panic!("output fails the index check: {e}"));
+            assert_eq!(rep.collapsed_faces, 0, "output faces repeat a vertex");
+            assert_eq!(rep.non_finite_vertices, 0, "non-finite output vertices");
+            if rule != SignRule::Orient {
+                assert!(
+                    rep.boundary_edges == 0 && rep.non_manifold_edges == 0 && rep.inconsistently_oriented_edges == 0 && rep.non_manifold_vertices == 0,
+                    "{rule:?}, {cells} cells: output not closed: {} boundary, {} non-manifold edges, {} misoriented edges, {} non-manifold vertices",
+                    rep.boundary_edges,
+                    rep.non_manifold_edges,
+                    rep.inconsistently_oriented_edges,
+                    rep.non_manifold_vertices
+                );
+            }
+        }
+    }
+    // Nothing of the run is left in the scratch directory but our files.
+    for e in std::fs::read_dir(scratch()).unwrap() {
+        let name = e.unwrap().file_name().into_string().unwrap();
+        assert!(name.starts_with("input.") || name.starts_with("again.") || name == "out.ply", "the run left {name} behind");
+    }
+}
