@@ -169,14 +169,19 @@ fn a_run_killed_at_random_moments_resumes_to_the_same_bytes() {
     let full = t.elapsed().as_secs_f64();
     let want = std::fs::read(&reference).unwrap();
     let mut rng = Rng(2026);
-    for round in 0..3 {
-        let work = d.path().join(format!("w{round}"));
-        let out = d.path().join(format!("o{round}.ply"));
+    let mut round = 0;
+    let mut tries = 0;
+    while round < 3 {
+        let work = d.path().join(format!("w{round}-{tries}"));
+        let out = d.path().join(format!("o{round}-{tries}.ply"));
         let mut kills = 0;
+        // Earlier moments on each retry: a busy machine can make the runs
+        // that resume much faster than the reference was.
+        let span = full * [0.9, 0.45, 0.2, 0.1][tries.min(3)];
         for attempt in 0..40 {
             let mut child = args(&out, Some(&work)).stdout(std::process::Stdio::null()).stderr(std::process::Stdio::null()).spawn().unwrap();
-            // A random moment within about one full run.
-            let wait = full * 1.3 * (rng.next() % 1000) as f64 / 1000.0;
+            // A random moment within the run.
+            let wait = span * (rng.next() % 1000) as f64 / 1000.0;
             std::thread::sleep(std::time::Duration::from_secs_f64(wait));
             let finished = child.try_wait().unwrap().is_some();
             if !finished && attempt < 6 {
@@ -189,11 +194,18 @@ fn a_run_killed_at_random_moments_resumes_to_the_same_bytes() {
             assert!(child.wait().unwrap().success(), "round {round}: the resumed run failed");
             break;
         }
-        assert!(kills >= 1, "round {round}: no run was killed before it ended");
+        if kills == 0 {
+            // The run ended before any kill: not a test of resuming; again, earlier.
+            tries += 1;
+            assert!(tries < 8, "round {round}: no run was killed before it ended in {tries} tries");
+            continue;
+        }
         assert!(std::fs::read(&out).unwrap() == want, "round {round} ({kills} kills): output bytes differ");
         // Nothing half-written is left beside the output.
         let debris: Vec<_> = std::fs::read_dir(d.path()).unwrap().flatten().filter(|e| e.file_name().to_string_lossy().contains(".mint-tmp")).collect();
         assert!(debris.is_empty(), "{debris:?}");
+        round += 1;
+        tries = 0;
     }
 }
 
