@@ -451,3 +451,32 @@ fn decimate_hits_its_target_keeps_closed_inputs_closed_and_errs_less_with_more_f
     let o = run(&["decimate", p(&d.path().join("torus.ply")), p(&d.path().join("x.ply")), "--faces", "3"]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("at least 4"));
 }
+
+/// `check --self-intersections`: none on mint's outputs and generated
+/// solids, the planted ones found in a file of two interpenetrating boxes.
+#[test]
+fn check_counts_self_intersections_exactly() {
+    let d = tempfile::tempdir().unwrap();
+    let sx = |f: &Path| -> u64 {
+        let j: serde_json::Value = serde_json::from_str(&ok(&["check", p(f), "--self-intersections", "--json"])).unwrap();
+        j["self_intersections"]["pairs"].as_u64().unwrap()
+    };
+    let t = d.path().join("t.ply");
+    ok(&["gen", "genus", p(&t), "--faces", "20000"]);
+    assert_eq!(sx(&t), 0);
+    let scan = d.path().join("scan.ply");
+    ok(&["gen", "scan", p(&scan), "--faces", "100000"]);
+    let r = d.path().join("r.ply");
+    ok(&["resample", p(&scan), p(&r), "--cells", "300000", "--quiet"]);
+    assert_eq!(sx(&r), 0, "resampled scans do not cross themselves");
+    let dec = d.path().join("d.ply");
+    ok(&["decimate", p(&r), p(&dec), "--faces", "3000", "--quiet"]);
+    assert_eq!(sx(&dec), 0, "decimated meshes do not cross themselves");
+    // Two boxes in one file, the second pushed halfway into the first: each
+    // of the second's faces that crosses the first's faces is a pair.
+    let mut m = crate::common::box_mesh([0.0; 3], [1.0; 3]);
+    crate::common::union(&mut m, &crate::common::box_mesh([0.5, 0.25, 0.25], [1.5, 0.75, 0.75]));
+    let two = crate::common::write_trimesh(d.path(), "two.ply", &m);
+    let n = sx(&two);
+    assert!(n >= 4, "{n} pairs");
+}

@@ -28,6 +28,7 @@ pub mod check;
 pub mod distance;
 pub mod error;
 pub mod rng;
+pub mod selfx;
 pub mod simplify;
 pub mod weld;
 
@@ -40,4 +41,5 @@ pub use distance::{
 pub use error::MeshError;
 pub use rng::SplitMix64;
 pub use simplify::{simplify, SimplifyOptions, SimplifyReport};
+pub use selfx::{faces_intersect, self_intersections, SelfIntersections};
 pub use weld::weld;
