@@ -914,7 +914,21 @@ fn cmd_bool(a: BoolArgs) -> Result<()> {
     };
     let bars = Bars::new(a.grid.quiet || a.grid.json);
     let s = mint_pipeline::boolean(op, &a.a, &a.b, &a.output, &opts, &bars)?;
+    if a.grid.preview {
+        write_preview(&[a.a.as_path(), a.b.as_path(), a.output.as_path()], &a.output, a.grid.quiet || a.grid.json, &bars)?;
+    }
     report(&a.grid, &s)
+}
+
+/// `--preview`: `OUT.png` beside `output`, the meshes side by side.
+fn write_preview(meshes: &[&std::path::Path], output: &std::path::Path, quiet: bool, bars: &Bars) -> Result<()> {
+    let png = preview_path(output);
+    let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, ..Default::default() };
+    mint_render::render_files(meshes, &png, &o, bars)?;
+    if !quiet {
+        eprintln!("preview: {} ({})", png.display(), meshes.iter().map(|m| m.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned())).collect::<Vec<_>>().join(", "));
+    }
+    Ok(())
 }
 
 fn cmd_csg(a: CsgArgs) -> Result<()> {
@@ -925,5 +939,13 @@ fn cmd_csg(a: CsgArgs) -> Result<()> {
     crate::paths::check_output(&a.output, &scene_inputs(&a.scene, &scene))?;
     let bars = Bars::new(a.grid.quiet || a.grid.json);
     let s = mint_pipeline::csg(&scene, &a.scene.display().to_string(), &a.output, &opts, &bars)?;
+    if a.grid.preview {
+        let mut meshes: Vec<&std::path::Path> = scene.operands.iter().filter_map(|o| match o {
+            mint_pipeline::scene::Operand::Mesh { path, .. } => Some(path.as_path()),
+            _ => None,
+        }).collect();
+        meshes.push(a.output.as_path());
+        write_preview(&meshes, &a.output, a.grid.quiet || a.grid.json, &bars)?;
+    }
     report(&a.grid, &s)
 }

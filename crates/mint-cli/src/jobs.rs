@@ -142,6 +142,10 @@ pub struct GridArgs {
     /// Shift the grid by fractions of a cell, e.g. 0.5,0,0 [default: 0,0,0].
     #[arg(long, value_parser = parse_triple, hide = true)]
     pub grid_offset: Option<[f64; 3]>,
+    /// Also write OUT.png beside the output: the input meshes and the
+    /// result side by side, under the same camera (see `mint render`).
+    #[arg(long)]
+    pub preview: bool,
     /// No progress bars and no summary.
     #[arg(long, short)]
     pub quiet: bool,
