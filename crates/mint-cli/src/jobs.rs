@@ -245,7 +245,7 @@ pub(crate) fn resample_options(a: &ResampleArgs) -> Result<ResampleOptions> {
 
 /// The default heap budget: a quarter of RAM (2 GiB when RAM is unknown).
 pub(crate) fn default_mem() -> u64 {
-    alloc::total_ram().map(|r| r / 4).unwrap_or(2 << 30)
+    mint_pipeline::default_mem_bytes()
 }
 
 /// The mesh `mint resample` reads: the input itself, or, for a PLY range

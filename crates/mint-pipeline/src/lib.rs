@@ -32,7 +32,7 @@ pub mod workdir;
 pub use decimate::{decimate, DecimateOptions, DecimateSummary};
 pub use engine::{boolean, csg, plan_run, resample, run_task, status, summarize_dir, RunStatus, StageStatus, TaskOptions, TaskOutcome};
 pub use error::PipelineError;
-pub use options::{ResampleOptions, ResampleSummary};
+pub use options::{default_mem_bytes, ResampleOptions, ResampleSummary};
 pub use plan::{Job, Plan};
 pub use progress::{NoProgress, Phase, Progress};
 pub use scene::{parse_scene, Scene, SceneError};

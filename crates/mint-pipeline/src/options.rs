@@ -12,7 +12,8 @@ use std::path::PathBuf;
 pub struct ResampleOptions {
     /// Grid size (no default: the CLI requires `--cells` or `--cell-size`).
     pub size: GridSize,
-    /// Heap budget in bytes; decides slab thickness. Default: 2 GiB.
+    /// Heap budget in bytes; decides slab thickness. Default:
+    /// [`default_mem_bytes`], a quarter of the machine's memory.
     pub mem_bytes: u64,
     /// Worker threads; 0 means all cores. Default 0.
     pub threads: usize,
@@ -51,11 +52,22 @@ pub struct ResampleOptions {
     pub slabs: u32,
 }
 
+/// The default heap budget of every command: a quarter of the machine's
+/// memory (`MemTotal` of /proc/meminfo), or 2 GiB where that is unknown.
+pub fn default_mem_bytes() -> u64 {
+    let total = || -> Option<u64> {
+        let s = std::fs::read_to_string("/proc/meminfo").ok()?;
+        let kb: u64 = s.lines().find(|l| l.starts_with("MemTotal:"))?.split_whitespace().nth(1)?.parse().ok()?;
+        Some(kb * 1024)
+    };
+    total().map_or(2 << 30, |r| r / 4)
+}
+
 impl Default for ResampleOptions {
     fn default() -> Self {
         ResampleOptions {
             size: GridSize::Cells(1_000_000),
-            mem_bytes: 2 << 30,
+            mem_bytes: default_mem_bytes(),
             threads: 0,
             tmp_dir: None,
             axis: None,
