@@ -241,3 +241,30 @@ fn a_shuffled_copy_resamples_to_the_same_bytes() {
     let want_obj = bytes(&ordered_obj, base.clone());
     assert!(bytes(&shuffled_obj, base) == want_obj, "shuffled OBJ differs");
 }
+
+/// Tiny cases with exact counts, each with its reason (as OpenVDB's "a
+/// filled 6³ box gives exactly 216 quads").
+#[test]
+fn tiny_boxes_give_exactly_the_counts_their_inside_nodes_dictate() {
+    let dir = tempfile::tempdir().unwrap();
+    let counts = |lo: f64, hi: f64| {
+        let input = write_trimesh(dir.path(), "box.ply", &box_mesh([lo; 3], [hi; 3]));
+        let out = dir.path().join("out.ply");
+        let (s, m) = run(&input, &out, opts(GridSize::CellSize(1.0)));
+        let r = mint_mesh::check(&m.positions, &m.faces);
+        assert!(r.watertight && r.genus_total == 0, "{r:?}");
+        (s.output_vertices, s.output_faces)
+    };
+    // A box [0.3, 2.7]³ on unit cells: the grid (extent 2.4 → 3 cells plus
+    // one of padding each side, centred) has nodes at -1, 0, …, 4, so the
+    // nodes inside are {1, 2}³, a 2×2×2 block. Each of the 3·2·2 = 12
+    // lines through the block crosses the box twice: 24 vertices. Faces:
+    // one quad (2 triangles) per block face, a strip of one quad (2
+    // triangles) per block edge, one triangle per corner: 6·2 + 12·2 + 8 = 44.
+    assert_eq!(counts(0.3, 2.7), (24, 44));
+    // [0.3, 3.7]³: extent 3.4 → 4 cells + 2, centre 2 → nodes at -1 … 5,
+    // inside {1, 2, 3}³: 3·3·3 = 27 lines, 54 vertices; faces: 4 quads
+    // per block face (8 triangles), 2 quads per block edge (4), 8 corners:
+    // 6·8 + 12·4 + 8 = 104 (and V − E + F = 54 − 156 + 104 = 2).
+    assert_eq!(counts(0.3, 3.7), (54, 104));
+}
