@@ -137,7 +137,7 @@ proptest! {
 
     #[test]
     fn random_soups_always_give_closed_manifolds_under_robust_rules(seed in any::<u64>(), cells in 100u64..20000, rule_pick in 0usize..3) {
-        use mint_core::reconstruct::resample_in_core_with;
+        use mint_core::robust::resample_in_core_with;
         use mint_core::signs::SignRule;
         let mut rng = Rng(seed);
         let tris = random_soup(&mut rng);

@@ -250,7 +250,7 @@ where
 }
 
 /// The raw intercepts of `triangles` (world coordinates), per plane.
-fn discretize_in_core<I>(grid: &Grid, triangles: I) -> Vec<Vec<Intercept>>
+pub(crate) fn discretize_in_core<I>(grid: &Grid, triangles: I) -> Vec<Vec<Intercept>>
 where
     I: IntoIterator<Item = [[f64; 3]; 3]>,
 {
@@ -264,43 +264,6 @@ where
         });
     }
     planes
-}
-
-/// [`resample_in_core`] under a sign rule: `Orient` is the strict path;
-/// `Union`, `Parity` and `Auto` (resolved by a census of all planes) use the
-/// robust state-first reconstruction of [`crate::robust`].
-pub fn resample_in_core_with<I>(
-    grid: &Grid,
-    triangles: I,
-    rule: crate::signs::SignRule,
-    sink: &mut dyn crate::MeshSink,
-) -> Result<(SlabResult, crate::signs::RepairStats, crate::signs::SignRule), crate::SinkError>
-where
-    I: IntoIterator<Item = [[f64; 3]; 3]>,
-{
-    use crate::signs::SignRule;
-    if rule == SignRule::Orient {
-        let r = resample_in_core(grid, triangles, sink)?;
-        return Ok((r, Default::default(), SignRule::Orient));
-    }
-    let mut planes = discretize_in_core(grid, triangles);
-    let rule = if rule == SignRule::Auto {
-        let mut census = crate::signs::LineCensus::default();
-        for p in &mut planes {
-            census += crate::robust::census_plane(p);
-        }
-        census.resolve()
-    } else {
-        rule
-    };
-    let (result, repair) = crate::robust::reconstruct_slab_robust(grid, 0, planes, rule);
-    for v in &result.vertices {
-        sink.vertex(*v)?;
-    }
-    for f in &result.faces {
-        sink.face(*f)?;
-    }
-    Ok((result, repair, rule))
 }
 
 /// Packs a crossing of a triangle in local grid coordinates into its record.

@@ -579,10 +579,47 @@ fn combine_s(prepared: &[Vec<Prepared>], s_finals: &[Vec<Vec<Intercept>>], p: us
     out
 }
 
+/// [`crate::reconstruct::resample_in_core`] under a sign rule: `Orient` is the strict path;
+/// `Union`, `Parity` and `Auto` (resolved by a census of all planes) use the
+/// robust state-first reconstruction of this module.
+pub fn resample_in_core_with<I>(
+    grid: &Grid,
+    triangles: I,
+    rule: crate::signs::SignRule,
+    sink: &mut dyn crate::MeshSink,
+) -> Result<(SlabResult, crate::signs::RepairStats, crate::signs::SignRule), crate::SinkError>
+where
+    I: IntoIterator<Item = [[f64; 3]; 3]>,
+{
+    use crate::signs::SignRule;
+    if rule == SignRule::Orient {
+        let r = crate::reconstruct::resample_in_core(grid, triangles, sink)?;
+        return Ok((r, Default::default(), SignRule::Orient));
+    }
+    let mut planes = crate::reconstruct::discretize_in_core(grid, triangles);
+    let rule = if rule == SignRule::Auto {
+        let mut census = crate::signs::LineCensus::default();
+        for p in &mut planes {
+            census += census_plane(p);
+        }
+        census.resolve()
+    } else {
+        rule
+    };
+    let (result, repair) = reconstruct_slab_robust(grid, 0, planes, rule);
+    for v in &result.vertices {
+        sink.vertex(*v)?;
+    }
+    for f in &result.faces {
+        sink.face(*f)?;
+    }
+    Ok((result, repair, rule))
+}
+
 #[cfg(test)]
 mod tests {
+    use super::resample_in_core_with;
     use crate::grid::{Grid, GridSize};
-    use crate::reconstruct::resample_in_core_with;
     use crate::reconstruct::tests::sphere;
     use crate::signs::SignRule;
     use crate::TriMesh;
