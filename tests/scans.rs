@@ -157,3 +157,21 @@ fn a_hole_wider_than_max_hole_stays_open_with_one_loop_and_close_all_closes_it()
 fn cells_opts(n: u64) -> ResampleOptions {
     cells(n)
 }
+
+/// The summary reports the output's own boundary loops, the same as
+/// `mint check` counts on the output, split into slabs or not.
+#[test]
+fn the_summary_counts_the_boundary_loops_check_counts() {
+    let d = tempfile::tempdir().unwrap();
+    let input = write_mesh(d.path(), "scan.ply", |s| {
+        mint_gen::scan_like(200_000, 5, &mint_gen::ScanOptions::default(), s).unwrap();
+    });
+    for (max_hole, slabs) in [(1u32, 1u32), (2, 1), (1, 3), (0, 4)] {
+        let out = d.path().join("o.ply");
+        let o = ResampleOptions { max_hole: Some(max_hole), slabs, slab_layers: Some(3), ..cells(1_000_000) };
+        let (s, m) = run(&input, &out, o);
+        let r = mint_mesh::check(&m.positions, &m.faces);
+        assert!(s.holes_left_open > 0, "max_hole {max_hole}: expected open holes");
+        assert_eq!((s.output_boundary_edges, s.output_boundary_loops), (r.boundary_edges, r.boundary_loops), "max_hole {max_hole}, {slabs} slabs");
+    }
+}

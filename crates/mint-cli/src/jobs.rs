@@ -314,7 +314,10 @@ pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, j
                 "  signs        {} ({} of {} lines winding-valid, {} odd); {} lines through holes, {} vertices synthesized, {} overlapping edges merged",
                 s.sign_rule, s.census_winding_valid, s.census_lines, s.census_odd, s.inconsistent_lines, s.synthesized_vertices, s.merged_edges
             );
-            eprintln!("  holes        {} closed, {} left open ({} cells)", s.holes_closed, s.holes_left_open, s.open_cells);
+            eprintln!(
+                "  holes        {} closed, {} left open ({} cells); the output's boundary: {} edges in {} loops",
+                s.holes_closed, s.holes_left_open, s.open_cells, s.output_boundary_edges, s.output_boundary_loops
+            );
         }
         eprintln!(
             "  time         {:.2}s (bounds {:.2}s, discretize {:.2}s, reconstruct {:.2}s, write {:.2}s)",

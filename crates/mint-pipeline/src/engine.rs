@@ -279,8 +279,19 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
     s.holes_left_open = holes.left_open;
     s.open_cells = open.as_ref().map_or(0, |o| o.len() as u64);
     let (mut kept, mut removed) = (0, 0);
+    let mut loose: Vec<(u32, u32)> = Vec::new();
     for t in 0..plan.tasks("reconstruct") {
-        let (_, r) = ctx.final_slab(t)?;
+        let (stage, r) = ctx.final_slab(t)?;
+        if let Some(sum) = r.loose_file {
+            let offset = s.output_vertices;
+            let path = crate::workdir::task_dir(&ctx.dir, stage, t).join("loose.bin");
+            crate::workdir::read_records::<8>(&path, sum, |b| {
+                let a = u32::from_le_bytes(b[..4].try_into().unwrap()) as u64 + offset;
+                let c = u32::from_le_bytes(b[4..].try_into().unwrap()) as u64 + offset;
+                loose.push((a as u32, c as u32));
+                Ok(())
+            })?;
+        }
         s.slabs += r.sub_slabs;
         s.planned_slab_bytes = s.planned_slab_bytes.max(r.planned_slab_bytes);
         s.output_vertices += r.vertices;
@@ -296,6 +307,7 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
         s.merged_edges += r.repair.merged_edges;
         s.dropped_intercepts += r.repair.dropped_intercepts;
     }
+    (s.output_boundary_edges, s.output_boundary_loops) = crate::stages::boundary_of(&loose);
     if plan.strict() || rules.first() == Some(&SignRule::Orient) {
         s.intercepts_kept = kept;
         s.intercepts_removed = removed;

@@ -140,6 +140,10 @@ pub struct ResampleSummary {
     pub holes_left_open: u64,
     /// Cells left open around those holes.
     pub open_cells: u64,
+    /// The output's own boundary: edges used by one face, and the loops
+    /// they form (what `mint check` counts on the output).
+    pub output_boundary_edges: u64,
+    pub output_boundary_loops: u64,
     /// The work directory of a staged run (`None`: a temporary one).
     pub work_dir: Option<String>,
     /// Tasks run by this process, and tasks found already done (resumed).

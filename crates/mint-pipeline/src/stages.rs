@@ -110,6 +110,12 @@ pub struct ReconstructResult {
     pub holes_file: Option<FileSum>,
     /// `reopen`: no hole stays open, the first pass's result stands.
     pub reused: bool,
+    /// `reopen` (holes left open): the directed edges used by one face of
+    /// their sub-slab (`loose.bin`, u32 pairs, task-local ids): the
+    /// output's boundary edges, and the seams between sub-slabs, which the
+    /// summary pairs up across slabs.
+    pub loose_edges: u64,
+    pub loose_file: Option<FileSum>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -630,6 +636,8 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<Re
     };
     let mut vfile = SumWriter::create(out.join("vertices.bin"))?;
     let mut ffile = SumWriter::create(out.join("faces.bin"))?;
+    let mut loose = if reopen { Some(SumWriter::create(out.join("loose.bin"))?) } else { None };
+    let mut loose_edges = 0u64;
     let mut filter = FilterStats::default();
     let mut repair = RepairStats::default();
     ctx.progress.start(Phase::Reconstruct, (b - a) as u64);
@@ -657,6 +665,16 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<Re
             }
             ffile.write(&bytes)?;
         }
+        if let Some(l) = loose.as_mut() {
+            for (a, b) in edges_used_once(&res.faces) {
+                let (a, b) = ((a as u64 + r.vertices) as u32, (b as u64 + r.vertices) as u32);
+                let mut bytes = [0u8; 8];
+                bytes[..4].copy_from_slice(&a.to_le_bytes());
+                bytes[4..].copy_from_slice(&b.to_le_bytes());
+                l.write(&bytes)?;
+                loose_edges += 1;
+            }
+        }
         r.vertices += res.vertices.len() as u64;
         r.faces += res.faces.len() as u64;
         r.active_cells += res.stats.active_cells;
@@ -671,6 +689,8 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<Re
     r.hole_cells = hole_cells;
     r.holes_file = holes.map(|h| h.finish()).transpose()?;
     r.faces_file = Some(ffile.finish()?);
+    r.loose_edges = loose_edges;
+    r.loose_file = loose.map(|l| l.finish()).transpose()?;
     r.filter_kept = filter.kept;
     r.filter_removed = filter.removed;
     r.repair = Repair {
@@ -680,6 +700,73 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<Re
         dropped_intercepts: repair.dropped_intercepts,
     };
     Ok(r)
+}
+
+/// The directed edges of `faces` that no other face of the list uses, in
+/// face order.
+fn edges_used_once(faces: &[[u32; 3]]) -> Vec<(u32, u32)> {
+    let mut count: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::with_capacity(faces.len() * 2);
+    for f in faces {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            *count.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+        }
+    }
+    let mut out = Vec::new();
+    for f in faces {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            if count[&(a.min(b), a.max(b))] == 1 {
+                out.push((a, b));
+            }
+        }
+    }
+    out
+}
+
+/// Boundary edges and loops of the whole output, from every slab's loose
+/// edges (`ids` offset to global): an edge is a boundary edge when exactly
+/// one face of the whole output uses it; a loop is a cycle of boundary
+/// edges through vertices with exactly one boundary edge in and one out
+/// (the definition `mint check` counts by).
+pub fn boundary_of(loose: &[(u32, u32)]) -> (u64, u64) {
+    use std::collections::HashMap;
+    let mut count: HashMap<(u32, u32), u32> = HashMap::new();
+    for &(a, b) in loose {
+        *count.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+    }
+    let boundary: Vec<(u32, u32)> = loose.iter().copied().filter(|&(a, b)| count[&(a.min(b), a.max(b))] == 1).collect();
+    let mut outd: HashMap<u32, (u32, u32)> = HashMap::new();
+    let mut ind: HashMap<u32, u32> = HashMap::new();
+    for &(a, b) in &boundary {
+        let e = outd.entry(a).or_insert((0, b));
+        e.0 += 1;
+        *ind.entry(b).or_insert(0) += 1;
+    }
+    let simple = |v: u32| outd.get(&v).is_some_and(|o| o.0 == 1) && ind.get(&v) == Some(&1);
+    let mut seen: std::collections::HashSet<u32> = std::collections::HashSet::new();
+    let mut loops = 0;
+    let mut starts: Vec<u32> = boundary.iter().map(|e| e.0).collect();
+    starts.sort_unstable();
+    starts.dedup();
+    for s in starts {
+        if seen.contains(&s) || !simple(s) {
+            continue;
+        }
+        let mut v = s;
+        let mut path = Vec::new();
+        let closed = loop {
+            if !simple(v) || !seen.insert(v) {
+                break v == s && !path.is_empty();
+            }
+            path.push(v);
+            v = outd[&v].1;
+        };
+        if closed {
+            loops += 1;
+        }
+    }
+    (boundary.len() as u64, loops)
 }
 
 fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
