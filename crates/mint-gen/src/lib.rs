@@ -35,14 +35,14 @@ pub mod sphere;
 pub mod surface;
 pub mod torus;
 
-pub use balls::{components, BallLattice};
+pub use balls::components;
 pub use error::GenError;
 pub use mint_core::{CountingSink, MeshSink, SinkError, TriMesh};
 pub use plate::{genus, Plate};
 pub use scan::{scan_like, ExpectedCheck, ScanDefects, ScanOptions};
 pub use shuffle::{shuffle_mesh, torus_shuffled, Permutation};
 pub use sphere::{sphere, SphereGrid};
-pub use surface::{ExactSurface, PlateSurface, ScanSurface, SphereSurface, TorusSurface};
+pub use surface::{BallLattice, ExactSurface, PlateSurface, ScanSurface, SphereSurface, TorusSurface};
 pub use torus::{torus, TorusGrid};
 
 use serde::{Deserialize, Serialize};
