@@ -85,7 +85,7 @@ impl Format {
         if head.starts_with(b"#VRML") {
             return Some(Format::Vrml);
         }
-        if crate::three_ds::sniff(head, file_len) {
+        if sniff_3ds(head, file_len) {
             return Some(Format::ThreeDs);
         }
         if stl_looks_ascii(head) || stl_binary_size_matches(head, file_len) {
@@ -181,6 +181,17 @@ pub(crate) fn stl_binary_size_matches(head: &[u8], file_len: u64) -> bool {
     }
     let count = u32::from_le_bytes(head[80..84].try_into().unwrap()) as u64;
     file_len == 84 + 50 * count
+}
+
+/// A 3DS file: a main chunk (id 0x4D4D, little-endian) whose length fits
+/// the file and covers at least its own header.
+pub(crate) fn sniff_3ds(head: &[u8], len: u64) -> bool {
+    if head.len() < 6 {
+        return false;
+    }
+    let id = u16::from_le_bytes([head[0], head[1]]);
+    let n = u32::from_le_bytes([head[2], head[3], head[4], head[5]]);
+    id == 0x4D4D && n as u64 <= len && n >= 6
 }
 
 #[cfg(test)]

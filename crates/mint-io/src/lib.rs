@@ -28,6 +28,7 @@
 #![warn(missing_docs)]
 
 pub mod atomic;
+mod backend;
 pub mod convert;
 pub mod error;
 pub mod format;

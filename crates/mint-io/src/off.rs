@@ -23,9 +23,9 @@ use crate::format::off_keyword;
 use crate::mapped::{Mapped, SpillFile};
 use crate::positions::not_finite;
 use crate::positions::{Emit, Positions, Reject};
-use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
+use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
 use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
-use crate::writer::{write_point, FormatWriter, OutFile, WriteOptions};
+use crate::backend::{write_point, FormatWriter, OutFile, WriteOptions};
 use crate::Format;
 
 /// The next line with content, `#` comments removed: (start, content).

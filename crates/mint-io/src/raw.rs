@@ -17,9 +17,9 @@ use crate::error::{show_token, Error};
 use crate::mapped::{Mapped, SpillFile};
 use crate::positions::not_finite;
 use crate::positions::{Emit, Positions, Reject};
-use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
+use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
 use crate::text::{line_of, parse_f64, words, Lines};
-use crate::writer::{write_coord, FormatWriter, OutFile, WriteOptions};
+use crate::backend::{write_coord, FormatWriter, OutFile, WriteOptions};
 use crate::Format;
 
 /// Parses every line; returns the triangle count.

@@ -19,43 +19,9 @@ use crate::error::Error;
 use crate::format::Format;
 use crate::mapped::Mapped;
 use crate::positions::{Emit, Positions};
+pub use crate::backend::{ElementInfo, MeshInfo, RangeGrid, ReadStats};
+use crate::backend::FaceStream;
 use crate::{mesh, obj, off, ply, raw, stl, three_ds, vrml};
-
-/// What a file says about itself, from its header (see [`read_info`]).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct MeshInfo {
-    /// The file format.
-    pub format: Format,
-    /// `"ascii"`, `"binary_little_endian"`, `"binary_big_endian"`, or
-    /// `"binary"` for binary STL.
-    pub encoding: String,
-    /// Vertices as stored (for STL: 3 per facet, a soup).
-    pub vertex_count: u64,
-    /// Face records (polygons, strips or facets) when the file says; `None`
-    /// when the file has no face element at all (a PLY point cloud or range
-    /// scan).
-    pub face_count: Option<u64>,
-    /// The elements in file order.
-    pub elements: Vec<ElementInfo>,
-    /// Header comments (PLY `comment`, leading `#` lines of OBJ/OFF, the
-    /// binary STL header text or the ascii STL solid name).
-    pub comments: Vec<String>,
-    /// PLY `obj_info` lines, without the keyword.
-    pub obj_info: Vec<String>,
-}
-
-/// One element of a file: PLY elements as declared; `v`/`f` for OBJ,
-/// `vertex`/`face` for OFF, `facet` for STL.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct ElementInfo {
-    /// Element name as in the file.
-    pub name: String,
-    /// Number of records.
-    pub count: u64,
-    /// Property declarations as written, e.g. `"float x"`,
-    /// `"list uchar int vertex_indices"`.
-    pub properties: Vec<String>,
-}
 
 /// Reads what the file says about itself without streaming its faces.
 ///
@@ -154,90 +120,6 @@ impl TriangleChunk {
         self.indices.clear();
         self.positions.clear();
     }
-}
-
-/// The sample grid of a range scan (PLY `range_grid` element): `cols` x
-/// `rows` cells in row-major order, each the index of the vertex sampled
-/// there, or `None`.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct RangeGrid {
-    /// Cells per row (`obj_info num_cols`).
-    pub cols: u32,
-    /// Rows (`obj_info num_rows`).
-    pub rows: u32,
-    /// `cols * rows` cells, row-major: the vertex sampled there, if any.
-    pub cells: Vec<Option<u32>>,
-}
-
-impl RangeGrid {
-    /// The vertex at (`col`, `row`), if any. Panics outside the grid.
-    pub fn cell(&self, col: u32, row: u32) -> Option<u32> {
-        assert!(col < self.cols && row < self.rows, "cell ({col}, {row}) outside a {}x{} grid", self.cols, self.rows);
-        self.cells[row as usize * self.cols as usize + col as usize]
-    }
-
-    /// Number of cells that hold a vertex.
-    pub fn filled(&self) -> usize {
-        self.cells.iter().filter(|c| c.is_some()).count()
-    }
-}
-
-/// Counters of what a reader met so far.
-#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
-pub struct ReadStats {
-    /// Triangles delivered.
-    pub triangles: u64,
-    /// Face records with fewer than 3 indices, skipped (PLY faces, OBJ `f`
-    /// lines, OFF faces).
-    pub short_faces: u64,
-    /// Strip triangles with a repeated index, dropped (PLY `tristrips`).
-    pub degenerate_strip_triangles: u64,
-    /// Vertex positions written to a spill file (0 when they are read in
-    /// place from a binary file).
-    pub spilled_vertices: u64,
-    /// Bytes after the last declared PLY element, ignored as MeshLab and
-    /// trimesh ignore them (see [`MeshReader::warnings`]). Known once the
-    /// faces have been read.
-    pub ignored_trailing_bytes: u64,
-}
-
-/// The format-specific part of a reader: produces triangles into an
-/// `Emit` until it is full or the faces end.
-pub(crate) trait FaceStream: Send {
-    /// Fills `out`; returns false when no triangles remain after this call.
-    fn fill(&mut self, out: &mut Emit, stats: &mut ReadStats) -> Result<bool, Error>;
-    /// Bytes of the input consumed so far.
-    fn bytes_done(&self) -> u64;
-    /// Bytes after the last declared element, ignored (PLY).
-    fn ignored_trailing_bytes(&self) -> u64 {
-        0
-    }
-    /// The number of face records, when every record has the same size if
-    /// it is a triangle, so that records `first .. end` can be read alone
-    /// (binary PLY with one face element, binary STL). `None` otherwise.
-    fn splittable_records(&self) -> Option<u64> {
-        None
-    }
-    /// Restricts the stream to face records `first .. end`, each of which
-    /// must be a triangle (checked while reading). Only called when
-    /// [`FaceStream::splittable_records`] is `Some`.
-    fn restrict(&mut self, _first: u64, _end: u64) -> Result<(), Error> {
-        unreachable!("restrict called on a stream that cannot be split")
-    }
-    /// Where the fixed-size face records are, for direct parallel access
-    /// ([`crate::visit::TriangleRecords`]); `None` unless splittable.
-    fn fixed_faces(&self) -> Result<Option<crate::visit::FixedFaces>, Error> {
-        Ok(None)
-    }
-}
-
-/// What a format module hands back from opening a file.
-pub(crate) struct Opened {
-    pub(crate) info: MeshInfo,
-    pub(crate) positions: Positions,
-    pub(crate) body: Box<dyn FaceStream>,
-    pub(crate) range_grid: Option<RangeGrid>,
-    pub(crate) spilled_vertices: u64,
 }
 
 /// Vertex positions by index, shareable across threads; see

@@ -24,9 +24,9 @@ use crate::format::stl_looks_ascii;
 use crate::mapped::{Mapped, SpillFile};
 use crate::positions::not_finite;
 use crate::positions::{Emit, Layout, Positions, Reject, Scalar};
-use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
+use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
 use crate::text::{line_of, parse_f64, Tokens};
-use crate::writer::{write_coord, FormatWriter, OutFile, WriteOptions};
+use crate::backend::{write_coord, FormatWriter, OutFile, WriteOptions};
 use crate::Format;
 
 fn is_ascii(data: &[u8]) -> bool {

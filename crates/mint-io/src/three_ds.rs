@@ -34,8 +34,8 @@ use crate::error::{Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
 use crate::positions::not_finite;
 use crate::positions::{Emit, Positions, Reject};
-use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
-use crate::writer::{FormatWriter, OutFile, WriteOptions};
+use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
+use crate::backend::{FormatWriter, OutFile, WriteOptions};
 use crate::Format;
 
 const MAIN: u16 = 0x4D4D;
@@ -67,11 +67,6 @@ fn u32_at(d: &[u8], o: usize) -> u32 {
     u32::from_le_bytes(d[o..o + 4].try_into().unwrap())
 }
 
-/// True if `head` looks like a 3DS file of `len` bytes.
-pub(crate) fn sniff(head: &[u8], len: u64) -> bool {
-    head.len() >= 6 && u16_at(head, 0) == MAIN && (u32_at(head, 2) as u64) <= len && u32_at(head, 2) >= 6
-}
-
 /// Walks the chunks of `[start, end)`, calling `f(id, body_start, end)`.
 fn chunks(path: &Path, d: &[u8], start: usize, end: usize, f: &mut dyn FnMut(u16, usize, usize) -> Result<(), Error>) -> Result<(), Error> {
     let mut o = start;
@@ -89,7 +84,7 @@ fn chunks(path: &Path, d: &[u8], start: usize, end: usize, f: &mut dyn FnMut(u16
 
 /// Finds every object's mesh.
 fn scan(path: &Path, d: &[u8]) -> Result<Vec<Obj>, Error> {
-    if !sniff(d, d.len() as u64) {
+    if !crate::format::sniff_3ds(d, d.len() as u64) {
         return Err(Error::format(path, "not a 3DS file: no main chunk 0x4D4D at the start").at_byte(0));
     }
     let main_end = u32_at(d, 2) as usize;
@@ -427,6 +422,6 @@ mod tests {
         assert_eq!(e.kind(), ErrorKind::Format);
         assert!(e.to_string().contains("chunk 0x3D3D"), "{e}");
         assert!(scan(Path::new("a.3ds"), b"hello world").is_err());
-        assert!(sniff(&d, 30) && !sniff(&d, 20));
+        assert!(crate::format::sniff_3ds(&d, 30) && !crate::format::sniff_3ds(&d, 20));
     }
 }

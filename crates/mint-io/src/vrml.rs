@@ -32,9 +32,9 @@ use crate::error::{show_token, Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
 use crate::positions::not_finite;
 use crate::positions::{Emit, Positions, Reject};
-use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
+use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
 use crate::text::{line_of, parse_f64, parse_i64};
-use crate::writer::{write_point, FormatWriter, OutFile, WriteOptions};
+use crate::backend::{write_point, FormatWriter, OutFile, WriteOptions};
 use crate::Format;
 
 /// An affine transform: 3 rows of `[a b c t]`.

@@ -33,7 +33,7 @@ use super::header::{parse, Element, Encoding, PlyHeader, PropType, Property};
 use crate::error::{show_token, Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
 use crate::positions::{check_finite, not_finite, Emit, Layout, PosKind, Positions, Reject, Scalar};
-use crate::reader::{ElementInfo, FaceStream, MeshInfo, Opened, RangeGrid, ReadStats};
+use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, RangeGrid, ReadStats};
 use crate::text::{line_of, parse_f64, parse_int, Tokens};
 use crate::Format;
 

@@ -11,7 +11,7 @@ use std::path::Path;
 
 use crate::error::Error;
 use crate::ply::header::Encoding;
-use crate::writer::{write_coord, FormatWriter, OutFile, WriteOptions};
+use crate::backend::{write_coord, FormatWriter, OutFile, WriteOptions};
 
 pub(crate) struct PlyWriter {
     out: OutFile,
