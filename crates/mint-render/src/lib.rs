@@ -22,6 +22,7 @@
 //! Worker threads draw whole chunks into tiles of their own, merged by that
 //! same rule, so the bytes do not depend on the number of threads.
 
+use glam::DVec3;
 use mint_core::progress::{Phase, Progress};
 use mint_io::{MeshReader, ReadOptions, TriangleChunk};
 use std::path::{Path, PathBuf};
@@ -91,27 +92,13 @@ impl View {
     }
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-fn unit(a: [f64; 3]) -> [f64; 3] {
-    let n = dot(a, a).sqrt();
-    [a[0] / n, a[1] / n, a[2] / n]
-}
-
 /// An orthographic camera: world point → (pixel x, pixel y, depth).
 #[derive(Debug, Clone, Copy)]
 pub struct Camera {
-    dir: [f64; 3],
-    right: [f64; 3],
-    up: [f64; 3],
-    center: [f64; 3],
+    dir: DVec3,
+    right: DVec3,
+    up: DVec3,
+    center: DVec3,
     /// Pixels per world unit.
     pub scale: f64,
     width: u32,
@@ -123,15 +110,16 @@ impl Camera {
     /// `width × height` pixels with a 5% margin.
     pub fn fit(view: View, lo: [f64; 3], hi: [f64; 3], width: u32, height: u32) -> Camera {
         let (dir, up0) = view.frame();
-        let right = unit(cross(dir, up0));
-        let up = cross(right, dir);
-        let center = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])];
+        let (dir, up0) = (DVec3::from(dir), DVec3::from(up0));
+        let right = dir.cross(up0).normalize();
+        let up = right.cross(dir);
+        let center = 0.5 * (DVec3::from(lo) + DVec3::from(hi));
         let (mut ex, mut ey) = (0.0f64, 0.0f64);
         for i in 0..8 {
-            let c = [if i & 1 == 0 { lo[0] } else { hi[0] }, if i & 2 == 0 { lo[1] } else { hi[1] }, if i & 4 == 0 { lo[2] } else { hi[2] }];
-            let d = sub(c, center);
-            ex = ex.max(dot(d, right).abs());
-            ey = ey.max(dot(d, up).abs());
+            let c = DVec3::new(if i & 1 == 0 { lo[0] } else { hi[0] }, if i & 2 == 0 { lo[1] } else { hi[1] }, if i & 4 == 0 { lo[2] } else { hi[2] });
+            let d = c - center;
+            ex = ex.max(d.dot(right).abs());
+            ey = ey.max(d.dot(up).abs());
         }
         let sx = if ex > 0.0 { 0.45 * width as f64 / ex } else { f64::INFINITY };
         let sy = if ey > 0.0 { 0.45 * height as f64 / ey } else { f64::INFINITY };
@@ -145,17 +133,13 @@ impl Camera {
     /// Pixel coordinates (x right, y down) and depth (larger is farther).
     #[inline]
     pub fn project(&self, p: [f64; 3]) -> [f64; 3] {
-        let d = sub(p, self.center);
-        [
-            0.5 * self.width as f64 + dot(d, self.right) * self.scale,
-            0.5 * self.height as f64 - dot(d, self.up) * self.scale,
-            dot(d, self.dir),
-        ]
+        let d = DVec3::from(p) - self.center;
+        [0.5 * self.width as f64 + d.dot(self.right) * self.scale, 0.5 * self.height as f64 - d.dot(self.up) * self.scale, d.dot(self.dir)]
     }
 
     /// The direction the camera looks along.
     pub fn direction(&self) -> [f64; 3] {
-        self.dir
+        self.dir.to_array()
     }
 }
 
@@ -189,19 +173,19 @@ impl Canvas {
     /// Draws one triangle seen by `cam`, flat-shaded.
     #[inline]
     pub fn triangle(&mut self, cam: &Camera, p: &[[f64; 3]; 3]) {
-        let n = cross(sub(p[1], p[0]), sub(p[2], p[0]));
-        let nn = dot(n, n).sqrt();
+        let (a, b, c) = (DVec3::from(p[0]), DVec3::from(p[1]), DVec3::from(p[2]));
+        let n = (b - a).cross(c - a);
+        let nn = n.length();
         if !(nn > 0.0) {
             return; // zero area (or non-finite): nothing to see
         }
-        let n = [n[0] / nn, n[1] / nn, n[2] / nn];
-        let facing = dot(n, cam.dir);
-        let front = facing < 0.0;
+        let n = n / nn;
+        let front = n.dot(cam.dir) < 0.0;
         // Light from above-left of the viewer; faces seen from behind are
         // lit as if their normal pointed at the viewer.
-        let light = unit([-cam.dir[0] + 0.5 * cam.up[0] - 0.4 * cam.right[0], -cam.dir[1] + 0.5 * cam.up[1] - 0.4 * cam.right[1], -cam.dir[2] + 0.5 * cam.up[2] - 0.4 * cam.right[2]]);
-        let ns = if front { n } else { [-n[0], -n[1], -n[2]] };
-        let lambert = dot(ns, light).max(0.0);
+        let light = (-cam.dir + 0.5 * cam.up - 0.4 * cam.right).normalize();
+        let ns = if front { n } else { -n };
+        let lambert = ns.dot(light).max(0.0);
         let base = if front { FRONT } else { BACK };
         let k = 0.25 + 0.75 * lambert;
         let color = base.map(|c| (255.0 * (c * k).min(1.0)).round() as u8);
@@ -280,8 +264,7 @@ impl Canvas {
             if z.is_finite() {
                 let (x, y) = ((i % self.width as usize) as f64 + 0.5, (i / self.width as usize) as f64 + 0.5);
                 let (a, b) = ((x - 0.5 * self.width as f64) / cam.scale, (0.5 * self.height as f64 - y) / cam.scale);
-                let c = cam.center;
-                v.push((i, [0, 1, 2].map(|d| c[d] + a * cam.right[d] + b * cam.up[d] + z as f64 * cam.dir[d])));
+                v.push((i, (cam.center + a * cam.right + b * cam.up + z as f64 * cam.dir).to_array()));
             }
         }
         v
