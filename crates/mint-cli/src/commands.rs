@@ -540,7 +540,7 @@ fn cmd_convert(a: ConvertArgs) -> Result<()> {
     crate::paths::check_output(&a.output, &[&a.input])?;
     let bars = Bars::new(a.quiet);
     use mint_pipeline::{Phase, Progress};
-    bars.start(Phase::Write, 0);
+    bars.start(Phase::named("convert"), 0);
     let read = mint_io::ReadOptions { spill_dir: a.tmp.clone(), ..Default::default() };
     let write = WriteOptions { ascii: a.ascii, double: a.double, ..Default::default() };
     let mut last = 0u64;
@@ -572,7 +572,7 @@ fn cmd_validate(a: ValidateArgs) -> Result<()> {
     let t = std::time::Instant::now();
     let mut reader = mint_io::MeshReader::open(&a.file, mint_io::ReadOptions { spill_dir: a.tmp.clone(), ..Default::default() })?;
     let bars = Bars::new(a.quiet || a.json);
-    bars.start(Phase::Discretize, reader.info().face_count.unwrap_or(0));
+    bars.start(Phase::named("validate"), reader.info().face_count.unwrap_or(0));
     let mut chunk = mint_io::TriangleChunk::default();
     let mut triangles = 0u64;
     // A checksum over positions keeps the read from being optimized away and

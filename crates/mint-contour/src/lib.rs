@@ -38,3 +38,13 @@ pub mod slice;
 pub mod triangulate;
 
 pub use error::{ContourError, ProfileError, ProfileErrorKind};
+
+/// The phases this crate reports through `mint_core::progress::Progress`.
+pub mod phases {
+    /// Reading the sections of a contour stack (units: sections).
+    pub const SECTIONS: mint_core::progress::Phase = mint_core::progress::Phase::named("sections");
+    /// Reconstructing a surface from contour sections (units: sections).
+    pub const CONTOURS: mint_core::progress::Phase = mint_core::progress::Phase::named("contours");
+    /// Cutting a mesh into sections (units: bytes of the input).
+    pub const SLICE: mint_core::progress::Phase = mint_core::progress::Phase::named("slice");
+}

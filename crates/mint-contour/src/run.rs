@@ -21,7 +21,7 @@ use crate::mc::{McOptions, McReconstructor, McStats, StackSummary};
 use crate::optimize::{optimize, OptimizeStats};
 use crate::profile::{ProfileOptions, ProfileReader, ProfileWriter};
 use crate::slice::{SliceStats, Slicer};
-use mint_core::progress::{Phase, Progress};
+use mint_core::progress::Progress;
 use mint_core::{MeshSink, SinkError};
 use mint_io::{AtomicFile, Format, MeshReader, MeshWriter, ReadOptions, TriangleChunk, WriteOptions};
 use serde::Serialize;
@@ -141,8 +141,8 @@ fn open_profile(path: &Path, opts: ProfileOptions) -> Result<ProfileReader<BufRe
 }
 
 /// `mint contours`: reconstructs the profile `input` into the mesh `output`.
-/// Progress is reported per section (phases [`Phase::Sections`] and
-/// [`Phase::Contours`]) and cancellation polled as often.
+/// Progress is reported per section (phases [`crate::phases::SECTIONS`] and
+/// [`crate::phases::CONTOURS`]) and cancellation polled as often.
 pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: WriteOptions, progress: &dyn Progress) -> Result<RunStats, ContourError> {
     let t = Instant::now();
     // Refuse an unknown output format before reading anything.
@@ -162,7 +162,7 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
             // Pass 1: bounding box and offsets (validates the whole file first).
             let mut r = open_profile(input, popts)?;
             let mut summary = None;
-            progress.start(Phase::Sections, 0);
+            progress.start(crate::phases::SECTIONS, 0);
             while let Some(s) = r.next_section()? {
                 let sm = summary.get_or_insert_with(|| StackSummary::new(r.frame().unwrap()));
                 sm.add(&s);
@@ -174,7 +174,7 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
             let mut sink = SpillSink::create(output, write)?;
             let mut mc = McReconstructor::new(&summary, o, input)?;
             let mut r = open_profile(input, popts)?;
-            progress.start(Phase::Contours, summary.offsets.len() as u64);
+            progress.start(crate::phases::CONTOURS, summary.offsets.len() as u64);
             while let Some(s) = r.next_section()? {
                 mc.push(&s, &mut sink)?;
                 check()?;
@@ -190,7 +190,7 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
             let mut a = AngleReconstructor::new(o);
             let mut r = open_profile(input, popts)?;
             let mut n = 0u64;
-            progress.start(Phase::Contours, 0);
+            progress.start(crate::phases::CONTOURS, 0);
             while let Some(s) = r.next_section()? {
                 a.push(&s, &mut sink)?;
                 n += 1;
@@ -229,7 +229,7 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
 
 /// `mint slice`: cuts the mesh `input` by `sections` planes across `axis`
 /// (0, 1, 2 for x, y, z) into the profile `output`. Progress is reported
-/// in bytes of the input ([`Phase::Slice`]), cancellation polled per chunk
+/// in bytes of the input ([`crate::phases::SLICE`]), cancellation polled per chunk
 /// of faces.
 pub fn slice_file(input: &Path, output: &Path, sections: u32, axis: usize, progress: &dyn Progress) -> Result<RunStats, ContourError> {
     let t = Instant::now();
@@ -251,7 +251,7 @@ pub fn slice_file(input: &Path, output: &Path, sections: u32, axis: usize, progr
     let mut slicer = Slicer::new(axis, lo, hi, sections);
     let mut chunk = TriangleChunk::new();
     let mut faces = 0u64;
-    progress.start(Phase::Slice, reader.bytes_total());
+    progress.start(crate::phases::SLICE, reader.bytes_total());
     let mut reported = reader.bytes_done();
     while reader.next_chunk(&mut chunk)? {
         for (ids, p) in chunk.indices.iter().zip(&chunk.positions) {

@@ -1,56 +1,23 @@
 //! One hook for progress and cancellation, polled between stages, per chunk
 //! of faces, per slab and per scan. The default methods do nothing, so
-//! [`NoProgress`] is the null hook. (A trait and an enum only: mint-core
+//! [`NoProgress`] is the null hook. (A trait and a name only: mint-core
 //! still does no I/O; the CLI draws the bars.)
 
-/// The long phases of a run.
+/// A long phase of some work, by name ("discretize", "zipper"…). Each
+/// crate names its own phases (`mint_pipeline::progress::DISCRETIZE`,
+/// `mint_range::phases::ZIPPER`…); the core keeps only this type and the
+/// trait.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Phase {
-    /// Reading vertex positions to find the bounding box (units: vertices).
-    Bounds,
-    /// Streaming faces and discretizing them (units: faces).
-    Discretize,
-    /// Reconstructing slabs (units: layers).
-    Reconstruct,
-    /// Copying the faces into the output after its vertices (units: faces).
-    Write,
-    /// Reading range scans (units: scans).
-    LoadScans,
-    /// Registering scans by ICP (units: scans).
-    Register,
-    /// Zippering scans into the model (units: scans).
-    Zipper,
-    /// Consensus geometry, two passes over the scans (units: scan passes).
-    Consensus,
-    /// Discretizing scans on the grid merge's grid (units: scans).
-    GridMerge,
-    /// Reading the sections of a contour stack (units: sections).
-    Sections,
-    /// Reconstructing a surface from contour sections (units: sections).
-    Contours,
-    /// Cutting a mesh into sections (units: bytes of the input).
-    Slice,
-    /// Drawing a mesh's triangles (units: faces).
-    Render,
-}
+pub struct Phase(&'static str);
 
 impl Phase {
+    /// A phase called `name` (lower case, a few words: shown beside its bar).
+    pub const fn named(name: &'static str) -> Phase {
+        Phase(name)
+    }
+
     pub fn name(self) -> &'static str {
-        match self {
-            Phase::Bounds => "bounds",
-            Phase::Discretize => "discretize",
-            Phase::Reconstruct => "reconstruct",
-            Phase::Write => "write",
-            Phase::LoadScans => "load scans",
-            Phase::Register => "register",
-            Phase::Zipper => "zipper",
-            Phase::Consensus => "consensus",
-            Phase::GridMerge => "grid merge",
-            Phase::Sections => "sections",
-            Phase::Contours => "contours",
-            Phase::Slice => "slice",
-            Phase::Render => "render",
-        }
+        self.0
     }
 }
 

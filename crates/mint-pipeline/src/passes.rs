@@ -8,7 +8,7 @@
 //! `threads + 1` results in memory).
 
 use crate::error::PipelineError;
-use crate::progress::{Phase, Progress};
+use crate::progress::Progress;
 use mint_core::grid::Grid;
 use mint_core::primitives::Transform;
 use mint_core::reconstruct::{crossing_to_intercept, SlabResult};
@@ -51,7 +51,7 @@ pub(crate) fn bounds(
 ) -> Result<Option<([f64; 3], [f64; 3])>, PipelineError> {
     let (first, end) = range;
     let n = end - first;
-    progress.start(Phase::Bounds, n);
+    progress.start(crate::progress::BOUNDS, n);
     let per = n.div_ceil(threads as u64).max(1);
     let parts: Vec<Result<([f64; 3], [f64; 3]), PipelineError>> = std::thread::scope(|s| {
         let handles: Vec<_> = (0..threads as u64)
@@ -139,7 +139,7 @@ pub(crate) fn discretize_all(
     let (chunk_tx, chunk_rx) = bounded::<(usize, TriangleChunk)>(threads * 2);
     let (free_tx, free_rx) = bounded::<TriangleChunk>(threads * 3 + 2);
     let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
-    progress.start(Phase::Discretize, expected_faces);
+    progress.start(crate::progress::DISCRETIZE, expected_faces);
     let mut faces = 0u64;
     let mut volumes: Vec<f64> = Vec::new();
     let result: Result<(), PipelineError> = std::thread::scope(|s| {
@@ -234,7 +234,7 @@ pub(crate) fn discretize_direct(
     let stop = std::sync::atomic::AtomicBool::new(false);
     let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
     let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
-    progress.start(Phase::Discretize, end.saturating_sub(first));
+    progress.start(crate::progress::DISCRETIZE, end.saturating_sub(first));
     let mut volumes = vec![0.0f64; chunks as usize];
     let written: Result<(), StoreError> = std::thread::scope(|s| {
         for _ in 0..threads {
@@ -518,7 +518,7 @@ pub(crate) fn surface_area(path: &Path, threads: usize, progress: &dyn Progress)
     if let Some(records) = reader.triangle_records()? {
         let n = records.len();
         let chunks = n.div_ceil(CHUNK_TRIANGLES as u64);
-        progress.start(Phase::Bounds, n);
+        progress.start(crate::progress::BOUNDS, n);
         let next = AtomicU64::new(0);
         let sums = Mutex::new(vec![0.0f64; chunks as usize]);
         let failed: Mutex<Option<mint_io::Error>> = Mutex::new(None);
@@ -547,7 +547,7 @@ pub(crate) fn surface_area(path: &Path, threads: usize, progress: &dyn Progress)
         progress.finish();
         return Ok((n, sums.into_inner().unwrap().iter().sum()));
     }
-    progress.start(Phase::Bounds, reader.info().face_count.unwrap_or(0));
+    progress.start(crate::progress::BOUNDS, reader.info().face_count.unwrap_or(0));
     let (mut faces, mut total) = (0u64, 0.0f64);
     let mut chunk = TriangleChunk::new();
     while reader.next_chunk(&mut chunk)? {

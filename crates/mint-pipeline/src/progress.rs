@@ -4,3 +4,12 @@
 //! same trait.
 
 pub use mint_core::progress::{NoProgress, Phase, Progress};
+
+/// Reading vertex positions to find the bounding box (units: vertices).
+pub const BOUNDS: Phase = Phase::named("bounds");
+/// Streaming faces and discretizing them (units: faces).
+pub const DISCRETIZE: Phase = Phase::named("discretize");
+/// Reconstructing slabs (units: layers).
+pub const RECONSTRUCT: Phase = Phase::named("reconstruct");
+/// Copying the slabs into the output (units: faces).
+pub const WRITE: Phase = Phase::named("write");

@@ -31,7 +31,7 @@
 use crate::error::PipelineError;
 use crate::passes::{bounds, check_cancel, discretize_all, discretize_direct, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, CHUNK_TRIANGLES, FIXED_RESERVE};
 use crate::plan::{OperandPlan, Plan};
-use crate::progress::{Phase, Progress};
+use crate::progress::Progress;
 use crate::scene::{Operand, Scene};
 use crate::workdir::{read_records, read_result, FileSum, SumWriter, TaskBuild};
 use mint_core::grid::Grid;
@@ -640,7 +640,7 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<Re
     let mut loose_edges = 0u64;
     let mut filter = FilterStats::default();
     let mut repair = RepairStats::default();
-    ctx.progress.start(Phase::Reconstruct, (b - a) as u64);
+    ctx.progress.start(crate::progress::RECONSTRUCT, (b - a) as u64);
     reconstruct_ordered(&subs, ctx.threads, &compute, ctx.progress, &mut |res, f, rep, layers| {
         filter += f;
         repair += rep;
@@ -777,7 +777,7 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
     let slabs: Vec<(&str, ReconstructResult)> = (0..ctx.plan.tasks("reconstruct")).map(|t| ctx.final_slab(t)).collect::<Result<_, _>>()?;
     let total_faces: u64 = slabs.iter().map(|(_, s)| s.faces).sum();
     let mut writer = MeshWriter::create(output, format, write)?;
-    ctx.progress.start(Phase::Write, total_faces);
+    ctx.progress.start(crate::progress::WRITE, total_faces);
     for (t, (stage, s)) in slabs.iter().enumerate() {
         let path = crate::workdir::task_dir(&ctx.dir, stage, t as u32).join("vertices.bin");
         read_records::<24>(&path, s.vertices_file.unwrap_or(FileSum { len: 0, crc32: 0 }), |b| {

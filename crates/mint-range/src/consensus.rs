@@ -22,7 +22,7 @@ use crate::geom::{add, dot, normalize, scale, Rigid, V3};
 use crate::raycast::RayBvh;
 use crate::scan_mesh::vertex_normals;
 use crate::source::ScanSource;
-use mint_core::progress::{NoProgress, Phase, Progress};
+use mint_core::progress::{NoProgress, Progress};
 use rayon::prelude::*;
 use serde::Serialize;
 use rustc_hash::FxHashMap as HashMap;
@@ -63,7 +63,7 @@ pub fn consensus<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u32; 3]
     consensus_with(positions, faces, scans, poses, opts, &NoProgress)
 }
 
-/// [`consensus`], reporting each scan visited ([`Phase::Consensus`], two
+/// [`consensus`], reporting each scan visited ([`crate::phases::CONSENSUS`], two
 /// passes) and stopping with [`RangeError::Cancelled`] when asked (the
 /// positions are then unchanged).
 pub fn consensus_with<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u32; 3]], scans: &S, poses: &[Rigid], opts: &ConsensusOptions, progress: &dyn Progress) -> Result<ConsensusReport, RangeError> {
@@ -86,7 +86,7 @@ pub fn consensus_with<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u3
         grid.entry(ckey(p)).or_default().push(i as u32);
     }
     let mut normal_sum = vec![[0.0; 3]; positions.len()];
-    progress.start(Phase::Consensus, 2 * poses.len() as u64);
+    progress.start(crate::phases::CONSENSUS, 2 * poses.len() as u64);
     let step = || crate::error::advance(progress);
     for (k, pose) in poses.iter().enumerate() {
         step()?;

@@ -56,7 +56,7 @@
 use crate::error::RangeError;
 use crate::geom::{normalize, tri_normal, Rigid};
 use crate::source::ScanSource;
-use mint_core::progress::{NoProgress, Phase, Progress};
+use mint_core::progress::{NoProgress, Progress};
 use mint_core::reconstruct::crossing_to_intercept;
 use mint_core::signs::SignRule;
 use mint_core::{discretize_triangle, Crossing, Grid, GridSize, Intercept, MARGIN};
@@ -226,7 +226,7 @@ pub fn grid_merge<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &Gri
     grid_merge_with(scans, poses, opts, &NoProgress)
 }
 
-/// [`grid_merge`], reporting each scan visited ([`Phase::GridMerge`]: the
+/// [`grid_merge`], reporting each scan visited ([`crate::phases::GRID_MERGE`]: the
 /// bounding-box pass, then the voting pass) and stopping with
 /// [`RangeError::Cancelled`] between scans when asked.
 pub fn grid_merge_with<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &GridMergeOptions, progress: &dyn Progress) -> Result<crate::Merged<GridMergeReport>, RangeError> {
@@ -239,7 +239,7 @@ pub fn grid_merge_with<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts:
     // 1. The grid around every posed scan vertex in use.
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    progress.start(Phase::GridMerge, 2 * poses.len() as u64);
+    progress.start(crate::phases::GRID_MERGE, 2 * poses.len() as u64);
     let step = || crate::error::advance(progress);
     for (i, pose) in poses.iter().enumerate() {
         step()?;

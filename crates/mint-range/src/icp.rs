@@ -58,7 +58,7 @@ use crate::error::RangeError;
 use crate::geom::{add, cross, dist, dot, normalize, scale, sub, tri_normal, Rigid, V3};
 
 use crate::scan_mesh::ScanMesh;
-use mint_core::progress::{NoProgress, Phase, Progress};
+use mint_core::progress::{NoProgress, Progress};
 use mint_mesh::TriangleBvh;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -226,7 +226,7 @@ pub fn align(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions) -> Resu
 }
 
 /// [`align`], reporting each registration of a scan (phase
-/// [`Phase::Register`]; the refine passes count too) and stopping with
+/// [`crate::phases::REGISTER`]; the refine passes count too) and stopping with
 /// [`RangeError::Cancelled`] between them when asked.
 pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, progress: &dyn Progress) -> Result<AlignResult, RangeError> {
     if scans.len() != initial.len() {
@@ -267,7 +267,7 @@ pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, pr
         Strategy::Anchor => 1,
         Strategy::Growing => 1 + opts.refine_passes,
     };
-    progress.start(Phase::Register, (passes * pending.len()) as u64);
+    progress.start(crate::phases::REGISTER, (passes * pending.len()) as u64);
     let step = || crate::error::advance(progress);
     match opts.strategy {
         Strategy::Anchor => {

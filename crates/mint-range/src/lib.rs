@@ -52,3 +52,17 @@ pub use range_image::RangeImage;
 pub use scan_mesh::{load_scan, load_set, range_image_as_mesh, MeshOptions, ScanMesh};
 pub use scanset::{ScanEntry, ScanSet, SetFormat};
 pub use source::{ScanFiles, ScanSource};
+
+/// The phases this crate reports through `mint_core::progress::Progress`.
+pub mod phases {
+    /// Reading range scans (units: scans).
+    pub const LOAD_SCANS: mint_core::progress::Phase = mint_core::progress::Phase::named("load scans");
+    /// Registering scans by ICP (units: scans).
+    pub const REGISTER: mint_core::progress::Phase = mint_core::progress::Phase::named("register");
+    /// Zippering scans into the model (units: scans).
+    pub const ZIPPER: mint_core::progress::Phase = mint_core::progress::Phase::named("zipper");
+    /// Consensus geometry, two passes over the scans (units: scan passes).
+    pub const CONSENSUS: mint_core::progress::Phase = mint_core::progress::Phase::named("consensus");
+    /// Discretizing scans on the grid merge's grid (units: scans).
+    pub const GRID_MERGE: mint_core::progress::Phase = mint_core::progress::Phase::named("grid merge");
+}

@@ -114,7 +114,7 @@ impl ScanFiles {
     }
 
     /// [`ScanFiles::open`], reporting each scan read
-    /// ([`Phase::LoadScans`](mint_core::progress::Phase::LoadScans)) and
+    /// ([`crate::phases::LOAD_SCANS`](crate::phases::LOAD_SCANS)) and
     /// stopping with [`RangeError::Cancelled`] when asked.
     pub fn open_with(set: &crate::ScanSet, set_path: &Path, opts: &MeshOptions, budget: usize, progress: &dyn mint_core::progress::Progress) -> Result<ScanFiles, RangeError> {
         for e in &set.entries {
@@ -130,7 +130,7 @@ impl ScanFiles {
             budget,
             cache: Mutex::new(Cache { scans: vec![None; n], sizes: vec![0; n], last_used: vec![0; n], ..Default::default() }),
         };
-        progress.start(mint_core::progress::Phase::LoadScans, n as u64);
+        progress.start(crate::phases::LOAD_SCANS, n as u64);
         for i in 0..n {
             if progress.cancelled() {
                 return Err(RangeError::Cancelled);

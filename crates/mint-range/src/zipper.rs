@@ -48,7 +48,7 @@
 //! geometry then visits the scans one at a time again.
 
 use crate::consensus::{consensus_with, ConsensusOptions, ConsensusReport};
-use mint_core::progress::{NoProgress, Phase, Progress};
+use mint_core::progress::{NoProgress, Progress};
 use crate::error::RangeError;
 use crate::geom::{add, dist, scale, Rigid, V3};
 use crate::mesh_ops::{compact, fill_small_holes, key, make_manifold, remove_small_components, remove_small_triangles};
@@ -221,7 +221,7 @@ pub fn zipper<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &ZipperO
     zipper_with(scans, poses, opts, &NoProgress)
 }
 
-/// [`zipper`], reporting each scan joined ([`Phase::Zipper`]) and the
+/// [`zipper`], reporting each scan joined ([`crate::phases::ZIPPER`]) and the
 /// consensus passes, and stopping with [`RangeError::Cancelled`] between
 /// scans when asked.
 pub fn zipper_with<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &ZipperOptions, progress: &dyn Progress) -> Result<crate::Merged<ZipperReport>, RangeError> {
@@ -239,7 +239,7 @@ pub fn zipper_with<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts: &Zi
     let s = scans.max_sampling();
     let d = opts.distance_factor * s;
     let mut report = ZipperReport { scans: scans.len(), distance: d, ..Default::default() };
-    progress.start(Phase::Zipper, poses.len() as u64);
+    progress.start(crate::phases::ZIPPER, poses.len() as u64);
     let mut model = Work::from_scan(&*scans.scan(0)?, &poses[0], 0);
     progress.advance(1);
     for (k, pose) in poses.iter().enumerate().skip(1) {

@@ -24,6 +24,11 @@
 
 use glam::DVec3;
 use mint_core::progress::{Phase, Progress};
+
+/// Finding the meshes' joint box (units: vertices).
+pub const BOUNDS_PHASE: Phase = Phase::named("bounds");
+/// Drawing the triangles (units: faces).
+pub const RENDER_PHASE: Phase = Phase::named("render");
 use mint_io::{MeshReader, ReadOptions, TriangleChunk};
 use std::path::{Path, PathBuf};
 
@@ -442,7 +447,7 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
     for path in inputs {
         let r = MeshReader::open(path, read.clone())?;
         let pos = r.positions();
-        progress.start(Phase::Bounds, pos.len() as u64);
+        progress.start(BOUNDS_PHASE, pos.len() as u64);
         let mut at = 0u32;
         while at < pos.len() {
             let to = at.saturating_add(1 << 20).min(pos.len());
@@ -485,7 +490,7 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
         let cams: Vec<Camera> = views.iter().map(|&v| Camera::fit(v, lo, hi, o.width, o.height)).collect();
         summary.scale = cams[0].scale;
         let mut r = MeshReader::open(path, read.clone())?;
-        progress.start(Phase::Render, r.info().face_count.unwrap_or(0));
+        progress.start(RENDER_PHASE, r.info().face_count.unwrap_or(0));
         // Workers draw whole chunks into tiles of their own; the tiles are
         // merged pixel by pixel keeping the nearest depth, and among equal
         // depths the earliest triangle: what one thread drawing in file
