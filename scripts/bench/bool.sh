@@ -23,7 +23,7 @@ for F in 1000000 10000000; do
     MO="$WORK/bool-mint.ply"; LO="$WORK/bool-manifold.ply"
     J=$(/usr/bin/time -f '%M' -o "$WORK/rss" "$MINT" bool $OP "$A" "$B" "$MO" --cells "$CELLS" --json --quiet)
     MRSS=$(cat "$WORK/rss")
-    L=$(/usr/bin/time -f '%M' -o "$WORK/rss" "$VENV/bin/python" "$ROOT/scripts/bench/manifold_bool.py" "$A" "$B" $OP "$LO" | tail -1)
+    L=$(/usr/bin/time -f '%M' -o "$WORK/rss" "$VENV/bin/python" "$ROOT/tools/peers/manifold_bool.py" "$A" "$B" $OP "$LO" | tail -1)
     LRSS=$(tail -1 "$WORK/rss")
     MW=$("$MINT" check "$MO" --json | python3 -c "import json,sys; j=json.load(sys.stdin); print('watertight' if j['watertight'] else 'NOT watertight', '%.5f' % j['signed_volume'])")
     LW=$("$MINT" check "$LO" --json | python3 -c "import json,sys; j=json.load(sys.stdin); print('watertight' if j['watertight'] else 'NOT watertight', '%.5f' % j['signed_volume'])")

@@ -29,7 +29,7 @@ for IN in "${INPUTS[@]}"; do
     J=$("$MINT" decimate "$IN" "$WORK/dm.ply" --faces "$T" --json --quiet)
     read -r ms mh <<< "$(python3 -c "import json,sys; j=json.loads(sys.argv[1]); print(f\"{j['seconds_total']:.2f} {j['peak_heap_bytes']/2**20:.0f}MiB\")" "$J")"
     read -r me mx <<< "$(err "$IN" "$WORK/dm.ply")"
-    K=$("$VENV/bin/python" "$ROOT/scripts/bench/meshlab_decimate.py" "$IN" "$WORK/dl.ply" "$T")
+    K=$("$VENV/bin/python" "$ROOT/tools/peers/meshlab_decimate.py" "$IN" "$WORK/dl.ply" "$T")
     read -r ls lr <<< "$(python3 -c "import json,sys; j=json.loads(sys.argv[1]); print(f\"{j['seconds']:.2f} {j['peak_rss_kib']/1024:.0f}MiB\")" "$K")"
     read -r le lx <<< "$(err "$IN" "$WORK/dl.ply")"
     printf '%-16s %10s %9s | %8s %9s %10s %10s | %8s %9s %10s %10s\n' "$(basename "$IN")" "$F" "$T" "$ms" "$mh" "$me" "$mx" "$ls" "$lr" "$le" "$lx"

@@ -29,7 +29,7 @@ for IN in "${INPUTS[@]}"; do
   J=$(/usr/bin/time -f '%M' -o "$WORK/rss" "$MINT" resample "$IN" "$MO" --cells "$CELLS" --json --quiet)
   MRSS=$(cat "$WORK/rss")
   H=$(python3 -c "import json,sys; print(json.loads(sys.argv[1])['cell_size'])" "$J")
-  L=$( (ulimit -v 16000000; /usr/bin/time -f '%M' -o "$WORK/rss" "$VENV/bin/python" "$ROOT/scripts/bench/meshlab_resample.py" "$IN" "$LO" "$H" 2>/dev/null | tail -1) || true)
+  L=$( (ulimit -v 16000000; /usr/bin/time -f '%M' -o "$WORK/rss" "$VENV/bin/python" "$ROOT/tools/peers/meshlab_resample.py" "$IN" "$LO" "$H" 2>/dev/null | tail -1) || true)
   LRSS=$(tail -1 "$WORK/rss")
   [ -n "$L" ] || L='{"seconds": -1, "faces": 0}'
   MW=$("$MINT" check "$MO" --json | python3 -c "import json,sys; j=json.load(sys.stdin); print('watertight' if j['watertight'] else 'NOT watertight (%d boundary, %d non-manifold edges)' % (j['boundary_edges'], j['non_manifold_edges']))")
