@@ -67,6 +67,9 @@ fn check_counts_exactly_the_defects_the_scan_sidecar_lists() {
 #[test]
 fn a_five_million_face_mesh_streams_through_convert_under_64_mib_identically() {
     if !has_prlimit() {
+        if std::env::var_os("MINT_REQUIRE_DATA").is_some_and(|v| v != "0") {
+            panic!("MINT_REQUIRE_DATA is set (CI): prlimit (util-linux) is not installed");
+        }
         eprintln!("skipping: prlimit (util-linux) is not installed");
         return;
     }
@@ -183,14 +186,11 @@ fn ctrl_c_stops_a_run_and_removes_its_temporary_files() {
     while leftovers(&work, &[]).is_empty() && t0.elapsed().as_secs() < 30 {
         std::thread::sleep(std::time::Duration::from_millis(5));
     }
+    // The test is of an interrupted run: it fails if the run was over.
+    assert!(child.try_wait().unwrap().is_none(), "the run ended before Ctrl-C could be sent");
     unsafe_sigint(child.id());
     let status = child.wait().unwrap();
-    if status.success() {
-        eprintln!("note: the run finished before Ctrl-C arrived; checking the success path instead");
-        assert_eq!(leftovers(&work, &[&out]), Vec::<PathBuf>::new());
-        return;
-    }
-    assert_eq!(status.code(), Some(130), "exit status {status:?}");
+    assert_eq!(status.code(), Some(130), "exit status {status:?} (a 20M-face run takes seconds; it should have been interrupted)");
     assert_eq!(leftovers(&work, &[]), Vec::<PathBuf>::new(), "temporary files left after Ctrl-C");
 }
 
@@ -427,7 +427,7 @@ fn render_draws_a_sphere_with_its_analytic_silhouette_and_the_same_bytes_every_t
 #[test]
 fn decimate_hits_its_target_keeps_closed_inputs_closed_and_errs_less_with_more_faces() {
     let d = tempfile::tempdir().unwrap();
-    let mut last_error = f64::INFINITY;
+    let mut last_error;
     for (shape, genus) in [("torus", 1), ("genus", 3), ("sphere", 0)] {
         let input = d.path().join(format!("{shape}.ply"));
         ok(&["gen", shape, p(&input), "--faces", "200000"]);
