@@ -3,26 +3,28 @@
 //! snapped onto the grid lattice (vertices on nodes, edges on lines, faces on
 //! planes). The output must always be a closed, oriented 2-manifold without
 //! zero-area faces, with zero non-canonical cells.
+//!
+//! The geometry itself is drawn (points on small integer lattices, per-face
+//! edits as flags), not a seed, so that proptest shrinks a failure to a few
+//! points; failures found are kept in `proptest-regressions/`.
 
 use mint_core::reconstruct::resample_in_core;
 use mint_core::{Grid, GridSize, TriMesh};
 use mint_testkit::hull::{convex_hull, soup};
 use mint_testkit::topology::check_closed_oriented;
-use mint_testkit::Rng;
 use proptest::prelude::*;
 
-/// A random convex hull around `centre`, optionally snapped to multiples of `snap`.
-fn random_hull(rng: &mut Rng, centre: [f64; 3], radius: f64, n: usize, snap: Option<f64>) -> Option<Vec<[[f64; 3]; 3]>> {
-    let pts: Vec<[f64; 3]> = (0..n)
-        .map(|_| {
-            let p = [0, 1, 2].map(|d| centre[d] + rng.range(-radius, radius));
-            match snap {
-                Some(s) => p.map(|x| (x / s).round() * s),
-                None => p,
-            }
-        })
-        .collect();
-    convex_hull(&pts).map(|m| soup(&m))
+/// Points of a lattice of `steps` per unit in [-1, 1]³ (`steps` = 1024 is
+/// all but continuous; 2 or 4 put vertices on grid nodes and half-cells).
+fn lattice_points(n: std::ops::Range<usize>, steps: i32) -> impl Strategy<Value = Vec<[i32; 3]>> {
+    prop::collection::vec([-steps..=steps, -steps..=steps, -steps..=steps], n)
+}
+
+/// The convex hull of `pts` (lattice units of `1/steps`) scaled by `radius`
+/// around `centre`, as a triangle soup.
+fn hull_of(pts: &[[i32; 3]], steps: i32, centre: [f64; 3], radius: f64) -> Option<Vec<[[f64; 3]; 3]>> {
+    let p: Vec<[f64; 3]> = pts.iter().map(|q| [0, 1, 2].map(|d| centre[d] + radius * q[d] as f64 / steps as f64)).collect();
+    convex_hull(&p).map(|m| soup(&m))
 }
 
 fn resample_and_check(tris: &[[[f64; 3]; 3]], grid: &Grid) -> Result<(), TestCaseError> {
@@ -52,9 +54,8 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 200, .. ProptestConfig::default() })]
 
     #[test]
-    fn random_convex_hulls_resample_watertight(seed in any::<u64>(), cells in 50u64..20000, axis in 0usize..3, off in 0.0f64..1.0) {
-        let mut rng = Rng(seed);
-        if let Some(tris) = random_hull(&mut rng, [0.0; 3], 1.0, 30, None) {
+    fn random_convex_hulls_resample_watertight(pts in lattice_points(4..30, 1024), cells in 50u64..20000, axis in 0usize..3, off in 0.0f64..1.0) {
+        if let Some(tris) = hull_of(&pts, 1024, [0.0; 3], 1.0) {
             let (lo, hi) = bounds(&tris);
             let g = Grid::around(lo, hi, GridSize::Cells(cells), [off, off * 0.7, off * 0.3], Some(axis)).unwrap();
             resample_and_check(&tris, &g)?;
@@ -62,12 +63,10 @@ proptest! {
     }
 
     #[test]
-    fn unions_of_disjoint_hulls_resample_watertight(seed in any::<u64>(), cells in 200u64..30000, axis in 0usize..3) {
-        let mut rng = Rng(seed);
+    fn unions_of_disjoint_hulls_resample_watertight(hulls in prop::collection::vec(lattice_points(4..20, 1024), 1..4), cells in 200u64..30000, axis in 0usize..3) {
         let mut tris = Vec::new();
-        for k in 0..4 {
-            let c = [3.0 * k as f64, rng.range(-0.3, 0.3), rng.range(-0.3, 0.3)];
-            if let Some(t) = random_hull(&mut rng, c, 1.0, 20, None) {
+        for (k, pts) in hulls.iter().enumerate() {
+            if let Some(t) = hull_of(pts, 1024, [3.0 * k as f64, 0.0, 0.0], 1.0) {
                 tris.extend(t);
             }
         }
@@ -78,15 +77,16 @@ proptest! {
     }
 
     #[test]
-    fn hulls_snapped_onto_the_lattice_resample_watertight(seed in any::<u64>(), snap_half in any::<bool>(), axis in 0usize..3) {
-        // Cell size 1 with an integer-aligned grid: snapped vertices sit on
-        // nodes (snap 1) or on half-cells (snap 0.5): edges run along grid
-        // lines and faces along grid planes all the time.
-        let mut rng = Rng(seed);
-        let snap = if snap_half { 0.5 } else { 1.0 };
+    fn hulls_snapped_onto_the_lattice_resample_watertight(a in lattice_points(4..25, 8), b in lattice_points(4..25, 8), snap_half in any::<bool>(), axis in 0usize..3) {
+        // Cell size 1 with an integer-aligned grid: vertices sit on nodes
+        // (radius 4 on a lattice of 4 steps: unit steps) or on half-cells
+        // (8 steps: half units): edges run along grid lines and faces along
+        // grid planes all the time.
+        let steps = if snap_half { 8 } else { 4 };
+        let clamp = |v: &Vec<[i32; 3]>| v.iter().map(|p| p.map(|x| x.clamp(-steps, steps))).collect::<Vec<_>>();
         let mut tris = Vec::new();
-        for k in 0..2 {
-            if let Some(t) = random_hull(&mut rng, [10.0 * k as f64, 0.0, 0.0], 4.0, 25, Some(snap)) {
+        for (k, pts) in [clamp(&a), clamp(&b)].iter().enumerate() {
+            if let Some(t) = hull_of(pts, steps, [10.0 * k as f64, 0.0, 0.0], 4.0) {
                 tris.extend(t);
             }
         }
@@ -104,30 +104,41 @@ proptest! {
 /// Random triangle soups: hull pieces with random orientation, random holes
 /// (faces dropped), overlapping copies, stray triangles. Under every robust
 /// sign rule the output is a closed, oriented 2-manifold without zero-area
-/// faces, and nothing panics.
-fn random_soup(rng: &mut Rng) -> Vec<[[f64; 3]; 3]> {
+/// faces, and nothing panics. Drawn as data: the hulls' lattice points (a
+/// quarter of them snapped to quarter units), one edit per face (0 keep,
+/// 1 drop, 2 flip, 3 keep and add a shifted copy), and the strays' corners.
+fn soup_strategy() -> impl Strategy<Value = (Vec<(Vec<[i32; 3]>, bool)>, Vec<u8>, Vec<[[i32; 3]; 3]>)> {
+    (
+        prop::collection::vec((lattice_points(4..25, 64), prop::bool::weighted(0.3)), 1..4),
+        prop::collection::vec(prop::sample::select(vec![0u8, 0, 0, 0, 0, 0, 1, 2, 2, 3]), 0..200),
+        prop::collection::vec([[-64i32..=64, -64..=64, -64..=64], [-64i32..=64, -64..=64, -64..=64], [-64i32..=64, -64..=64, -64..=64]], 0..5),
+    )
+}
+
+fn soup_of(data: &(Vec<(Vec<[i32; 3]>, bool)>, Vec<u8>, Vec<[[i32; 3]; 3]>)) -> Vec<[[f64; 3]; 3]> {
+    let (hulls, edits, strays) = data;
     let mut tris = Vec::new();
-    for k in 0..3 {
-        let c = [2.5 * k as f64 + rng.range(-0.5, 0.5), rng.range(-0.5, 0.5), 0.0];
-        let snap = if rng.f64() < 0.3 { Some(0.25) } else { None };
-        if let Some(t) = random_hull(rng, c, 1.0, 25, snap) {
+    let mut e = 0;
+    for (k, (pts, snap)) in hulls.iter().enumerate() {
+        let pts: Vec<[i32; 3]> = if *snap { pts.iter().map(|p| p.map(|x| x / 16 * 16)).collect() } else { pts.clone() };
+        if let Some(t) = hull_of(&pts, 64, [2.5 * k as f64, 0.0, 0.0], 1.0) {
             for tri in t {
-                let r = rng.f64();
-                if r < 0.1 {
-                    continue; // hole
-                }
-                let tri = if rng.f64() < 0.3 { [tri[0], tri[2], tri[1]] } else { tri };
-                tris.push(tri);
-                if r > 0.95 {
-                    // an overlapping, slightly shifted copy
-                    tris.push(tri.map(|p| [p[0] + 0.01, p[1], p[2] - 0.01]));
+                let edit = if edits.is_empty() { 0 } else { edits[e % edits.len()] };
+                e += 1;
+                match edit {
+                    1 => continue,
+                    2 => tris.push([tri[0], tri[2], tri[1]]),
+                    3 => {
+                        tris.push(tri);
+                        tris.push(tri.map(|p| [p[0] + 0.01, p[1], p[2] - 0.01]));
+                    }
+                    _ => tris.push(tri),
                 }
             }
         }
     }
-    for _ in 0..5 {
-        let p = [rng.range(-1.0, 6.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)];
-        tris.push([p, [p[0] + rng.range(-0.5, 0.5), p[1] + 0.3, p[2]], [p[0], p[1], p[2] + rng.range(-0.5, 0.5)]]);
+    for s in strays {
+        tris.push(s.map(|p| [3.0 * p[0] as f64 / 64.0 + 2.5, p[1] as f64 / 64.0, p[2] as f64 / 64.0]));
     }
     tris
 }
@@ -136,11 +147,10 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 150, .. ProptestConfig::default() })]
 
     #[test]
-    fn random_soups_always_give_closed_manifolds_under_robust_rules(seed in any::<u64>(), cells in 100u64..20000, rule_pick in 0usize..3) {
+    fn random_soups_always_give_closed_manifolds_under_robust_rules(data in soup_strategy(), cells in 100u64..20000, rule_pick in 0usize..3) {
         use mint_core::robust::resample_in_core_with;
         use mint_core::signs::SignRule;
-        let mut rng = Rng(seed);
-        let tris = random_soup(&mut rng);
+        let tris = soup_of(&data);
         prop_assume!(!tris.is_empty());
         let (lo, hi) = bounds(&tris);
         let g = Grid::around(lo, hi, GridSize::Cells(cells), [0.0; 3], None).unwrap();
@@ -157,12 +167,11 @@ proptest! {
     /// With holes left open (`--max-hole`), random soups still never give a
     /// non-manifold edge or vertex, nor an inconsistently oriented edge.
     #[test]
-    fn random_soups_with_open_holes_stay_manifold(seed in any::<u64>(), cells in 500u64..20000, max_hole in 1u32..6) {
+    fn random_soups_with_open_holes_stay_manifold(data in soup_strategy(), cells in 500u64..20000, max_hole in 1u32..6) {
         use mint_core::holes::open_cells;
         use mint_core::reconstruct::crossing_to_intercept;
         use mint_core::robust::{census_plane, reconstruct_slab_solids, Expr};
-        let mut rng = Rng(seed);
-        let tris = random_soup(&mut rng);
+        let tris = soup_of(&data);
         prop_assume!(!tris.is_empty());
         let (lo, hi) = bounds(&tris);
         let g = Grid::around(lo, hi, GridSize::Cells(cells), [0.0; 3], None).unwrap();
