@@ -7,6 +7,10 @@
 pub mod alloc;
 mod commands;
 mod contour_cmds;
+mod gen_cmds;
+mod grid_cmds;
+mod mesh_cmds;
+mod picture_cmds;
 mod jobs;
 mod paths;
 mod range_cmds;
