@@ -9,17 +9,17 @@ pub fn mint() -> Command {
     Command::new(env!("CARGO_BIN_EXE_mint"))
 }
 
-fn run(args: &[&str]) -> Output {
+pub fn run(args: &[&str]) -> Output {
     mint().args(args).output().unwrap()
 }
 
-fn ok(args: &[&str]) -> String {
+pub fn ok(args: &[&str]) -> String {
     let o = run(args);
     assert!(o.status.success(), "mint {args:?} failed: {}", String::from_utf8_lossy(&o.stderr));
     String::from_utf8(o.stdout).unwrap()
 }
 
-fn p(path: &Path) -> &str {
+pub fn p(path: &Path) -> &str {
     path.to_str().unwrap()
 }
 

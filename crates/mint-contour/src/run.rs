@@ -297,16 +297,9 @@ pub fn slice_file(input: &Path, output: &Path, sections: u32, axis: usize, progr
     })
 }
 
-/// Reads a whole mesh: positions and faces.
+/// Reads a whole mesh: positions and faces (`mint_io::read_mesh`).
 pub fn load_mesh(path: &Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>), ContourError> {
-    let mut reader = MeshReader::open(path, ReadOptions { resolve_positions: true, ..Default::default() })?;
-    let positions: Vec<[f64; 3]> = (0..reader.vertex_count()).map(|i| reader.vertex(i)).collect();
-    let mut faces = Vec::new();
-    let mut chunk = TriangleChunk::new();
-    while reader.next_chunk(&mut chunk)? {
-        faces.extend_from_slice(&chunk.indices);
-    }
-    Ok((positions, faces))
+    Ok(mint_io::read_mesh(path)?)
 }
 
 /// `mint optimize`: the normal optimizer from `input` to `output`.

@@ -46,11 +46,13 @@ pub fn read_info(path: &Path) -> Result<MeshInfo, Error> {
 
 /// Reads a whole mesh into memory: every vertex position and every
 /// triangle (polygons fanned, strips unrolled, as the streaming reader
-/// delivers them). For the in-core tools (check, distance, simplify); the
-/// out-of-core pipelines stream instead. Nothing is reserved from the
-/// header's counts, so a lying header costs nothing before it is caught.
+/// delivers them). For the in-core tools (simplify, contours, render's
+/// reference); the out-of-core pipelines stream instead. A vertex used by a
+/// face must be finite (the streaming reader's check). Nothing is reserved
+/// from the header's counts, so a lying header costs nothing before it is
+/// caught.
 pub fn read_mesh(path: &Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>), Error> {
-    let mut reader = MeshReader::open(path, ReadOptions { resolve_positions: false, ..Default::default() })?;
+    let mut reader = MeshReader::open(path, ReadOptions::default())?;
     let positions: Vec<[f64; 3]> = (0..reader.vertex_count()).map(|i| reader.vertex(i)).collect();
     let mut faces = Vec::new();
     let mut chunk = TriangleChunk::new();
