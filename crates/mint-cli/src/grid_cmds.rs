@@ -58,7 +58,7 @@ pub(crate) fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::Resa
     crate::paths::check_output(&a.output, &[&a.input])?;
     let mem = opts.mem_bytes;
     let tmp_root = a.tmp.clone().unwrap_or_else(|| a.output.parent().filter(|p| !p.as_os_str().is_empty()).map(PathBuf::from).unwrap_or_else(|| PathBuf::from(".")));
-    let (input, _range_mesh) = resample_input(&a.input, a.work.as_deref(), &tmp_root)?;
+    let (input, _range_mesh) = resample_input(&a.input, a.staged.work.as_deref(), &tmp_root)?;
     let bars = Bars::new(a.quiet || a.json);
     let mut summary = resample(&input, &a.output, &opts, &bars)?;
     summary.input = a.input.display().to_string();

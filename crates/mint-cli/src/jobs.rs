@@ -44,22 +44,8 @@ pub struct ResampleArgs {
     /// Force slabs of K cell layers (for tests and tuning); without it, --mem decides.
     #[arg(long, value_name = "K")]
     pub slab: Option<u32>,
-    /// Keep the run's stages in DIR: a run killed at any moment (crash,
-    /// kill -9, reboot) resumes where it stopped when run again with the same
-    /// DIR, after checking that the inputs and options are the same. DIR is
-    /// kept at the end (remove it yourself). [default: a temporary directory,
-    /// removed at the end]
-    #[arg(long, value_name = "DIR")]
-    pub work: Option<PathBuf>,
-    /// Split the reading of the input's faces into P parts (one task each;
-    /// binary PLY and binary STL split, other formats are read whole by the
-    /// first part). The output is the same for any P.
-    #[arg(long, value_name = "P", default_value_t = 1)]
-    pub parts: u32,
-    /// Split the grid into S slabs (one reconstruction task each). The
-    /// output is the same for any S.
-    #[arg(long, value_name = "S", default_value_t = 1)]
-    pub slabs: u32,
+    #[command(flatten)]
+    pub staged: StagedArgs,
     /// How crossing signs become inside/outside. auto: robust; picks union
     /// (orientation kept, overlapping scans merge) or parity (orientation
     /// ignored, for flipped faces) from a census of all grid lines, and
@@ -123,22 +109,8 @@ pub struct GridArgs {
     /// Force slabs of K cell layers; without it, --mem decides.
     #[arg(long, value_name = "K")]
     pub slab: Option<u32>,
-    /// Keep the run's stages in DIR: a run killed at any moment (crash,
-    /// kill -9, reboot) resumes where it stopped when run again with the same
-    /// DIR, after checking that the inputs and options are the same. DIR is
-    /// kept at the end (remove it yourself). [default: a temporary directory,
-    /// removed at the end]
-    #[arg(long, value_name = "DIR")]
-    pub work: Option<PathBuf>,
-    /// Split the reading of the input's faces into P parts (one task each;
-    /// binary PLY and binary STL split, other formats are read whole by the
-    /// first part). The output is the same for any P.
-    #[arg(long, value_name = "P", default_value_t = 1)]
-    pub parts: u32,
-    /// Split the grid into S slabs (one reconstruction task each). The
-    /// output is the same for any S.
-    #[arg(long, value_name = "S", default_value_t = 1)]
-    pub slabs: u32,
+    #[command(flatten)]
+    pub staged: StagedArgs,
     /// Shift the grid by fractions of a cell, e.g. 0.5,0,0 [default: 0,0,0].
     #[arg(long, value_parser = parse_triple, hide = true)]
     pub grid_offset: Option<[f64; 3]>,
@@ -237,9 +209,9 @@ pub(crate) fn resample_options(a: &ResampleArgs) -> Result<ResampleOptions> {
             SignsArg::Parity => mint_core::signs::SignRule::Parity,
         },
         max_hole: if a.close_all { None } else { Some(a.max_hole) },
-        work_dir: a.work.clone(),
-        parts: a.parts,
-        slabs: a.slabs,
+        work_dir: a.staged.work.clone(),
+        parts: a.staged.parts,
+        slabs: a.staged.slabs,
     })
 }
 
@@ -381,9 +353,9 @@ pub(crate) fn grid_options(g: &GridArgs) -> Result<ResampleOptions> {
         tmp_dir: g.tmp.clone(),
         slab_layers: g.slab,
         grid_offset: g.grid_offset.unwrap_or([0.0; 3]),
-        work_dir: g.work.clone(),
-        parts: g.parts,
-        slabs: g.slabs,
+        work_dir: g.staged.work.clone(),
+        parts: g.staged.parts,
+        slabs: g.staged.slabs,
         max_hole: None,
         ..Default::default()
     })
@@ -440,4 +412,26 @@ pub(crate) fn scene_inputs<'a>(path: &'a std::path::Path, scene: &'a mint_pipeli
         }
     }
     v
+}
+
+/// How a run is staged: the work directory that makes it resumable, and its
+/// split into parts and slabs (shared by resample, bool, csg, stage, slurm).
+#[derive(Args, Debug, Clone, Default)]
+pub struct StagedArgs {
+    /// Keep the run's stages in DIR: a run killed at any moment (crash,
+    /// kill -9, reboot) resumes where it stopped when run again with the same
+    /// DIR, after checking that the inputs and options are the same. DIR is
+    /// kept at the end (remove it yourself). [default: a temporary directory,
+    /// removed at the end]
+    #[arg(long, value_name = "DIR")]
+    pub work: Option<PathBuf>,
+    /// Split the reading of the input's faces into P parts (one task each;
+    /// binary PLY and binary STL split, other formats are read whole by the
+    /// first part). The output is the same for any P.
+    #[arg(long, value_name = "P", default_value_t = 1)]
+    pub parts: u32,
+    /// Split the grid into S slabs (one reconstruction task each). The
+    /// output is the same for any S.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    pub slabs: u32,
 }

@@ -88,7 +88,7 @@ fn job_of(c: &JobCommand) -> Result<(Job, ResampleOptions, PathBuf, bool, bool)>
     Ok(match c {
         JobCommand::Resample(a) => {
             let opts = resample_options(a)?;
-            let Some(work) = &a.work else { bail!("a staged run needs --work DIR (a directory every task can reach)") };
+            let Some(work) = &a.staged.work else { bail!("a staged run needs --work DIR (a directory every task can reach)") };
             crate::paths::check_output(&a.output, &[&a.input])?;
             let (input, _) = resample_input(&a.input, Some(work), work)?;
             (Job::Resample { input: abs(&input) }, opts, a.output.clone(), a.json, a.quiet)
