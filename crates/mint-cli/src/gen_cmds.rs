@@ -167,7 +167,7 @@ pub(crate) fn cmd_demo(a: DemoArgs) -> Result<()> {
         tmp: None,
         axis: AxisArg::Auto,
         slab: None,
-        staged: StagedArgs { work: None, parts: 1, slabs: 1 },
+        staged: StagedArgs::default(),
         signs: SignsArg::Auto,
         max_hole: 16,
         close_all: false,

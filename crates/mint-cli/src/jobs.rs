@@ -212,6 +212,7 @@ pub(crate) fn resample_options(a: &ResampleArgs) -> Result<ResampleOptions> {
         work_dir: a.staged.work.clone(),
         parts: a.staged.parts,
         slabs: a.staged.slabs,
+        deref: a.staged.deref.to_deref(),
     })
 }
 
@@ -279,6 +280,10 @@ pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, j
             human_bytes(s.shard_bytes)
         );
         eprintln!("  output       {} vertices, {} faces", s.output_vertices, s.output_faces);
+        if !s.deref.is_empty() {
+            let spilled = if s.deref_spilled_bytes > 0 { format!(" ({} spilled to disk)", human_bytes(s.deref_spilled_bytes)) } else { String::new() };
+            eprintln!("  faces        dereferenced by {}{spilled}", s.deref);
+        }
         if s.sign_rule == "orient" {
             eprintln!("  signs        orient; non-canonical cells {} (left open)", s.non_canonical_cells);
         } else {
@@ -356,6 +361,7 @@ pub(crate) fn grid_options(g: &GridArgs) -> Result<ResampleOptions> {
         work_dir: g.staged.work.clone(),
         parts: g.staged.parts,
         slabs: g.staged.slabs,
+        deref: g.staged.deref.to_deref(),
         max_hole: None,
         ..Default::default()
     })
@@ -434,4 +440,42 @@ pub struct StagedArgs {
     /// output is the same for any S.
     #[arg(long, value_name = "S", default_value_t = 1)]
     pub slabs: u32,
+    /// How each face's vertex indices become positions. mmap: fetch them
+    /// from the mapped vertex array (fast when neighbouring faces use
+    /// neighbouring vertices). sort: Lindstrom-Silva dereferencing, which
+    /// sorts corners by vertex and joins them with the vertex array in one
+    /// sequential pass, spilling to disk beyond --mem (for meshes whose
+    /// vertices are in no spatial order, or larger than RAM). auto: sort when
+    /// a sample of the faces shows poor locality and the positions are larger
+    /// than a cache; the summary says which ran and why. The output is the
+    /// same for every choice.
+    #[arg(long, value_enum, default_value_t = DerefArg::Auto)]
+    pub deref: DerefArg,
+}
+
+/// `--deref`.
+#[derive(ValueEnum, Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum DerefArg {
+    #[default]
+    Auto,
+    Mmap,
+    Sort,
+}
+
+impl DerefArg {
+    pub(crate) fn to_deref(self) -> mint_pipeline::Deref {
+        match self {
+            DerefArg::Auto => mint_pipeline::Deref::Auto,
+            DerefArg::Mmap => mint_pipeline::Deref::Mmap,
+            DerefArg::Sort => mint_pipeline::Deref::Sort,
+        }
+    }
+
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            DerefArg::Auto => "auto",
+            DerefArg::Mmap => "mmap",
+            DerefArg::Sort => "sort",
+        }
+    }
 }

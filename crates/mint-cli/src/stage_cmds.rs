@@ -3,7 +3,7 @@
 //! options are parsed by the same argument groups as `resample`, `bool` and
 //! `csg`, so a staged run accepts every option of a one-process run.
 
-use crate::jobs::{default_mem, grid_options, print_resample_summary, resample_input, resample_options, scene_inputs, BoolArgs, BoolOpArg, CsgArgs, ResampleArgs};
+use crate::jobs::{default_mem, DerefArg, grid_options, print_resample_summary, resample_input, resample_options, scene_inputs, BoolArgs, BoolOpArg, CsgArgs, ResampleArgs};
 use crate::progress::Bars;
 use crate::units::{human_bytes, parse_bytes};
 use anyhow::{bail, Context, Result};
@@ -50,6 +50,9 @@ pub struct RunArgs {
     /// Heap budget of this task [default: the plan's].
     #[arg(long, value_parser = parse_bytes)]
     pub mem: Option<u64>,
+    /// How a discretize task dereferences faces (see `mint resample --help`).
+    #[arg(long, value_enum, default_value_t = DerefArg::Auto)]
+    pub deref: DerefArg,
     /// No progress bars; one line when the task is done.
     #[arg(long, short)]
     pub quiet: bool,
@@ -136,7 +139,7 @@ pub fn cmd_stage(c: StageCommand) -> Result<()> {
         StageCommand::Run(a) => {
             let bars = Bars::new(a.quiet);
             let t = std::time::Instant::now();
-            let topts = mint_pipeline::TaskOptions { threads: a.threads, mem_bytes: a.mem };
+            let topts = mint_pipeline::TaskOptions { threads: a.threads, mem_bytes: a.mem, deref: a.deref.to_deref() };
             let outcome = mint_pipeline::run_task(&a.dir, &a.stage, a.task, &topts, &bars)?;
             match outcome {
                 mint_pipeline::TaskOutcome::AlreadyDone => eprintln!("{} {}: already done", a.stage, a.task),
@@ -185,6 +188,14 @@ pub fn cmd_slurm(a: SlurmArgs) -> Result<()> {
         task_args.extend(["--threads".to_string(), n.to_string()]);
     }
     task_args.extend(["--mem".to_string(), plan.tuning.mem_bytes.to_string()]);
+    let deref = match job_of(&a.job)?.1.deref {
+        mint_pipeline::Deref::Auto => DerefArg::Auto,
+        mint_pipeline::Deref::Mmap => DerefArg::Mmap,
+        mint_pipeline::Deref::Sort => DerefArg::Sort,
+    };
+    if deref != DerefArg::Auto {
+        task_args.extend(["--deref".to_string(), deref.name().to_string()]);
+    }
     let sbatch_args = match &a.sbatch {
         Some(s) => slurm::split_args(s).map_err(|e| anyhow::anyhow!("--sbatch: {e}"))?,
         None => Vec::new(),

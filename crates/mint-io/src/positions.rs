@@ -203,6 +203,12 @@ impl Positions {
         (self.base, recs * self.stride)
     }
 
+    /// True when every coordinate type converts to `f32` without loss
+    /// (`f32` and the 8- and 16-bit integers), so a copy may be kept as f32.
+    pub(crate) fn exact_in_f32(&self) -> bool {
+        self.ty.iter().all(|t| matches!(t, Scalar::F32 | Scalar::I8 | Scalar::U8 | Scalar::I16 | Scalar::U16))
+    }
+
     pub(crate) fn mapped(&self) -> &Mapped {
         &self.map
     }

@@ -145,6 +145,22 @@ impl VertexPositions {
         self.0.get(i)
     }
 
+    /// True when every coordinate is stored as `f32` or a narrower type, so
+    /// that a copy kept as `f32` gives back the same `f64` values.
+    pub fn exact_in_f32(&self) -> bool {
+        self.0.exact_in_f32()
+    }
+
+    /// Bytes the positions span in their file (or spill), records whole.
+    pub fn stored_bytes(&self) -> u64 {
+        self.0.byte_range().1 as u64
+    }
+
+    /// Bytes from one vertex's record to the next (for locality estimates).
+    pub fn stride(&self) -> u64 {
+        (self.stored_bytes() / (self.len().max(1) as u64)).max(1)
+    }
+
     /// The bounding box of vertices `first .. end` (clamped to `len()`),
     /// `Ok(None)` for an empty range, or `Err((i, p))` for the first vertex
     /// `i` whose position `p` is NaN or infinite. A tight loop for the

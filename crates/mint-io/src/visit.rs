@@ -137,6 +137,91 @@ impl TriangleRecords {
         }
     }
 
+    /// Calls `f(k, [a, b, c])` with the vertex indices of every record `k`
+    /// in `first .. end` (clamped), in order, without touching positions.
+    /// Checks what [`TriangleRecords::visit`] checks except finiteness
+    /// (positions are not read): every record is a triangle and every index
+    /// is in range.
+    pub fn visit_indices(&self, first: u64, end: u64, mut f: impl FnMut(u64, [u32; 3])) -> Result<(), Error> {
+        let end = end.min(self.len());
+        if first >= end {
+            return Ok(());
+        }
+        match &self.faces {
+            FixedFaces::Soup { .. } => {
+                for k in first..end {
+                    let v = (3 * k) as u32;
+                    f(k, [v, v + 1, v + 2]);
+                }
+                Ok(())
+            }
+            FixedFaces::Ply { map, element, start, stride, pre, cty, ity, be, .. } => {
+                let data = map.bytes();
+                let nv = self.positions.count() as i64;
+                if !*be && *stride == 13 && *pre == 0 && *cty == Scalar::U8 && matches!(ity, Scalar::U32 | Scalar::I32) {
+                    let bytes = &data[start + first as usize * 13..start + end as usize * 13];
+                    for (i, r) in bytes.chunks_exact(13).enumerate() {
+                        let k = first + i as u64;
+                        let t = [
+                            u32::from_le_bytes([r[1], r[2], r[3], r[4]]),
+                            u32::from_le_bytes([r[5], r[6], r[7], r[8]]),
+                            u32::from_le_bytes([r[9], r[10], r[11], r[12]]),
+                        ];
+                        if r[0] != 3 || t.iter().any(|&v| v as i64 >= nv) {
+                            return Err(self.bad_record(data, k, element, start + k as usize * 13));
+                        }
+                        f(k, t);
+                    }
+                    return Ok(());
+                }
+                for k in first..end {
+                    let at = start + k as usize * stride;
+                    match self.indices_at(&data[at..at + stride], *pre, *cty, *ity, *be) {
+                        Some(t) => f(k, t),
+                        None => return Err(self.bad_record(data, k, element, at)),
+                    }
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The three indices of a generic PLY face record, or `None` when it is
+    /// not a triangle or an index is out of range.
+    fn indices_at(&self, rec: &[u8], pre: usize, cty: Scalar, ity: Scalar, be: bool) -> Option<[u32; 3]> {
+        if cty.read_i64(&rec[pre..], be) != 3 {
+            return None;
+        }
+        let nv = self.positions.count() as i64;
+        let mut t = [0u32; 3];
+        for (c, slot) in t.iter_mut().enumerate() {
+            let v = ity.read_i64(&rec[pre + cty.size() + c * ity.size()..], be);
+            if v < 0 || v >= nv {
+                return None;
+            }
+            *slot = v as u32;
+        }
+        Some(t)
+    }
+
+    /// The error for PLY face record `k` at byte `at`, which
+    /// [`TriangleRecords::visit_indices`] found not a triangle or out of
+    /// range: the same located error [`TriangleRecords::visit`] gives.
+    fn bad_record(&self, data: &[u8], k: u64, element: &str, at: usize) -> Error {
+        let FixedFaces::Ply { stride, pre, cty, ity, be, .. } = &self.faces else { unreachable!() };
+        let rec = &data[at..at + stride];
+        let n = cty.read_i64(&rec[*pre..], *be);
+        if n != 3 {
+            return self.not_triangle(n, k, element, at);
+        }
+        let nv = self.positions.count() as i64;
+        let bad = (0..3)
+            .map(|c| ity.read_i64(&rec[pre + cty.size() + c * ity.size()..], *be))
+            .find(|&v| v < 0 || v >= nv)
+            .unwrap_or(-1);
+        self.reject(Reject::Index(bad), k, element, Some(at as u64))
+    }
+
     fn not_triangle(&self, n: i64, record: u64, element: &str, at: usize) -> Error {
         Error::unsupported(&self.path, format!("a face with {n} corners: a file read in parts must hold only triangles (run it as one part, --parts 1)"))
             .at_element(element)

@@ -92,6 +92,8 @@ pub struct TaskOptions {
     pub threads: usize,
     /// Heap budget; `None`: the plan's.
     pub mem_bytes: Option<u64>,
+    /// How discretize tasks dereference faces.
+    pub deref: crate::deref::Deref,
 }
 
 /// Runs task `task` of `stage` of the plan in `dir`, in this process. A
@@ -131,7 +133,8 @@ pub fn run_task(dir: &Path, stage: &str, task: u32, topts: &TaskOptions, progres
     verify_inputs(&plan)?;
     let scene = plan.job.scene()?;
     let mem = topts.mem_bytes.unwrap_or(plan.tuning.mem_bytes);
-    let ctx = Ctx::new(dir, plan, scene, threads_of(topts.threads), mem, progress);
+    let mut ctx = Ctx::new(dir, plan, scene, threads_of(topts.threads), mem, progress);
+    ctx.deref = topts.deref;
     run_one(&ctx, stage, task)?;
     Ok(TaskOutcome::Ran)
 }
@@ -196,7 +199,8 @@ fn run_job(job: Job, scene: Option<Scene>, output: &Path, opts: &ResampleOptions
         let _ = std::fs::remove_dir_all(task_dir(&dir, "write", 0));
     }
     let stages = plan.stages.clone();
-    let ctx = Ctx::new(&dir, plan, scene, threads, opts.mem_bytes, progress);
+    let mut ctx = Ctx::new(&dir, plan, scene, threads, opts.mem_bytes, progress);
+    ctx.deref = opts.deref;
     let (mut ran, mut resumed) = (0u64, 0u64);
     let mut seconds = std::collections::HashMap::new();
     for stage in &stages {
@@ -250,10 +254,19 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
             mesh_ops.push(j);
         }
     }
+    let mut derefs: Vec<String> = Vec::new();
     for m in parts.iter().flat_map(|p| p.operands.iter().flatten()) {
         s.intercepts_found += m.shards.records();
         s.shard_bytes += m.shards.bytes();
+        if let Some(d) = &m.deref {
+            let line = format!("{}: {}", if d.sort { "sort" } else { "mmap" }, d.reason);
+            if !derefs.contains(&line) {
+                derefs.push(line);
+            }
+        }
+        s.deref_spilled_bytes += m.sort.map_or(0, |st| st.bytes_spilled);
     }
+    s.deref = derefs.join("; ");
     let (rules, census) = ctx.rules()?;
     if let Job::Resample { .. } = plan.job {
         let vol = ctx.faces_and_volume(0)?.1;

@@ -11,6 +11,8 @@
 //! - [`stages`]: the tasks of each stage and the reduces between stages;
 //! - [`passes`]: the parallel passes inside a task (bounds, discretize,
 //!   slab planning, ordered reconstruction);
+//! - [`deref`]: how faces' vertex indices become positions (memory map,
+//!   or Lindstrom–Silva dereferencing by distribution sort);
 //! - [`workdir`]: task directories, atomic commits, checksums;
 //! - [`slurm`]: submitting a plan to a Slurm cluster;
 //! - [`scene`]: the CSG scene format;
@@ -18,6 +20,7 @@
 //!   meshoptimizer's simplifier to a face target.
 
 pub mod decimate;
+pub mod deref;
 pub mod engine;
 pub mod error;
 pub mod options;
@@ -31,6 +34,7 @@ pub mod workdir;
 
 pub use decimate::{decimate, DecimateOptions, DecimateSummary};
 pub use engine::{boolean, csg, plan_run, resample, run_task, status, summarize_dir, RunStatus, StageStatus, TaskOptions, TaskOutcome};
+pub use deref::Deref;
 pub use error::PipelineError;
 pub use options::{default_mem_bytes, ResampleOptions, ResampleSummary};
 pub use plan::{Job, Plan};

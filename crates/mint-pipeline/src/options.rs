@@ -50,6 +50,9 @@ pub struct ResampleOptions {
     /// Slabs the grid is split into (one reconstruct task each). Default 1.
     /// Each slab task still cuts its own work to fit `mem_bytes`.
     pub slabs: u32,
+    /// How face corners are resolved to positions. Default `Auto`. Does
+    /// not change the output.
+    pub deref: crate::deref::Deref,
 }
 
 /// The default heap budget of every command: a quarter of the machine's
@@ -80,6 +83,7 @@ impl Default for ResampleOptions {
             work_dir: None,
             parts: 1,
             slabs: 1,
+            deref: crate::deref::Deref::Auto,
         }
     }
 }
@@ -144,6 +148,10 @@ pub struct ResampleSummary {
     /// they form (what `mint check` counts on the output).
     pub output_boundary_edges: u64,
     pub output_boundary_loops: u64,
+    /// How faces were dereferenced (`mmap` or `sort`) and why, per part
+    /// when parts decided differently; bytes the sort spilled to disk.
+    pub deref: String,
+    pub deref_spilled_bytes: u64,
     /// The work directory of a staged run (`None`: a temporary one).
     pub work_dir: Option<String>,
     /// Tasks run by this process, and tasks found already done (resumed).

@@ -331,6 +331,24 @@ impl<const S: usize> TriangleVisitor for Chunk<'_, S> {
     }
 }
 
+/// Resolved triangles `tris` (each chunk's, in face order): local
+/// coordinates, volume and crossings, exactly as the direct path computes
+/// them triangle by triangle (so the same bits).
+pub(crate) fn discretize_slice(tris: &[[[f64; 3]; 3]], axis: usize, local: &LocalMap, xf: Option<&Transform>, nb: u32, recs: &mut Vec<Intercept>, volume: &mut f64) {
+    #[inline(never)]
+    fn run<const S: usize>(tris: &[[[f64; 3]; 3]], local: &LocalMap, xf: Option<&Transform>, nb: u32, recs: &mut Vec<Intercept>, volume: &mut f64) {
+        for p in tris {
+            triangle::<S>(p, local, xf, nb, recs, volume);
+        }
+    }
+    match (axis, xf) {
+        (0, None) => run::<0>(tris, local, None, nb, recs, volume),
+        (1, None) => run::<1>(tris, local, None, nb, recs, volume),
+        (_, None) => run::<2>(tris, local, None, nb, recs, volume),
+        (_, Some(t)) => run::<3>(tris, local, Some(t), nb, recs, volume),
+    }
+}
+
 /// One triangle: local coordinates, volume, crossings.
 #[inline(always)]
 fn triangle<const S: usize>(p: &[[f64; 3]; 3], local: &LocalMap, xf: Option<&Transform>, nb: u32, recs: &mut Vec<Intercept>, v: &mut f64) {
@@ -351,14 +369,14 @@ fn triangle<const S: usize>(p: &[[f64; 3]; 3], local: &LocalMap, xf: Option<&Tra
 
 /// [`Grid::to_local`] with its axes and scale taken out of the loop (the
 /// same arithmetic, so the same bits).
-struct LocalMap {
+pub(crate) struct LocalMap {
     ax: [usize; 3],
     origin: [f64; 3],
     inv: f64,
 }
 
 impl LocalMap {
-    fn new(grid: &Grid) -> LocalMap {
+    pub(crate) fn new(grid: &Grid) -> LocalMap {
         let ax = grid.local_axes();
         LocalMap { ax, origin: ax.map(|a| grid.origin[a]), inv: 1.0 / grid.cell }
     }

@@ -29,6 +29,7 @@
 //! memory or task order.
 
 use crate::error::PipelineError;
+use crate::deref::{choose, discretize_sorted, Deref, DerefChoice, Faces, SortStats};
 use crate::passes::{bounds, check_cancel, discretize_all, discretize_direct, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, CHUNK_TRIANGLES, FIXED_RESERVE};
 use crate::plan::{OperandPlan, Plan};
 use crate::progress::Progress;
@@ -61,6 +62,11 @@ pub struct MeshPart {
     /// Six times the signed volume of each chunk of faces, in grid units.
     pub chunk_volumes6: Vec<f64>,
     pub shards: ShardManifest,
+    /// How the faces were dereferenced, and what the sort did.
+    #[serde(default)]
+    pub deref: Option<DerefChoice>,
+    #[serde(default)]
+    pub sort: Option<SortStats>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -133,6 +139,8 @@ pub struct Ctx<'a> {
     pub scene: Scene,
     pub threads: usize,
     pub mem_bytes: u64,
+    /// How discretize tasks dereference faces (does not change the output).
+    pub deref: Deref,
     pub progress: &'a dyn Progress,
     grid: OnceCell<Grid>,
     parts: OnceCell<Vec<DiscretizeResult>>,
@@ -159,6 +167,7 @@ impl<'a> Ctx<'a> {
             scene,
             threads: threads.max(1),
             mem_bytes,
+            deref: Deref::Auto,
             progress,
             grid: OnceCell::new(),
             parts: OnceCell::new(),
@@ -180,6 +189,11 @@ impl<'a> Ctx<'a> {
 
     fn read_options(&self) -> ReadOptions {
         ReadOptions { chunk_triangles: CHUNK_TRIANGLES, spill_dir: Some(self.dir.clone()), resolve_positions: false }
+    }
+
+    /// Heap budget of a sorted dereference.
+    fn sort_budget(&self) -> u64 {
+        self.mem_bytes.saturating_sub(FIXED_RESERVE).max(16 << 20)
     }
 
     /// Heap budget of one sub-slab in flight.
@@ -533,10 +547,22 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
             Some(_) => reader.triangle_records()?,
             None => None,
         };
+        let positions = reader.positions();
+        let choice = choose(ctx.deref, direct.as_ref(), &positions, range);
         let mut result = None;
+        let mut sort_stats = None;
         if let Some(records) = &direct {
             let mut writer = ShardWriter::create(&make_dir(&dir)?, ns + 1);
-            match discretize_direct(records, range, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j)) {
+            let run = if choice.sort {
+                let faces = Faces::Records { records, first: range.0, end: range.1 };
+                discretize_sorted(faces, &positions, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, ctx.sort_budget()).map(|(n, v, st)| {
+                    sort_stats = Some(st);
+                    (n, v)
+                })
+            } else {
+                discretize_direct(records, range, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j))
+            };
+            match run {
                 Ok(r) => result = Some((r, writer)),
                 Err(PipelineError::Io(e)) if ctx.plan.parts == 1 && e.kind() == mint_io::ErrorKind::Unsupported => {
                     drop(writer);
@@ -551,11 +577,19 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
                 let mut reader = if ctx.plan.parts > 1 && split_faces.is_some() { MeshReader::open_range(path, ctx.read_options(), range.0, range.1)? } else { reader };
                 let expected = if range.1 == u64::MAX { reader.info().face_count.unwrap_or(0) } else { range.1 - range.0 };
                 let mut writer = ShardWriter::create(&make_dir(&dir)?, ns + 1);
-                (discretize_all(&mut reader, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), expected)?, writer)
+                let r = if choice.sort {
+                    let positions = reader.positions();
+                    let (n, v, st) = discretize_sorted(Faces::Reader(&mut reader), &positions, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, ctx.sort_budget())?;
+                    sort_stats = Some(st);
+                    (n, v)
+                } else {
+                    discretize_all(&mut reader, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), expected)?
+                };
+                (r, writer)
             }
         };
         let shards = writer.finish()?;
-        operands.push(Some(MeshPart { faces, chunk_volumes6, shards }));
+        operands.push(Some(MeshPart { faces, chunk_volumes6, shards, deref: Some(choice), sort: sort_stats }));
         check_cancel(ctx.progress)?;
     }
     Ok(DiscretizeResult { operands })

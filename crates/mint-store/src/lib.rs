@@ -20,6 +20,9 @@
 //! The store does not own its directory: the staged engine (mint-pipeline)
 //! decides where shards live and when they are removed.
 
+pub mod buckets;
+
+pub use buckets::{Bucket, BucketReader, Buckets, Record};
 use mint_core::intercept::FAMILY_S;
 use mint_core::Intercept;
 use serde::{Deserialize, Serialize};

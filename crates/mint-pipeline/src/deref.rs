@@ -1,0 +1,558 @@
+//! Dereferencing: how each face's three vertex indices become positions.
+//!
+//! `mmap` fetches the three positions of every face from the memory-mapped
+//! vertex array. That is free when neighbouring faces use neighbouring
+//! vertices, and ruinous when they do not: in a mesh whose vertices are in
+//! no spatial order every corner is a cache miss, and once the vertex array
+//! is larger than the page cache, a random disk read.
+//!
+//! `sort` is Lindstrom & Silva's answer (2001, "A memory insensitive
+//! technique for large model simplification"), done by distribution rather
+//! than by comparison, since the keys are dense integers:
+//! 1. **scatter**: stream the faces; send each corner `(vertex, block,
+//!    corner)` to the bucket of its vertex's block of vertices (a block is
+//!    small enough to stay in cache);
+//! 2. **join**: for each vertex block in order, copy its positions (one
+//!    sequential read of the vertex array in all) and send every corner's
+//!    position to the bucket of its face block;
+//! 3. **assemble**: workers take face blocks, place each corner's position
+//!    into the block's triangle array, and discretize the block chunk by
+//!    chunk, exactly as the direct path does.
+//!
+//! Buckets stay in memory while they fit the budget and spill to files in a
+//! temporary directory otherwise ([`mint_store::Buckets`]); all I/O is
+//! sequential. Faces keep their order and chunks their boundaries, so the
+//! per-chunk volumes and the output bytes are those of `mmap`.
+//!
+//! [`choose`] decides for `auto`: `sort` when a sample of the faces shows
+//! poor locality and the positions are larger than a cache, `mmap`
+//! otherwise; the summary says which ran and why.
+
+use crate::error::PipelineError;
+use crate::passes::{discretize_slice, LocalMap, CHUNK_TRIANGLES};
+use crate::progress::{Phase, Progress};
+use mint_core::grid::Grid;
+use mint_core::primitives::Transform;
+use mint_core::Intercept;
+use mint_io::{MeshReader, TriangleChunk, TriangleRecords, VertexPositions};
+use mint_store::{BucketReader, Buckets, Record, ShardWriter, StoreError};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// Scattering corners to vertex blocks (units: faces).
+pub const SCATTER: Phase = Phase::named("dereference: scatter");
+/// Joining corners with the vertex array (units: vertex blocks).
+pub const JOIN: Phase = Phase::named("dereference: join");
+/// Assembling and discretizing face blocks (units: faces).
+pub const ASSEMBLE: Phase = Phase::named("discretize");
+
+/// How face corners are resolved to positions (`--deref`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Deref {
+    /// `sort` when sampled locality is poor and the positions are larger
+    /// than a cache; `mmap` otherwise.
+    #[default]
+    Auto,
+    /// Fetch positions from the mapped vertex array.
+    Mmap,
+    /// Lindstrom–Silva external dereferencing (see the module docs).
+    Sort,
+}
+
+/// What ran, and why (reported in the summary).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DerefChoice {
+    pub sort: bool,
+    pub reason: String,
+}
+
+/// Positions at most this large are fetched from the map whatever their
+/// order: they stay in the processor's caches.
+const CACHE_SIZED: u64 = 32 << 20;
+/// Sampled locality: windows of this many consecutive faces…
+const WINDOW: u64 = 1024;
+/// …this many of them, spread over the faces.
+const WINDOWS: u64 = 64;
+/// More distinct 4 KiB pages of positions per face than this is poor
+/// locality (an ordered mesh touches a few pages per window; a shuffled
+/// one about three per face).
+const POOR_PAGES_PER_FACE: f64 = 0.25;
+/// Bytes of positions per vertex block (one block is joined at a time and
+/// should stay in cache).
+const BLOCK_BYTES: u64 = 1 << 20;
+/// Most buckets of either kind.
+const MAX_BUCKETS: u64 = 4096;
+
+/// Decides how to dereference faces `range` of `records` (`None`: a format
+/// that streams, whose locality is not sampled).
+pub(crate) fn choose(mode: Deref, records: Option<&TriangleRecords>, positions: &VertexPositions, range: (u64, u64)) -> DerefChoice {
+    match mode {
+        Deref::Mmap => return DerefChoice { sort: false, reason: "asked for (--deref mmap)".into() },
+        Deref::Sort => return DerefChoice { sort: true, reason: "asked for (--deref sort)".into() },
+        Deref::Auto => {}
+    }
+    let bytes = positions.stored_bytes();
+    if bytes <= CACHE_SIZED {
+        return DerefChoice { sort: false, reason: format!("the positions ({}) fit in cache", mib(bytes)) };
+    }
+    let Some(records) = records else {
+        return DerefChoice { sort: false, reason: "faces of this format stream; locality was not sampled".into() };
+    };
+    let pages = pages_per_face(records, positions, range);
+    if pages > POOR_PAGES_PER_FACE {
+        DerefChoice { sort: true, reason: format!("poor vertex locality ({pages:.2} pages of positions per face, sampled) and {} of positions", mib(bytes)) }
+    } else {
+        DerefChoice { sort: false, reason: format!("good vertex locality ({pages:.3} pages of positions per face, sampled)") }
+    }
+}
+
+fn mib(b: u64) -> String {
+    format!("{:.0} MiB", b as f64 / (1u64 << 20) as f64)
+}
+
+/// Distinct 4 KiB pages of positions touched per face, over [`WINDOWS`]
+/// windows of [`WINDOW`] consecutive faces spread evenly over `range`.
+fn pages_per_face(records: &TriangleRecords, positions: &VertexPositions, (first, end): (u64, u64)) -> f64 {
+    let end = end.min(records.len());
+    let n = end.saturating_sub(first);
+    if n == 0 {
+        return 0.0;
+    }
+    let stride = positions.stride();
+    let (mut pages, mut faces) = (0u64, 0u64);
+    let mut ids: Vec<u64> = Vec::with_capacity(3 * WINDOW as usize);
+    for w in 0..WINDOWS.min(n.div_ceil(WINDOW)) {
+        let a = first + n.saturating_sub(WINDOW) * w / WINDOWS.max(1);
+        let b = (a + WINDOW).min(end);
+        ids.clear();
+        // A bad record is reported by the pass itself; a sample ignores it.
+        let _ = records.visit_indices(a, b, |_, t| ids.extend(t.iter().map(|&v| v as u64 * stride / 4096)));
+        ids.sort_unstable();
+        ids.dedup();
+        pages += ids.len() as u64;
+        faces += b - a;
+    }
+    pages as f64 / faces.max(1) as f64
+}
+
+/// Where the faces come from.
+pub(crate) enum Faces<'a> {
+    /// Fixed-size records `first .. end`; chunks are [`CHUNK_TRIANGLES`]
+    /// records from `first`.
+    Records { records: &'a TriangleRecords, first: u64, end: u64 },
+    /// A streaming reader; each chunk it returns is one chunk.
+    Reader(&'a mut MeshReader),
+}
+
+/// A corner on its way to its vertex block: vertex, face block, and the
+/// corner's number in its face block (`3 * face + k`).
+#[derive(Clone, Copy)]
+struct Corner {
+    v: u32,
+    block: u32,
+    corner: u32,
+}
+
+impl Record for Corner {
+    const SIZE: usize = 12;
+    #[inline]
+    fn put(&self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.v.to_le_bytes());
+        out.extend_from_slice(&self.block.to_le_bytes());
+        out.extend_from_slice(&self.corner.to_le_bytes());
+    }
+    #[inline]
+    fn get(b: &[u8]) -> Self {
+        let w = |i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap());
+        Corner { v: w(0), block: w(4), corner: w(8) }
+    }
+}
+
+/// A corner with its position, on its way to its face block. Two widths:
+/// `f32` when the file stores nothing wider (exact), `f64` otherwise.
+trait Resolved: Record + Sync {
+    fn new(corner: u32, p: [f64; 3]) -> Self;
+    fn corner(&self) -> u32;
+    fn pos(&self) -> [f64; 3];
+}
+
+#[derive(Clone, Copy)]
+struct Resolved32 {
+    corner: u32,
+    p: [f32; 3],
+}
+
+impl Record for Resolved32 {
+    const SIZE: usize = 16;
+    #[inline]
+    fn put(&self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.corner.to_le_bytes());
+        for c in self.p {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    #[inline]
+    fn get(b: &[u8]) -> Self {
+        let f = |i: usize| f32::from_le_bytes(b[i..i + 4].try_into().unwrap());
+        Resolved32 { corner: u32::from_le_bytes(b[..4].try_into().unwrap()), p: [f(4), f(8), f(12)] }
+    }
+}
+
+impl Resolved for Resolved32 {
+    #[inline]
+    fn new(corner: u32, p: [f64; 3]) -> Self {
+        Resolved32 { corner, p: p.map(|c| c as f32) }
+    }
+    #[inline]
+    fn corner(&self) -> u32 {
+        self.corner
+    }
+    #[inline]
+    fn pos(&self) -> [f64; 3] {
+        self.p.map(|c| c as f64)
+    }
+}
+
+#[derive(Clone, Copy)]
+struct Resolved64 {
+    corner: u32,
+    p: [f64; 3],
+}
+
+impl Record for Resolved64 {
+    const SIZE: usize = 28;
+    #[inline]
+    fn put(&self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.corner.to_le_bytes());
+        for c in self.p {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    #[inline]
+    fn get(b: &[u8]) -> Self {
+        let f = |i: usize| f64::from_le_bytes(b[i..i + 8].try_into().unwrap());
+        Resolved64 { corner: u32::from_le_bytes(b[..4].try_into().unwrap()), p: [f(4), f(12), f(20)] }
+    }
+}
+
+impl Resolved for Resolved64 {
+    #[inline]
+    fn new(corner: u32, p: [f64; 3]) -> Self {
+        Resolved64 { corner, p }
+    }
+    #[inline]
+    fn corner(&self) -> u32 {
+        self.corner
+    }
+    #[inline]
+    fn pos(&self) -> [f64; 3] {
+        self.p
+    }
+}
+
+/// What a sorted dereference did, for the summary.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct SortStats {
+    pub vertex_blocks: u64,
+    pub face_blocks: u64,
+    /// Bytes the buckets wrote to disk (0: everything fitted the budget).
+    pub bytes_spilled: u64,
+}
+
+/// Face blocks: consecutive chunks, at most `max_faces` faces each (but at
+/// least one chunk). `chunks[i]` is chunk `i`'s face count.
+struct Blocks {
+    /// Per block: its first chunk, one past its last chunk, its first face.
+    spans: Vec<(usize, usize, u64)>,
+    /// Chunk face counts.
+    chunks: Vec<u32>,
+    faces_in_open: u64,
+    max_faces: u64,
+}
+
+impl Blocks {
+    fn new(max_faces: u64) -> Blocks {
+        Blocks { spans: Vec::new(), chunks: Vec::new(), faces_in_open: 0, max_faces }
+    }
+
+    /// Adds a chunk of `n` faces; returns its block and the block-local
+    /// number of its first face.
+    fn add_chunk(&mut self, n: u32, first_face: u64) -> (u32, u64) {
+        let ci = self.chunks.len();
+        self.chunks.push(n);
+        match self.spans.last_mut() {
+            Some(last) if self.faces_in_open + n as u64 <= self.max_faces => {
+                last.1 = ci + 1;
+                let at = self.faces_in_open;
+                self.faces_in_open += n as u64;
+                (self.spans.len() as u32 - 1, at)
+            }
+            _ => {
+                self.spans.push((ci, ci + 1, first_face));
+                self.faces_in_open = n as u64;
+                (self.spans.len() as u32 - 1, 0)
+            }
+        }
+    }
+}
+
+/// Discretizes every face of `faces` into `store`, dereferencing by sorting
+/// (see the module docs), with about `budget` bytes of heap and spill files
+/// under `spill_dir`. Returns the faces read, six times the signed volume
+/// of each chunk (as the direct and streaming paths return them), and what
+/// the sort did.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn discretize_sorted(
+    faces: Faces,
+    positions: &VertexPositions,
+    grid: &Grid,
+    store: &mut ShardWriter,
+    threads: usize,
+    progress: &dyn Progress,
+    xf: Option<&Transform>,
+    spill_dir: &Path,
+    budget: u64,
+) -> Result<(u64, Vec<f64>, SortStats), PipelineError> {
+    let tmp = tempfile::Builder::new()
+        .prefix(".mint-deref-")
+        .tempdir_in(spill_dir)
+        .map_err(|source| PipelineError::Temp { path: spill_dir.to_path_buf(), op: "creating the dereference spill directory", source })?;
+    if positions.exact_in_f32() {
+        run::<Resolved32>(faces, positions, grid, store, threads, progress, xf, tmp.path(), budget)
+    } else {
+        run::<Resolved64>(faces, positions, grid, store, threads, progress, xf, tmp.path(), budget)
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run<R: Resolved>(
+    mut faces: Faces,
+    positions: &VertexPositions,
+    grid: &Grid,
+    store: &mut ShardWriter,
+    threads: usize,
+    progress: &dyn Progress,
+    xf: Option<&Transform>,
+    dir: &Path,
+    budget: u64,
+) -> Result<(u64, Vec<f64>, SortStats), PipelineError> {
+    let threads = threads.max(1);
+    let nv = positions.len() as u64;
+    // Vertex blocks stay in cache; face blocks share a third of the budget
+    // between the workers, in whole chunks.
+    let per_vertex = if R::SIZE == 16 { 12 } else { 24 };
+    let block_vertices = (BLOCK_BYTES / per_vertex).max(nv.div_ceil(MAX_BUCKETS)).max(1);
+    let vertex_blocks = nv.div_ceil(block_vertices).max(1);
+    let chunk = CHUNK_TRIANGLES as u64;
+    let total_faces = match &faces {
+        Faces::Records { records, first, end } => (*end).min(records.len()).saturating_sub(*first),
+        Faces::Reader(r) => r.info().face_count.unwrap_or(0),
+    };
+    let max_block = ((budget / 3 / threads as u64 / 72) / chunk * chunk).max(chunk);
+    // At least four blocks per worker, so that the workers stay busy.
+    let even = (total_faces.div_ceil(4 * threads as u64)).div_ceil(chunk) * chunk;
+    let mut blocks = Blocks::new(max_block.min(even.max(chunk)).max(total_faces.div_ceil(MAX_BUCKETS - 1).div_ceil(chunk) * chunk));
+
+    // 1. Scatter corners to vertex blocks.
+    let mut scatter = Buckets::<Corner>::new(dir, "corners", vertex_blocks as usize, budget / 3);
+    progress.start(SCATTER, total_faces);
+    let mut nfaces = 0u64;
+    {
+        let mut push_chunk = |tris: &mut dyn FnMut(&mut dyn FnMut([u32; 3]) -> Result<(), StoreError>) -> Result<(), PipelineError>, n: u32| -> Result<(), PipelineError> {
+            let (block, at) = blocks.add_chunk(n, nfaces);
+            let mut corner = (at * 3) as u32;
+            tris(&mut |t: [u32; 3]| {
+                for v in t {
+                    scatter.push((v as u64 / block_vertices) as usize, Corner { v, block, corner })?;
+                    corner += 1;
+                }
+                Ok(())
+            })?;
+            nfaces += n as u64;
+            progress.advance(n as u64);
+            if progress.cancelled() {
+                return Err(PipelineError::Cancelled);
+            }
+            Ok(())
+        };
+        match &mut faces {
+            Faces::Records { records, first, end } => {
+                let end = (*end).min(records.len());
+                let mut a = *first;
+                while a < end {
+                    let b = (a + chunk).min(end);
+                    push_chunk(
+                        &mut |emit| {
+                            let mut err = None;
+                            records.visit_indices(a, b, |_, t| {
+                                if err.is_none() {
+                                    if let Err(e) = emit(t) {
+                                        err = Some(e);
+                                    }
+                                }
+                            })?;
+                            err.map_or(Ok(()), |e| Err(e.into()))
+                        },
+                        (b - a) as u32,
+                    )?;
+                    a = b;
+                }
+            }
+            Faces::Reader(reader) => {
+                let mut c = TriangleChunk::new();
+                while reader.next_chunk(&mut c)? {
+                    let tris = &c.indices;
+                    push_chunk(
+                        &mut |emit| {
+                            for t in tris {
+                                emit(*t)?;
+                            }
+                            Ok(())
+                        },
+                        tris.len() as u32,
+                    )?;
+                }
+            }
+        }
+    }
+    progress.finish();
+    let mut scatter = scatter.finish();
+    let face_blocks = blocks.spans.len();
+
+    // 2. Join each vertex block with its corners, in order.
+    let mut gather = Buckets::<R>::new(dir, "positions", face_blocks.max(1), budget / 3);
+    progress.start(JOIN, vertex_blocks);
+    let mut block: Vec<[f64; 3]> = Vec::with_capacity(block_vertices as usize);
+    let mut failed: Option<StoreError> = None;
+    for vb in 0..vertex_blocks {
+        let v0 = vb * block_vertices;
+        let v1 = (v0 + block_vertices).min(nv);
+        block.clear();
+        block.extend((v0..v1).map(|i| positions.get(i as u32)));
+        scatter.read(vb as usize, |batch| {
+            if failed.is_some() {
+                return;
+            }
+            for c in batch {
+                let p = block[(c.v as u64 - v0) as usize];
+                if let Err(e) = gather.push(c.block as usize, R::new(c.corner, p)) {
+                    failed = Some(e);
+                    return;
+                }
+            }
+        })?;
+        if let Some(e) = failed.take() {
+            return Err(e.into());
+        }
+        progress.advance(1);
+        if progress.cancelled() {
+            return Err(PipelineError::Cancelled);
+        }
+    }
+    drop(block);
+    progress.finish();
+    let spilled = scatter.bytes_spilled();
+    drop(scatter);
+    let gather = gather.finish();
+    let stats = SortStats { vertex_blocks, face_blocks: face_blocks as u64, bytes_spilled: spilled + gather.bytes_spilled() };
+
+    // 3. Assemble face blocks and discretize them chunk by chunk.
+    let volumes = assemble::<R>(gather, &blocks, grid, store, threads, progress, xf, nfaces)?;
+    Ok((nfaces, volumes, stats))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn assemble<R: Resolved>(
+    gather: BucketReader<R>,
+    blocks: &Blocks,
+    grid: &Grid,
+    store: &mut ShardWriter,
+    threads: usize,
+    progress: &dyn Progress,
+    xf: Option<&Transform>,
+    nfaces: u64,
+) -> Result<Vec<f64>, PipelineError> {
+    use crossbeam_channel::bounded;
+    let [_, nb, _] = grid.local_dims();
+    let local = LocalMap::new(grid);
+    let axis = grid.slab_axis;
+    let gather = Mutex::new(gather);
+    let next = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
+    let (tx, rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
+    let mut volumes = vec![0.0f64; blocks.chunks.len()];
+    progress.start(ASSEMBLE, nfaces);
+    let written: Result<(), StoreError> = std::thread::scope(|s| {
+        for _ in 0..threads {
+            let tx = tx.clone();
+            let (gather, next, stop, failed, local) = (&gather, &next, &stop, &failed, &local);
+            s.spawn(move || {
+                let mut tris: Vec<[[f64; 3]; 3]> = Vec::new();
+                loop {
+                    let b = next.fetch_add(1, Ordering::Relaxed);
+                    if b >= blocks.spans.len() || stop.load(Ordering::Relaxed) {
+                        return;
+                    }
+                    if progress.cancelled() {
+                        failed.lock().unwrap().get_or_insert(PipelineError::Cancelled);
+                        stop.store(true, Ordering::Relaxed);
+                        return;
+                    }
+                    let (c0, c1, _) = blocks.spans[b];
+                    let n: u64 = blocks.chunks[c0..c1].iter().map(|&n| n as u64).sum();
+                    tris.clear();
+                    tris.resize(n as usize, [[0.0; 3]; 3]);
+                    let bucket = gather.lock().unwrap().take(b);
+                    let filled = bucket.read(|batch| {
+                        for r in batch {
+                            let c = r.corner() as usize;
+                            tris[c / 3][c % 3] = r.pos();
+                        }
+                    });
+                    if let Err(e) = filled {
+                        failed.lock().unwrap().get_or_insert(e.into());
+                        stop.store(true, Ordering::Relaxed);
+                        return;
+                    }
+                    let mut at = 0usize;
+                    for ci in c0..c1 {
+                        let m = blocks.chunks[ci] as usize;
+                        let mut recs = Vec::with_capacity(1024);
+                        let mut volume = 0.0;
+                        discretize_slice(&tris[at..at + m], axis, local, xf, nb, &mut recs, &mut volume);
+                        at += m;
+                        progress.advance(m as u64);
+                        if tx.send((ci, recs, volume)).is_err() {
+                            return; // the writer stopped on an error
+                        }
+                    }
+                }
+            });
+        }
+        drop(tx);
+        let volumes = &mut volumes;
+        let stop = &stop;
+        s.spawn(move || -> Result<(), StoreError> {
+            for (ci, recs, volume) in rx {
+                volumes[ci] = volume;
+                if let Err(e) = store.append(&recs) {
+                    stop.store(true, Ordering::Relaxed);
+                    return Err(e);
+                }
+            }
+            Ok(())
+        })
+        .join()
+        .expect("shard writer panicked")
+    });
+    if let Some(e) = failed.into_inner().unwrap() {
+        return Err(e);
+    }
+    written?;
+    progress.finish();
+    Ok(volumes)
+}
