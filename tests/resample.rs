@@ -207,9 +207,12 @@ fn twenty_million_faces_resample_under_a_256_mib_heap_limit() {
 
 /// Real scans list vertices in no spatial order: the same mesh with its
 /// vertices and faces shuffled resamples to the same bytes, through the
-/// direct path (binary PLY), the streaming path (OBJ) and split into parts.
+/// direct path (binary PLY), the streaming path (OBJ) and split into parts,
+/// and with either way of dereferencing faces: the memory map, and the
+/// sort, here under a budget small enough that its buckets spill to disk.
 #[test]
-fn a_shuffled_copy_resamples_to_the_same_bytes() {
+fn a_shuffled_copy_resamples_to_the_same_bytes_with_mmap_and_sort_dereferencing() {
+    use mint_pipeline::Deref;
     let dir = tempfile::tempdir().unwrap();
     let mut m = TriMesh::default();
     mint_gen::genus(2, 200_000, &mut m).unwrap();
@@ -231,18 +234,33 @@ fn a_shuffled_copy_resamples_to_the_same_bytes() {
             s.face(*f).unwrap();
         }
     });
-    let bytes = |input: &Path, o: ResampleOptions| {
+    let run_it = |input: &Path, o: ResampleOptions| {
         let out = dir.path().join("out.ply");
-        run(input, &out, o);
-        std::fs::read(&out).unwrap()
+        let (s, _) = run(input, &out, o);
+        (std::fs::read(&out).unwrap(), s)
     };
+    let bytes = |input: &Path, o: ResampleOptions| run_it(input, o).0;
     let base = opts(GridSize::Cells(80_000));
-    let want = bytes(&ordered, base.clone());
-    assert!(bytes(&shuffled, base.clone()) == want, "shuffled binary PLY differs");
-    let parts = ResampleOptions { parts: 3, slabs: 2, work_dir: Some(dir.path().join("w")), mem_bytes: 49 << 20, ..base.clone() };
-    assert!(bytes(&shuffled, parts) == want, "shuffled binary PLY in parts differs");
-    let want_obj = bytes(&ordered_obj, base.clone());
-    assert!(bytes(&shuffled_obj, base) == want_obj, "shuffled OBJ differs");
+    let want = bytes(&ordered, ResampleOptions { deref: Deref::Mmap, ..base.clone() });
+    let want_obj = bytes(&ordered_obj, ResampleOptions { deref: Deref::Mmap, ..base.clone() });
+    for deref in [Deref::Mmap, Deref::Sort] {
+        let d = ResampleOptions { deref, ..base.clone() };
+        // 20 MiB: the sort's corner buckets (about 4.8 MB) spill.
+        let small = ResampleOptions { mem_bytes: 20 << 20, ..d.clone() };
+        assert!(bytes(&ordered, d.clone()) == want, "{deref:?}: ordered binary PLY differs");
+        let (got, s) = run_it(&shuffled, small.clone());
+        assert!(got == want, "{deref:?}: shuffled binary PLY differs");
+        assert_eq!(s.deref.starts_with("sort"), deref == Deref::Sort, "{}", s.deref);
+        if deref == Deref::Sort {
+            assert!(s.deref_spilled_bytes > 0, "the sort was meant to spill under 20 MiB");
+        }
+        let parts = ResampleOptions { parts: 3, slabs: 2, work_dir: Some(dir.path().join(format!("w-{deref:?}"))), mem_bytes: 49 << 20, ..d.clone() };
+        assert!(bytes(&shuffled, parts) == want, "{deref:?}: shuffled binary PLY in parts differs");
+        assert!(bytes(&shuffled_obj, small) == want_obj, "{deref:?}: shuffled OBJ differs");
+    }
+    // auto: this mesh's positions fit in cache, so the map is used.
+    let (got, s) = run_it(&shuffled, base);
+    assert!(got == want && s.deref.starts_with("mmap: the positions"), "{}", s.deref);
 }
 
 /// Tiny cases with exact counts, each with its reason (as OpenVDB's "a

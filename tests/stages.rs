@@ -53,7 +53,7 @@ fn run_all_tasks(dir: &Path, order: Order) {
             Order::Shuffled(seed) => Rng(seed ^ st.tasks as u64).shuffle(&mut tasks),
         }
         for t in tasks {
-            let o = run_task(dir, &st.name, t, &TaskOptions { threads: 1 + (t as usize % 2), mem_bytes: None }, &NoProgress)
+            let o = run_task(dir, &st.name, t, &TaskOptions { threads: 1 + (t as usize % 2), mem_bytes: None, deref: if t % 3 == 1 { mint_pipeline::Deref::Sort } else { mint_pipeline::Deref::Auto } }, &NoProgress)
                 .unwrap_or_else(|e| panic!("{} {t}: {e}", st.name));
             assert_eq!(o, TaskOutcome::Ran);
         }

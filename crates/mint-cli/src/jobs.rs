@@ -445,10 +445,11 @@ pub struct StagedArgs {
     /// neighbouring vertices). sort: Lindstrom-Silva dereferencing, which
     /// sorts corners by vertex and joins them with the vertex array in one
     /// sequential pass, spilling to disk beyond --mem (for meshes whose
-    /// vertices are in no spatial order, or larger than RAM). auto: sort when
-    /// a sample of the faces shows poor locality and the positions are larger
-    /// than a cache; the summary says which ran and why. The output is the
-    /// same for every choice.
+    /// vertices are in no spatial order and larger than memory). auto: sort
+    /// when a sample of the faces shows poor locality and the positions will
+    /// not stay in memory (larger than 3/4 of MemAvailable or of the cgroup's
+    /// limit); the summary says which ran and why. The output is the same for
+    /// every choice.
     #[arg(long, value_enum, default_value_t = DerefArg::Auto)]
     pub deref: DerefArg,
 }

@@ -25,7 +25,7 @@
 //! per-chunk volumes and the output bytes are those of `mmap`.
 //!
 //! [`choose`] decides for `auto`: `sort` when a sample of the faces shows
-//! poor locality and the positions are larger than a cache, `mmap`
+//! poor locality and the positions will not stay in memory, `mmap`
 //! otherwise; the summary says which ran and why.
 
 use crate::error::PipelineError;
@@ -88,6 +88,18 @@ const MAX_BUCKETS: u64 = 4096;
 
 /// Decides how to dereference faces `range` of `records` (`None`: a format
 /// that streams, whose locality is not sampled).
+///
+/// `sort` costs more than `mmap` whenever the positions stay in memory,
+/// even in no order (measured on a shuffled 100M-face torus: 4.5 s against
+/// 14 s warm; see docs/PERFORMANCE.md): random reads from RAM are cheaper
+/// than writing and reading every corner twice. It wins, by orders of
+/// magnitude, once the positions do not stay in memory: then every corner
+/// is a random disk read. So `auto` sorts when sampled locality is poor
+/// and the positions are larger than three quarters of the memory this
+/// process may use for the page cache ([`cache_room`]), leaving the rest to
+/// the streaming faces and the heap (measured: a 600 MB vertex array runs
+/// well by map in a 1 GiB cgroup, 4.7 s, and not at all in 400 MiB, over
+/// 200 s, where the sort takes 31 s).
 pub(crate) fn choose(mode: Deref, records: Option<&TriangleRecords>, positions: &VertexPositions, range: (u64, u64)) -> DerefChoice {
     match mode {
         Deref::Mmap => return DerefChoice { sort: false, reason: "asked for (--deref mmap)".into() },
@@ -98,15 +110,47 @@ pub(crate) fn choose(mode: Deref, records: Option<&TriangleRecords>, positions: 
     if bytes <= CACHE_SIZED {
         return DerefChoice { sort: false, reason: format!("the positions ({}) fit in cache", mib(bytes)) };
     }
+    let room = cache_room();
+    if bytes <= room / 4 * 3 {
+        return DerefChoice { sort: false, reason: format!("the positions ({}) stay in memory ({} available)", mib(bytes), mib(room)) };
+    }
     let Some(records) = records else {
-        return DerefChoice { sort: false, reason: "faces of this format stream; locality was not sampled".into() };
+        return DerefChoice { sort: true, reason: format!("the positions ({}) are larger than 3/4 of the memory available ({}), and this format's locality is not sampled", mib(bytes), mib(room)) };
     };
     let pages = pages_per_face(records, positions, range);
     if pages > POOR_PAGES_PER_FACE {
-        DerefChoice { sort: true, reason: format!("poor vertex locality ({pages:.2} pages of positions per face, sampled) and {} of positions", mib(bytes)) }
+        DerefChoice { sort: true, reason: format!("poor vertex locality ({pages:.2} pages of positions per face, sampled) and positions ({}) larger than 3/4 of the memory available ({})", mib(bytes), mib(room)) }
     } else {
         DerefChoice { sort: false, reason: format!("good vertex locality ({pages:.3} pages of positions per face, sampled)") }
     }
+}
+
+/// Memory the page cache may give this process: `MemAvailable`, or less
+/// under a cgroup memory limit (v2 `memory.max`, v1
+/// `memory.limit_in_bytes`). `u64::MAX` when unknown.
+fn cache_room() -> u64 {
+    let read = |p: &str| std::fs::read_to_string(p).ok();
+    let num = |s: Option<String>| s.and_then(|s| s.trim().parse::<u64>().ok());
+    let mut room = read("/proc/meminfo")
+        .and_then(|s| s.lines().find(|l| l.starts_with("MemAvailable:"))?.split_whitespace().nth(1)?.parse::<u64>().ok())
+        .map_or(u64::MAX, |kb| kb * 1024);
+    if let Some(cg) = read("/proc/self/cgroup") {
+        for line in cg.lines() {
+            let mut f = line.splitn(3, ':');
+            let (_, ctrl, path) = (f.next(), f.next().unwrap_or(""), f.next().unwrap_or(""));
+            let limit = if ctrl.is_empty() {
+                num(read(&format!("/sys/fs/cgroup{path}/memory.max")))
+            } else if ctrl.split(',').any(|c| c == "memory") {
+                num(read(&format!("/sys/fs/cgroup/memory{path}/memory.limit_in_bytes")))
+            } else {
+                continue;
+            };
+            if let Some(l) = limit {
+                room = room.min(l);
+            }
+        }
+    }
+    room
 }
 
 fn mib(b: u64) -> String {
@@ -147,27 +191,29 @@ pub(crate) enum Faces<'a> {
     Reader(&'a mut MeshReader),
 }
 
-/// A corner on its way to its vertex block: vertex, face block, and the
-/// corner's number in its face block (`3 * face + k`).
+/// A corner on its way to its vertex block: its vertex's place in the
+/// block (low 20 bits) and its face block (high 12 bits), and the corner's
+/// number in its face block (`3 * face + k`). Eight bytes.
 #[derive(Clone, Copy)]
 struct Corner {
-    v: u32,
-    block: u32,
+    v_block: u32,
     corner: u32,
 }
 
+/// Bits of [`Corner::v_block`] for the vertex's place in its block.
+const V_BITS: u32 = 20;
+
 impl Record for Corner {
-    const SIZE: usize = 12;
+    const SIZE: usize = 8;
     #[inline]
     fn put(&self, out: &mut Vec<u8>) {
-        out.extend_from_slice(&self.v.to_le_bytes());
-        out.extend_from_slice(&self.block.to_le_bytes());
+        out.extend_from_slice(&self.v_block.to_le_bytes());
         out.extend_from_slice(&self.corner.to_le_bytes());
     }
     #[inline]
     fn get(b: &[u8]) -> Self {
         let w = |i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap());
-        Corner { v: w(0), block: w(4), corner: w(8) }
+        Corner { v_block: w(0), corner: w(4) }
     }
 }
 
@@ -341,132 +387,205 @@ fn run<R: Resolved>(
 ) -> Result<(u64, Vec<f64>, SortStats), PipelineError> {
     let threads = threads.max(1);
     let nv = positions.len() as u64;
-    // Vertex blocks stay in cache; face blocks share a third of the budget
-    // between the workers, in whole chunks.
+    // Vertex blocks stay in cache (and a vertex's place in its block fits
+    // V_BITS). Face blocks are whole chunks: one chunk (its triangles stay
+    // in cache while corners are placed) unless that makes more than
+    // MAX_BUCKETS of them.
     let per_vertex = if R::SIZE == 16 { 12 } else { 24 };
-    let block_vertices = (BLOCK_BYTES / per_vertex).max(nv.div_ceil(MAX_BUCKETS)).max(1);
+    let block_vertices = (BLOCK_BYTES / per_vertex).min(1 << V_BITS).max(nv.div_ceil(MAX_BUCKETS)).max(1);
     let vertex_blocks = nv.div_ceil(block_vertices).max(1);
     let chunk = CHUNK_TRIANGLES as u64;
     let total_faces = match &faces {
         Faces::Records { records, first, end } => (*end).min(records.len()).saturating_sub(*first),
         Faces::Reader(r) => r.info().face_count.unwrap_or(0),
     };
-    let max_block = ((budget / 3 / threads as u64 / 72) / chunk * chunk).max(chunk);
-    // At least four blocks per worker, so that the workers stay busy.
-    let even = (total_faces.div_ceil(4 * threads as u64)).div_ceil(chunk) * chunk;
-    let mut blocks = Blocks::new(max_block.min(even.max(chunk)).max(total_faces.div_ceil(MAX_BUCKETS - 1).div_ceil(chunk) * chunk));
+    let max_block = (total_faces.div_ceil(MAX_BUCKETS - 1).div_ceil(chunk) * chunk).max(chunk);
+    let mut blocks = Blocks::new(max_block);
+    let scatter_budget = budget * 45 / 100 / threads as u64;
+    let scatter: Vec<Mutex<Buckets<Corner>>> =
+        (0..threads).map(|t| Mutex::new(Buckets::new(dir, &format!("corners-{t}"), vertex_blocks as usize, scatter_budget))).collect();
+    let scatter_one = |b: &mut Buckets<Corner>, t: [u32; 3], block: u32, corner: &mut u32| -> Result<(), StoreError> {
+        for v in t {
+            let vb = v as u64 / block_vertices;
+            let local = v as u64 - vb * block_vertices;
+            b.push(vb as usize, Corner { v_block: local as u32 | block << V_BITS, corner: *corner })?;
+            *corner += 1;
+        }
+        Ok(())
+    };
 
+    let trace = std::env::var_os("MINT_DEREF_TRACE").is_some();
+    let t0 = std::time::Instant::now();
     // 1. Scatter corners to vertex blocks.
-    let mut scatter = Buckets::<Corner>::new(dir, "corners", vertex_blocks as usize, budget / 3);
     progress.start(SCATTER, total_faces);
-    let mut nfaces = 0u64;
-    {
-        let mut push_chunk = |tris: &mut dyn FnMut(&mut dyn FnMut([u32; 3]) -> Result<(), StoreError>) -> Result<(), PipelineError>, n: u32| -> Result<(), PipelineError> {
-            let (block, at) = blocks.add_chunk(n, nfaces);
-            let mut corner = (at * 3) as u32;
-            tris(&mut |t: [u32; 3]| {
-                for v in t {
-                    scatter.push((v as u64 / block_vertices) as usize, Corner { v, block, corner })?;
-                    corner += 1;
-                }
-                Ok(())
-            })?;
-            nfaces += n as u64;
-            progress.advance(n as u64);
-            if progress.cancelled() {
-                return Err(PipelineError::Cancelled);
-            }
-            Ok(())
-        };
-        match &mut faces {
-            Faces::Records { records, first, end } => {
-                let end = (*end).min(records.len());
-                let mut a = *first;
-                while a < end {
-                    let b = (a + chunk).min(end);
-                    push_chunk(
-                        &mut |emit| {
-                            let mut err = None;
-                            records.visit_indices(a, b, |_, t| {
+    let nfaces;
+    match &mut faces {
+        Faces::Records { records, first, end } => {
+            let records: &TriangleRecords = records;
+            let (first, end) = (*first, (*end).min(records.len()));
+            let chunks = end.saturating_sub(first).div_ceil(chunk);
+            let spans: Vec<(u32, u64)> = (0..chunks)
+                .map(|c| {
+                    let a = first + c * chunk;
+                    blocks.add_chunk(((a + chunk).min(end) - a) as u32, a - first)
+                })
+                .collect();
+            let next = AtomicUsize::new(0);
+            let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
+            let stop = AtomicBool::new(false);
+            std::thread::scope(|s| {
+                for t in 0..threads {
+                    let (next, failed, stop, spans, scatter, scatter_one) = (&next, &failed, &stop, &spans, &scatter, &scatter_one);
+                    s.spawn(move || {
+                        let mut mine = scatter[t].lock().unwrap();
+                        loop {
+                            let c = next.fetch_add(1, Ordering::Relaxed);
+                            if c as u64 >= chunks || stop.load(Ordering::Relaxed) {
+                                return;
+                            }
+                            let (block, at) = spans[c];
+                            let a = first + c as u64 * chunk;
+                            let b = (a + chunk).min(end);
+                            let mut corner = (at * 3) as u32;
+                            let mut err: Option<StoreError> = None;
+                            let visited = records.visit_indices(a, b, |_, t| {
                                 if err.is_none() {
-                                    if let Err(e) = emit(t) {
+                                    err = scatter_one(&mut mine, t, block, &mut corner).err();
+                                }
+                            });
+                            let e = match (visited, err) {
+                                (Err(e), _) => Some(PipelineError::from(e)),
+                                (_, Some(e)) => Some(e.into()),
+                                _ if progress.cancelled() => Some(PipelineError::Cancelled),
+                                _ => None,
+                            };
+                            if let Some(e) = e {
+                                failed.lock().unwrap().get_or_insert(e);
+                                stop.store(true, Ordering::Relaxed);
+                                return;
+                            }
+                            progress.advance(b - a);
+                        }
+                    });
+                }
+            });
+            if let Some(e) = failed.into_inner().unwrap() {
+                return Err(e);
+            }
+            nfaces = end.saturating_sub(first);
+        }
+        Faces::Reader(reader) => {
+            let mut mine = scatter[0].lock().unwrap();
+            let mut c = TriangleChunk::new();
+            let mut n = 0u64;
+            while reader.next_chunk(&mut c)? {
+                let (block, at) = blocks.add_chunk(c.indices.len() as u32, n);
+                let mut corner = (at * 3) as u32;
+                for t in &c.indices {
+                    scatter_one(&mut mine, *t, block, &mut corner)?;
+                }
+                n += c.indices.len() as u64;
+                progress.advance(c.indices.len() as u64);
+                if progress.cancelled() {
+                    return Err(PipelineError::Cancelled);
+                }
+            }
+            nfaces = n;
+        }
+    }
+    progress.finish();
+    let scatter: Vec<Mutex<BucketReader<Corner>>> = scatter.into_iter().map(|m| Mutex::new(m.into_inner().unwrap().finish())).collect();
+    let face_blocks = blocks.spans.len().max(1);
+    if trace {
+        eprintln!("deref: scatter {:.2}s ({} vertex blocks of {}, {} face blocks of <= {})", t0.elapsed().as_secs_f64(), vertex_blocks, block_vertices, face_blocks, max_block);
+    }
+    let t0 = std::time::Instant::now();
+
+    // 2. Join each vertex block with its corners.
+    let gather_budget = budget * 45 / 100 / threads as u64;
+    let gather: Vec<Mutex<Buckets<R>>> = (0..threads).map(|t| Mutex::new(Buckets::new(dir, &format!("positions-{t}"), face_blocks, gather_budget))).collect();
+    progress.start(JOIN, vertex_blocks);
+    {
+        let next = AtomicUsize::new(0);
+        let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
+        let stop = AtomicBool::new(false);
+        std::thread::scope(|s| {
+            for t in 0..threads {
+                let (next, failed, stop, scatter, gather) = (&next, &failed, &stop, &scatter, &gather);
+                s.spawn(move || {
+                    let mut out = gather[t].lock().unwrap();
+                    let mut block: Vec<[f64; 3]> = Vec::with_capacity(block_vertices as usize);
+                    loop {
+                        let vb = next.fetch_add(1, Ordering::Relaxed) as u64;
+                        if vb >= vertex_blocks || stop.load(Ordering::Relaxed) {
+                            return;
+                        }
+                        let v0 = vb * block_vertices;
+                        let v1 = (v0 + block_vertices).min(nv);
+                        block.clear();
+                        block.extend((v0..v1).map(|i| positions.get(i as u32)));
+                        let mut err: Option<StoreError> = None;
+                        for set in scatter {
+                            let bucket = set.lock().unwrap().take(vb as usize);
+                            let read = bucket.read(|batch| {
+                                if err.is_some() {
+                                    return;
+                                }
+                                for c in batch {
+                                    let p = block[(c.v_block & ((1 << V_BITS) - 1)) as usize];
+                                    if let Err(e) = out.push((c.v_block >> V_BITS) as usize, R::new(c.corner, p)) {
                                         err = Some(e);
+                                        return;
                                     }
                                 }
-                            })?;
-                            err.map_or(Ok(()), |e| Err(e.into()))
-                        },
-                        (b - a) as u32,
-                    )?;
-                    a = b;
-                }
-            }
-            Faces::Reader(reader) => {
-                let mut c = TriangleChunk::new();
-                while reader.next_chunk(&mut c)? {
-                    let tris = &c.indices;
-                    push_chunk(
-                        &mut |emit| {
-                            for t in tris {
-                                emit(*t)?;
+                            });
+                            if let Err(e) = read {
+                                err.get_or_insert(e);
                             }
-                            Ok(())
-                        },
-                        tris.len() as u32,
-                    )?;
-                }
+                        }
+                        let e = match err {
+                            Some(e) => Some(PipelineError::from(e)),
+                            None if progress.cancelled() => Some(PipelineError::Cancelled),
+                            None => None,
+                        };
+                        if let Some(e) = e {
+                            failed.lock().unwrap().get_or_insert(e);
+                            stop.store(true, Ordering::Relaxed);
+                            return;
+                        }
+                        progress.advance(1);
+                    }
+                });
             }
+        });
+        if let Some(e) = failed.into_inner().unwrap() {
+            return Err(e);
         }
     }
     progress.finish();
-    let mut scatter = scatter.finish();
-    let face_blocks = blocks.spans.len();
-
-    // 2. Join each vertex block with its corners, in order.
-    let mut gather = Buckets::<R>::new(dir, "positions", face_blocks.max(1), budget / 3);
-    progress.start(JOIN, vertex_blocks);
-    let mut block: Vec<[f64; 3]> = Vec::with_capacity(block_vertices as usize);
-    let mut failed: Option<StoreError> = None;
-    for vb in 0..vertex_blocks {
-        let v0 = vb * block_vertices;
-        let v1 = (v0 + block_vertices).min(nv);
-        block.clear();
-        block.extend((v0..v1).map(|i| positions.get(i as u32)));
-        scatter.read(vb as usize, |batch| {
-            if failed.is_some() {
-                return;
-            }
-            for c in batch {
-                let p = block[(c.v as u64 - v0) as usize];
-                if let Err(e) = gather.push(c.block as usize, R::new(c.corner, p)) {
-                    failed = Some(e);
-                    return;
-                }
-            }
-        })?;
-        if let Some(e) = failed.take() {
-            return Err(e.into());
-        }
-        progress.advance(1);
-        if progress.cancelled() {
-            return Err(PipelineError::Cancelled);
-        }
+    let mut spilled = 0;
+    for set in scatter {
+        spilled += set.into_inner().unwrap().bytes_spilled();
     }
-    drop(block);
-    progress.finish();
-    let spilled = scatter.bytes_spilled();
-    drop(scatter);
-    let gather = gather.finish();
-    let stats = SortStats { vertex_blocks, face_blocks: face_blocks as u64, bytes_spilled: spilled + gather.bytes_spilled() };
+    let gather: Vec<BucketReader<R>> = gather.into_iter().map(|m| m.into_inner().unwrap().finish()).collect();
+    spilled += gather.iter().map(|g| g.bytes_spilled()).sum::<u64>();
+    let stats = SortStats { vertex_blocks, face_blocks: face_blocks as u64, bytes_spilled: spilled };
+    if trace {
+        eprintln!("deref: join {:.2}s; {} bytes spilled", t0.elapsed().as_secs_f64(), spilled);
+    }
+    let t0 = std::time::Instant::now();
 
     // 3. Assemble face blocks and discretize them chunk by chunk.
     let volumes = assemble::<R>(gather, &blocks, grid, store, threads, progress, xf, nfaces)?;
+    if trace {
+        eprintln!("deref: assemble and discretize {:.2}s", t0.elapsed().as_secs_f64());
+    }
     Ok((nfaces, volumes, stats))
 }
 
 #[allow(clippy::too_many_arguments)]
 fn assemble<R: Resolved>(
-    gather: BucketReader<R>,
+    gather: Vec<BucketReader<R>>,
     blocks: &Blocks,
     grid: &Grid,
     store: &mut ShardWriter,
@@ -479,7 +598,8 @@ fn assemble<R: Resolved>(
     let [_, nb, _] = grid.local_dims();
     let local = LocalMap::new(grid);
     let axis = grid.slab_axis;
-    let gather = Mutex::new(gather);
+    let gather: Vec<Mutex<BucketReader<R>>> = gather.into_iter().map(Mutex::new).collect();
+    let gather = &gather;
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
     let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
@@ -489,7 +609,7 @@ fn assemble<R: Resolved>(
     let written: Result<(), StoreError> = std::thread::scope(|s| {
         for _ in 0..threads {
             let tx = tx.clone();
-            let (gather, next, stop, failed, local) = (&gather, &next, &stop, &failed, &local);
+            let (next, stop, failed, local) = (&next, &stop, &failed, &local);
             s.spawn(move || {
                 let mut tris: Vec<[[f64; 3]; 3]> = Vec::new();
                 loop {
@@ -506,17 +626,19 @@ fn assemble<R: Resolved>(
                     let n: u64 = blocks.chunks[c0..c1].iter().map(|&n| n as u64).sum();
                     tris.clear();
                     tris.resize(n as usize, [[0.0; 3]; 3]);
-                    let bucket = gather.lock().unwrap().take(b);
-                    let filled = bucket.read(|batch| {
-                        for r in batch {
-                            let c = r.corner() as usize;
-                            tris[c / 3][c % 3] = r.pos();
+                    for set in gather {
+                        let bucket = set.lock().unwrap().take(b);
+                        let filled = bucket.read(|batch| {
+                            for r in batch {
+                                let c = r.corner() as usize;
+                                tris[c / 3][c % 3] = r.pos();
+                            }
+                        });
+                        if let Err(e) = filled {
+                            failed.lock().unwrap().get_or_insert(e.into());
+                            stop.store(true, Ordering::Relaxed);
+                            return;
                         }
-                    });
-                    if let Err(e) = filled {
-                        failed.lock().unwrap().get_or_insert(e.into());
-                        stop.store(true, Ordering::Relaxed);
-                        return;
                     }
                     let mut at = 0usize;
                     for ci in c0..c1 {

@@ -4,9 +4,10 @@
 //! This is the distribution step of an external sort (Lindstrom & Silva
 //! 2001 dereference a mesh this way; `mint check` groups edges this way).
 //! [`Buckets::push`] appends a record to bucket `b` in memory; when the
-//! records held reach the budget, every bucket's buffer is appended to its
-//! own file in the spill directory, so disk is touched only when the
-//! records do not fit. [`Buckets::finish`] turns the writer into a
+//! buffers' allocated capacity reaches the budget, every bucket's buffer is
+//! appended to its own file in the spill directory and freed, so disk is
+//! touched only when the records do not fit, and the budget bounds what is
+//! allocated, not just what is used. [`Buckets::finish`] turns the writer into a
 //! [`BucketReader`], which hands each bucket's records back in push order,
 //! in batches, so a bucket larger than memory is never held whole.
 //!
@@ -37,8 +38,12 @@ const READ_BATCH: usize = 1 << 16;
 pub struct Buckets<R: Record> {
     dir: PathBuf,
     name: String,
-    buffers: Vec<Vec<R>>,
+    /// Per bucket: its full pages, then the page being filled.
+    buffers: Vec<Vec<Vec<R>>>,
     spilled: Vec<u64>,
+    /// Records per page (pages are allocated whole).
+    page: usize,
+    /// Records the allocated pages have room for, in all.
     held: usize,
     limit: usize,
     bytes_spilled: u64,
@@ -46,16 +51,20 @@ pub struct Buckets<R: Record> {
 }
 
 impl<R: Record> Buckets<R> {
-    /// `n` buckets whose files are `DIR/NAME-BUCKET.bin`, holding at most
-    /// about `budget` bytes of records in memory (buffers may hold up to
-    /// twice that while they grow).
+    /// `n` buckets whose files are `DIR/NAME-BUCKET.bin`, with at most
+    /// `budget` bytes of buffers allocated (at least a few KiB).
     pub fn new(dir: &Path, name: &str, n: usize, budget: u64) -> Buckets<R> {
-        let limit = (budget / R::SIZE.max(1) as u64).clamp(1024, usize::MAX as u64 / 2) as usize;
+        let n = n.max(1);
+        let limit = (budget / std::mem::size_of::<R>().max(1) as u64).clamp(1024, usize::MAX as u64 / 2) as usize;
+        // Small enough that every bucket can hold a few pages, large enough
+        // that writes and reads are long.
+        let page = (limit / (4 * n)).clamp(64, 1 << 16);
         Buckets {
             dir: dir.to_path_buf(),
             name: name.to_string(),
-            buffers: (0..n.max(1)).map(|_| Vec::new()).collect(),
-            spilled: vec![0; n.max(1)],
+            buffers: (0..n).map(|_| Vec::new()).collect(),
+            spilled: vec![0; n],
+            page,
             held: 0,
             limit,
             bytes_spilled: 0,
@@ -80,37 +89,53 @@ impl<R: Record> Buckets<R> {
     /// Appends `r` to bucket `b`.
     #[inline]
     pub fn push(&mut self, b: usize, r: R) -> Result<(), StoreError> {
-        self.buffers[b].push(r);
-        self.held += 1;
-        if self.held >= self.limit {
+        if let Some(page) = self.buffers[b].last_mut() {
+            if page.len() < page.capacity() {
+                page.push(r);
+                return Ok(());
+            }
+        }
+        self.new_page_and_push(b, r)
+    }
+
+    /// [`Buckets::push`] when bucket `b` has no room: a new page, after
+    /// spilling if the page would pass the budget.
+    #[cold]
+    fn new_page_and_push(&mut self, b: usize, r: R) -> Result<(), StoreError> {
+        if self.held + self.page > self.limit {
             self.spill()?;
         }
+        let mut page = Vec::with_capacity(self.page);
+        page.push(r);
+        self.buffers[b].push(page);
+        self.held += self.page;
         Ok(())
     }
 
-    /// Appends every buffer to its bucket's file and empties it.
+    /// Appends every bucket's pages to its file and frees them.
     fn spill(&mut self) -> Result<(), StoreError> {
         for b in 0..self.buffers.len() {
             if self.buffers[b].is_empty() {
                 continue;
             }
             let path = self.path(b);
-            self.scratch.clear();
-            for r in &self.buffers[b] {
-                r.put(&mut self.scratch);
-            }
             let mut f = std::fs::OpenOptions::new()
                 .create(true)
                 .append(true)
                 .open(&path)
                 .map_err(|source| StoreError::Io { path: path.clone(), op: "creating a spill file", source })?;
-            f.write_all(&self.scratch).map_err(|source| StoreError::Io { path: path.clone(), op: "writing a spill file", source })?;
-            self.spilled[b] += self.buffers[b].len() as u64;
-            self.bytes_spilled += self.scratch.len() as u64;
-            self.buffers[b].clear();
+            for page in &self.buffers[b] {
+                self.scratch.clear();
+                for r in page {
+                    r.put(&mut self.scratch);
+                }
+                f.write_all(&self.scratch).map_err(|source| StoreError::Io { path: path.clone(), op: "writing a spill file", source })?;
+                self.spilled[b] += page.len() as u64;
+                self.bytes_spilled += self.scratch.len() as u64;
+            }
+            self.buffers[b] = Vec::new();
         }
         self.held = 0;
-        self.scratch = Vec::new();
         Ok(())
     }
 
@@ -124,7 +149,7 @@ impl<R: Record> Buckets<R> {
 pub struct BucketReader<R: Record> {
     dir: PathBuf,
     name: String,
-    buffers: Vec<Vec<R>>,
+    buffers: Vec<Vec<Vec<R>>>,
     spilled: Vec<u64>,
     bytes_spilled: u64,
 }
@@ -147,7 +172,7 @@ impl<R: Record> BucketReader<R> {
 
     /// Records in bucket `b`.
     pub fn count(&self, b: usize) -> u64 {
-        self.spilled[b] + self.buffers[b].len() as u64
+        self.spilled[b] + self.buffers[b].iter().map(|p| p.len() as u64).sum::<u64>()
     }
 
     /// Calls `f` with bucket `b`'s records in push order, in batches, then
@@ -169,7 +194,7 @@ impl<R: Record> BucketReader<R> {
 /// One bucket's records, taken from a [`BucketReader`].
 pub struct Bucket<R: Record> {
     file: Option<(PathBuf, u64)>,
-    memory: Vec<R>,
+    memory: Vec<Vec<R>>,
 }
 
 impl<R: Record> Bucket<R> {
@@ -196,8 +221,8 @@ impl<R: Record> Bucket<R> {
             drop(rd);
             std::fs::remove_file(&path).map_err(|source| StoreError::Io { path: path.clone(), op: "removing a spill file", source })?;
         }
-        for piece in self.memory.chunks(READ_BATCH) {
-            f(piece);
+        for page in self.memory {
+            f(&page);
         }
         Ok(())
     }
