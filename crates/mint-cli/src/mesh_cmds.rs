@@ -29,6 +29,18 @@ pub struct CheckArgs {
     /// texture seams, which would otherwise read as boundaries everywhere.
     #[arg(long)]
     pub no_weld: bool,
+    /// Heap budget, e.g. 512M or 2G [default: a quarter of RAM]. The check
+    /// keeps a few bytes per vertex in memory and sends each face's corners
+    /// to buckets that spill to disk past this budget, so a mesh of any size
+    /// can be checked (--self-intersections is in memory, though).
+    #[arg(long, value_parser = crate::units::parse_bytes)]
+    pub mem: Option<u64>,
+    /// Directory for spill files [default: the system temp dir].
+    #[arg(long)]
+    pub tmp: Option<PathBuf>,
+    /// No progress bars.
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 #[derive(Args, Debug)]
@@ -212,11 +224,20 @@ pub(crate) fn cmd_validate(a: ValidateArgs) -> Result<()> {
 }
 
 pub(crate) fn cmd_check(a: CheckArgs) -> Result<()> {
-    let (mut positions, mut faces) = load_mesh(&a.file)?;
-    let welded = if a.no_weld { 0 } else { mint_mesh::weld(&mut positions, &mut faces) };
-    let mut r = mint_mesh::try_check(&positions, &faces).with_context(|| format!("{}", a.file.display()))?;
-    r.welded_vertices = welded;
-    let sx = a.self_intersections.then(|| mint_mesh::self_intersections(&positions, &faces, 5));
+    let opts = mint_pipeline::CheckOptions { mem_bytes: a.mem.unwrap_or_else(default_mem), weld: !a.no_weld, tmp_dir: a.tmp.clone() };
+    let (r, stats) = mint_pipeline::check_file(&a.file, &opts, &Bars::new(a.quiet || a.json))?;
+    let sx = if a.self_intersections {
+        let (mut positions, mut faces) = load_mesh(&a.file)?;
+        if !a.no_weld {
+            mint_mesh::weld(&mut positions, &mut faces);
+        }
+        Some(mint_mesh::self_intersections(&positions, &faces, 5))
+    } else {
+        None
+    };
+    if !a.json && !a.quiet && stats.bytes_spilled > 0 {
+        eprintln!("  ({} of corners spilled to disk to stay within --mem)", human_bytes(stats.bytes_spilled));
+    }
     if a.json {
         let mut v = serde_json::to_value(&r)?;
         v["file"] = a.file.display().to_string().into();

@@ -84,7 +84,7 @@ use serde::{Deserialize, Serialize};
 use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Faces per chunk in the geometry pass; fixes the summation order.
-const FACE_CHUNK: usize = 1 << 14;
+pub const FACE_CHUNK: usize = 1 << 14;
 /// Vertices per chunk in the per-vertex topology pass.
 const VERTEX_CHUNK: usize = 1 << 12;
 /// Label of an unreferenced vertex.
@@ -177,29 +177,57 @@ pub fn try_check(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<CheckRepo
             chi[l] += 1;
         }
     }
-    let genera: Vec<i64> = (0..components as usize)
-        .filter(|&c| !bad[c])
-        .map(|c| (2 - chi[c]) / 2)
-        .collect();
-
-    let (boundary_loops, loop_edges) = walk_boundary_loops(&local.simple);
-    let proper_faces = faces.len() as u64 - geom.collapsed;
-    let c = &local.counts;
-    let watertight = c.boundary == 0
-        && c.non_manifold_edges == 0
-        && c.non_manifold_vertices == 0
-        && c.inconsistent == 0
-        && !faces.is_empty();
-
-    Ok(CheckReport {
+    Ok(report_from(Totals {
         vertices: nv as u64,
         faces: faces.len() as u64,
-        referenced_vertices: referenced,
-        unreferenced_vertices: nv as u64 - referenced,
-        non_finite_vertices: bbox.non_finite,
-        bbox_min: bbox.min,
-        bbox_max: bbox.max,
+        referenced,
         components,
+        bbox,
+        geom,
+        counts: local.counts,
+        simple: &local.simple,
+        chi: &chi,
+        bad: &bad,
+        duplicate_collapsed: duplicate_collapsed(faces),
+    }))
+}
+
+/// Everything a [`CheckReport`] is made from, as the in-core check and the
+/// bounded one (mint-pipeline's `check_file`) both compute it.
+pub struct Totals<'a> {
+    pub vertices: u64,
+    pub faces: u64,
+    pub referenced: u64,
+    pub components: u64,
+    pub bbox: Bbox,
+    pub geom: FaceGeom,
+    pub counts: TopologyCounts,
+    /// `(v, w)` for each simple boundary vertex and its outgoing boundary
+    /// edge, sorted by `v`.
+    pub simple: &'a [(u32, u32)],
+    /// Per component, in component order: Euler characteristic, and
+    /// whether it is not a closed oriented manifold.
+    pub chi: &'a [i64],
+    pub bad: &'a [bool],
+    pub duplicate_collapsed: u64,
+}
+
+/// The report from its totals; see the [module docs](self).
+pub fn report_from(t: Totals) -> CheckReport {
+    let genera: Vec<i64> = (0..t.components as usize).filter(|&c| !t.bad[c]).map(|c| (2 - t.chi[c]) / 2).collect();
+    let (boundary_loops, loop_edges) = walk_boundary_loops(t.simple);
+    let proper_faces = t.faces - t.geom.collapsed;
+    let c = &t.counts;
+    let watertight = c.boundary == 0 && c.non_manifold_edges == 0 && c.non_manifold_vertices == 0 && c.inconsistent == 0 && t.faces > 0;
+    CheckReport {
+        vertices: t.vertices,
+        faces: t.faces,
+        referenced_vertices: t.referenced,
+        unreferenced_vertices: t.vertices - t.referenced,
+        non_finite_vertices: t.bbox.non_finite,
+        bbox_min: t.bbox.min,
+        bbox_max: t.bbox.max,
+        components: t.components,
         edges: c.edges,
         boundary_edges: c.boundary,
         boundary_loops,
@@ -207,18 +235,18 @@ pub fn try_check(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<CheckRepo
         non_manifold_edges: c.non_manifold_edges,
         non_manifold_vertices: c.non_manifold_vertices,
         inconsistently_oriented_edges: c.inconsistent,
-        degenerate_faces: geom.degenerate,
-        collapsed_faces: geom.collapsed,
-        duplicate_faces: c.duplicates + duplicate_collapsed(faces),
-        euler_characteristic: referenced as i64 - c.edges as i64 + proper_faces as i64,
+        degenerate_faces: t.geom.degenerate,
+        collapsed_faces: t.geom.collapsed,
+        duplicate_faces: c.duplicates + t.duplicate_collapsed,
+        euler_characteristic: t.referenced as i64 - c.edges as i64 + proper_faces as i64,
         closed_components: genera.len() as u64,
         genus_total: genera.iter().sum(),
         welded_vertices: 0,
         genera,
-        signed_volume: geom.volume6 / 6.0,
-        surface_area: geom.area2 / 2.0,
+        signed_volume: t.geom.volume6 / 6.0,
+        surface_area: t.geom.area2 / 2.0,
         watertight,
-    })
+    }
 }
 
 /// Rejects out-of-range indices and sizes beyond `u32` indexing; reports the
@@ -250,15 +278,40 @@ fn validate(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<(), MeshError>
     Ok(())
 }
 
+/// True when a face repeats a vertex index.
 #[inline]
-pub(crate) fn is_collapsed(f: &[u32; 3]) -> bool {
+pub fn is_collapsed(f: &[u32; 3]) -> bool {
     f[0] == f[1] || f[1] == f[2] || f[0] == f[2]
 }
 
-struct Bbox {
-    min: Option<[f64; 3]>,
-    max: Option<[f64; 3]>,
-    non_finite: u64,
+/// Bounding box over finite positions, and how many are not finite.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Bbox {
+    pub min: Option<[f64; 3]>,
+    pub max: Option<[f64; 3]>,
+    pub non_finite: u64,
+}
+
+impl Bbox {
+    /// Nothing seen yet.
+    pub fn empty() -> Bbox {
+        Bbox { min: None, max: None, non_finite: 0 }
+    }
+
+    /// Adds one position.
+    #[inline]
+    pub fn add(&mut self, p: [f64; 3]) {
+        if !p.iter().all(|x| x.is_finite()) {
+            self.non_finite += 1;
+            return;
+        }
+        let lo = self.min.get_or_insert(p);
+        let hi = self.max.get_or_insert(p);
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
 }
 
 fn bounding_box(positions: &[[f64; 3]]) -> Bbox {
@@ -298,12 +351,39 @@ fn bounding_box(positions: &[[f64; 3]]) -> Bbox {
     }
 }
 
-#[derive(Default, Clone, Copy)]
-struct FaceGeom {
-    volume6: f64,
-    area2: f64,
-    degenerate: u64,
-    collapsed: u64,
+/// Per-face geometry sums: six times the signed volume, twice the area,
+/// degenerate and collapsed faces. Summed over [`FACE_CHUNK`] faces at a
+/// time and the chunks combined in order ([`FaceGeom::then`]), so that the
+/// sums are bit-identical however the work is split.
+#[derive(Default, Debug, Clone, Copy, PartialEq)]
+pub struct FaceGeom {
+    pub volume6: f64,
+    pub area2: f64,
+    pub degenerate: u64,
+    pub collapsed: u64,
+}
+
+impl FaceGeom {
+    /// Adds one face: its indices (after welding) and corner positions.
+    #[inline]
+    pub fn add(&mut self, f: &[u32; 3], [a, b, c]: [[f64; 3]; 3]) {
+        if is_collapsed(f) {
+            self.collapsed += 1;
+            self.degenerate += 1;
+            return;
+        }
+        let n = cross(sub(b, a), sub(c, a));
+        self.area2 += dot(n, n).sqrt();
+        self.volume6 += dot(a, cross(b, c));
+        if collinear_exact(a, b, c) {
+            self.degenerate += 1;
+        }
+    }
+
+    /// This chunk's sums followed by the next chunk's.
+    pub fn then(self, g: &FaceGeom) -> FaceGeom {
+        FaceGeom { volume6: self.volume6 + g.volume6, area2: self.area2 + g.area2, degenerate: self.degenerate + g.degenerate, collapsed: self.collapsed + g.collapsed }
+    }
 }
 
 fn face_geometry(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> FaceGeom {
@@ -312,29 +392,13 @@ fn face_geometry(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> FaceGeom {
         .map(|chunk| {
             let mut g = FaceGeom::default();
             for f in chunk {
-                if is_collapsed(f) {
-                    g.collapsed += 1;
-                    g.degenerate += 1;
-                    continue;
-                }
-                let [a, b, c] = f.map(|i| positions[i as usize]);
-                let n = cross(sub(b, a), sub(c, a));
-                g.area2 += dot(n, n).sqrt();
-                g.volume6 += dot(a, cross(b, c));
-                if collinear_exact(a, b, c) {
-                    g.degenerate += 1;
-                }
+                g.add(f, f.map(|i| positions[i as usize]));
             }
             g
         })
         .collect();
     // Combine in chunk order: the sum does not depend on the thread count.
-    parts.iter().fold(FaceGeom::default(), |acc, g| FaceGeom {
-        volume6: acc.volume6 + g.volume6,
-        area2: acc.area2 + g.area2,
-        degenerate: acc.degenerate + g.degenerate,
-        collapsed: acc.collapsed + g.collapsed,
-    })
+    parts.iter().fold(FaceGeom::default(), |acc, g| acc.then(g))
 }
 
 /// True iff the three points are exactly collinear (or coincident): the
@@ -450,18 +514,19 @@ fn component_labels(nv: usize, faces: &[[u32; 3]]) -> (Vec<u32>, u64, u64) {
     (parent, nref, u64::from(next))
 }
 
-#[derive(Default, Clone, Copy)]
-struct Counts {
-    edges: u64,
-    boundary: u64,
-    non_manifold_edges: u64,
-    inconsistent: u64,
-    non_manifold_vertices: u64,
-    duplicates: u64,
+/// Edge and vertex counts summed over the per-vertex scans.
+#[derive(Default, Debug, Clone, Copy, PartialEq)]
+pub struct TopologyCounts {
+    pub edges: u64,
+    pub boundary: u64,
+    pub non_manifold_edges: u64,
+    pub inconsistent: u64,
+    pub non_manifold_vertices: u64,
+    pub duplicates: u64,
 }
 
-impl Counts {
-    fn add(&mut self, o: &Counts) {
+impl TopologyCounts {
+    pub fn add(&mut self, o: &TopologyCounts) {
         self.edges += o.edges;
         self.boundary += o.boundary;
         self.non_manifold_edges += o.non_manifold_edges;
@@ -472,7 +537,7 @@ impl Counts {
 }
 
 struct Local {
-    counts: Counts,
+    counts: TopologyCounts,
     /// Per vertex: number of edges `{v, w}` with `w > v` (low 31 bits) and
     /// the `BAD` flag.
     vinfo: Vec<u32>,
@@ -486,15 +551,14 @@ struct Local {
 /// smaller one, and the fans at `v` are found by a small local union-find.
 fn local_topology(nv: usize, faces: &[[u32; 3]], inc: &Incidence) -> Local {
     let mut vinfo = vec![0u32; nv];
-    let parts: Vec<(Counts, Vec<(u32, u32)>)> = vinfo
+    let parts: Vec<(TopologyCounts, Vec<(u32, u32)>)> = vinfo
         .par_chunks_mut(VERTEX_CHUNK)
         .enumerate()
         .map(|(ci, info)| {
-            let mut counts = Counts::default();
+            let mut counts = TopologyCounts::default();
             let mut simple = Vec::new();
-            let mut keys: Vec<u64> = Vec::new();
-            let mut lp: Vec<u32> = Vec::new();
-            let mut dup: Vec<u64> = Vec::new();
+            let mut scratch = VertexScratch::default();
+            let mut fan: Vec<(u32, u32)> = Vec::new();
             let v0 = ci * VERTEX_CHUNK;
             for (dv, slot) in info.iter_mut().enumerate() {
                 let v = (v0 + dv) as u32;
@@ -502,93 +566,21 @@ fn local_topology(nv: usize, faces: &[[u32; 3]], inc: &Incidence) -> Local {
                     inc.offsets[v as usize] as usize,
                     inc.offsets[v as usize + 1] as usize,
                 );
-                let d = e - s;
-                if d == 0 {
+                if e == s {
                     continue;
                 }
-                keys.clear();
-                dup.clear();
-                for k in 0..d {
-                    let f = faces[inc.faces[s + k].load(Ordering::Relaxed) as usize];
-                    let (a, b) = if f[0] == v {
-                        (f[1], f[2])
-                    } else if f[1] == v {
-                        (f[2], f[0])
-                    } else {
-                        (f[0], f[1])
-                    };
-                    // Key: neighbour (32 bits), direction (1 bit, 1 = v→w),
-                    // local face (31 bits: a degree is at most the face count,
-                    // which validation keeps below 2³¹).
-                    keys.push(u64::from(a) << 32 | 1 << 31 | k as u64);
-                    keys.push(u64::from(b) << 32 | k as u64);
-                    if v < a && v < b {
-                        dup.push(u64::from(a.min(b)) << 32 | u64::from(a.max(b)));
-                    }
-                }
-                keys.sort_unstable();
-                lp.clear();
-                lp.extend(0..d as u32);
-                let mut unions = 0usize;
-                let (mut bout, mut bin, mut next) = (0u32, 0u32, 0u32);
-                let mut bad = false;
-                let mut edges_here = 0u32;
-                let mut g = 0;
-                while g < keys.len() {
-                    let w = (keys[g] >> 32) as u32;
-                    let first = (keys[g] & 0x7FFF_FFFF) as u32;
-                    let (mut n_out, mut n_in) = (0u32, 0u32);
-                    let mut h = g;
-                    while h < keys.len() && (keys[h] >> 32) as u32 == w {
-                        if keys[h] >> 31 & 1 == 1 {
-                            n_out += 1;
-                        } else {
-                            n_in += 1;
-                        }
-                        let k = (keys[h] & 0x7FFF_FFFF) as u32;
-                        if local_union(&mut lp, first, k) {
-                            unions += 1;
-                        }
-                        h += 1;
-                    }
-                    g = h;
-                    let m = n_out + n_in;
-                    let inconsistent = m == 2 && n_out != 1;
-                    if m == 1 {
-                        if n_out == 1 {
-                            bout += 1;
-                            next = w;
-                        } else {
-                            bin += 1;
-                        }
-                    }
-                    bad |= m != 2 || inconsistent;
-                    if w > v {
-                        edges_here += 1;
-                        counts.edges += 1;
-                        counts.boundary += u64::from(m == 1);
-                        counts.non_manifold_edges += u64::from(m >= 3);
-                        counts.inconsistent += u64::from(inconsistent);
-                    }
-                }
-                let fans = d - unions;
-                if fans >= 2 {
-                    counts.non_manifold_vertices += 1;
-                    bad = true;
-                }
-                if bout == 1 && bin == 1 {
+                fan.clear();
+                fan.extend((s..e).map(|k| fan_pair(&faces[inc.faces[k].load(Ordering::Relaxed) as usize], v)));
+                let t = scan_vertex(v, &fan, &mut scratch, &mut counts);
+                if let Some(next) = t.simple_next {
                     simple.push((v, next));
                 }
-                if dup.len() > 1 {
-                    dup.sort_unstable();
-                    counts.duplicates += dup.windows(2).filter(|p| p[0] == p[1]).count() as u64;
-                }
-                *slot = edges_here | if bad { BAD } else { 0 };
+                *slot = t.edges_here | if t.bad { BAD } else { 0 };
             }
             (counts, simple)
         })
         .collect();
-    let mut counts = Counts::default();
+    let mut counts = TopologyCounts::default();
     let mut simple = Vec::new();
     for (c, s) in parts {
         counts.add(&c);
@@ -599,6 +591,118 @@ fn local_topology(nv: usize, faces: &[[u32; 3]], inc: &Incidence) -> Local {
         vinfo,
         simple,
     }
+}
+
+/// The other two corners of proper face `f` around its corner `v`, in the
+/// face's order: `(a, b)` with `v → a → b`.
+#[inline]
+pub fn fan_pair(f: &[u32; 3], v: u32) -> (u32, u32) {
+    if f[0] == v {
+        (f[1], f[2])
+    } else if f[1] == v {
+        (f[2], f[0])
+    } else {
+        (f[0], f[1])
+    }
+}
+
+/// Reused buffers of [`scan_vertex`].
+#[derive(Default)]
+pub struct VertexScratch {
+    keys: Vec<u64>,
+    lp: Vec<u32>,
+    dup: Vec<u64>,
+}
+
+/// What [`scan_vertex`] finds at one vertex.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VertexTopology {
+    /// Edges `{v, w}` with `w > v` (each edge is counted at its smaller end).
+    pub edges_here: u32,
+    /// Faces whose smallest vertex is `v` (each face is counted once).
+    pub faces_here: u32,
+    /// The vertex spoils closedness: an edge here is a boundary,
+    /// non-manifold or inconsistently oriented edge, or the vertex is
+    /// non-manifold.
+    pub bad: bool,
+    /// For a simple boundary vertex, its outgoing boundary edge's end.
+    pub simple_next: Option<u32>,
+}
+
+/// The per-vertex scan: vertex `v` looks at its incident proper faces only,
+/// each given as [`fan_pair`], so every edge `{v, w}` is seen whole from
+/// both ends and classified (and counted into `counts`) at the smaller one,
+/// and the fans at `v` are found by a small local union-find.
+pub fn scan_vertex(v: u32, fan: &[(u32, u32)], s: &mut VertexScratch, counts: &mut TopologyCounts) -> VertexTopology {
+    let d = fan.len();
+    let (keys, lp, dup) = (&mut s.keys, &mut s.lp, &mut s.dup);
+    keys.clear();
+    dup.clear();
+    let mut faces_here = 0u32;
+    for (k, &(a, b)) in fan.iter().enumerate() {
+        // Key: neighbour (32 bits), direction (1 bit, 1 = v→w), local face
+        // (31 bits: a degree is at most the face count, kept below 2³¹).
+        keys.push(u64::from(a) << 32 | 1 << 31 | k as u64);
+        keys.push(u64::from(b) << 32 | k as u64);
+        if v < a && v < b {
+            dup.push(u64::from(a.min(b)) << 32 | u64::from(a.max(b)));
+            faces_here += 1;
+        }
+    }
+    keys.sort_unstable();
+    lp.clear();
+    lp.extend(0..d as u32);
+    let mut unions = 0usize;
+    let (mut bout, mut bin, mut next) = (0u32, 0u32, 0u32);
+    let mut bad = false;
+    let mut edges_here = 0u32;
+    let mut g = 0;
+    while g < keys.len() {
+        let w = (keys[g] >> 32) as u32;
+        let first = (keys[g] & 0x7FFF_FFFF) as u32;
+        let (mut n_out, mut n_in) = (0u32, 0u32);
+        let mut h = g;
+        while h < keys.len() && (keys[h] >> 32) as u32 == w {
+            if keys[h] >> 31 & 1 == 1 {
+                n_out += 1;
+            } else {
+                n_in += 1;
+            }
+            let k = (keys[h] & 0x7FFF_FFFF) as u32;
+            if local_union(lp, first, k) {
+                unions += 1;
+            }
+            h += 1;
+        }
+        g = h;
+        let m = n_out + n_in;
+        let inconsistent = m == 2 && n_out != 1;
+        if m == 1 {
+            if n_out == 1 {
+                bout += 1;
+                next = w;
+            } else {
+                bin += 1;
+            }
+        }
+        bad |= m != 2 || inconsistent;
+        if w > v {
+            edges_here += 1;
+            counts.edges += 1;
+            counts.boundary += u64::from(m == 1);
+            counts.non_manifold_edges += u64::from(m >= 3);
+            counts.inconsistent += u64::from(inconsistent);
+        }
+    }
+    if d - unions >= 2 {
+        counts.non_manifold_vertices += 1;
+        bad = true;
+    }
+    if dup.len() > 1 {
+        dup.sort_unstable();
+        counts.duplicates += dup.windows(2).filter(|p| p[0] == p[1]).count() as u64;
+    }
+    VertexTopology { edges_here, faces_here, bad, simple_next: (bout == 1 && bin == 1).then_some(next) }
 }
 
 /// Union in a small local forest; true if two classes were merged.
@@ -620,7 +724,7 @@ fn local_union(p: &mut [u32], a: u32, b: u32) -> bool {
 }
 
 /// Duplicates among collapsed faces (the per-vertex pass never sees them).
-fn duplicate_collapsed(faces: &[[u32; 3]]) -> u64 {
+pub fn duplicate_collapsed(faces: &[[u32; 3]]) -> u64 {
     let mut keys: Vec<[u32; 3]> = faces
         .iter()
         .filter(|f| is_collapsed(f))
@@ -634,9 +738,10 @@ fn duplicate_collapsed(faces: &[[u32; 3]]) -> u64 {
     keys.windows(2).filter(|p| p[0] == p[1]).count() as u64
 }
 
-/// Follows boundary edges from simple boundary vertices; returns the number
-/// of closed loops and the number of edges on them.
-fn walk_boundary_loops(simple: &[(u32, u32)]) -> (u64, u64) {
+/// Follows boundary edges from simple boundary vertices (`(v, w)` sorted
+/// by `v`); returns the number of closed loops and the number of edges on
+/// them.
+pub fn walk_boundary_loops(simple: &[(u32, u32)]) -> (u64, u64) {
     let mut visited = vec![false; simple.len()];
     let (mut loops, mut loop_edges) = (0u64, 0u64);
     for start in 0..simple.len() {

@@ -8,12 +8,19 @@
 //!
 //! Memory: one sort of `(position, index)` pairs, 32 bytes per vertex.
 
+/// The key two positions weld by: their bits, with -0.0 taken as 0.0.
+/// Only finite positions weld (callers check [`f64::is_finite`]).
+#[inline]
+pub fn position_key(p: &[f64; 3]) -> [u64; 3] {
+    p.map(|c| if c == 0.0 { 0u64 } else { c.to_bits() })
+}
+
 /// Welds `positions` in place: returns the new positions (the first vertex
 /// of each group of identical positions, in their original order) and
 /// rewrites `faces` to them. Returns how many vertices were merged away.
 pub fn weld(positions: &mut Vec<[f64; 3]>, faces: &mut [[u32; 3]]) -> u64 {
     let n = positions.len();
-    let key = |p: &[f64; 3]| p.map(|c| if c == 0.0 { 0u64 } else { c.to_bits() });
+    let key = |p: &[f64; 3]| position_key(p);
     let mut order: Vec<u32> = (0..n as u32).collect();
     order.sort_unstable_by_key(|&i| (key(&positions[i as usize]), i));
     // canonical[i]: the smallest index with i's position.

@@ -16,9 +16,12 @@
 //! - [`workdir`]: task directories, atomic commits, checksums;
 //! - [`slurm`]: submitting a plan to a Slurm cluster;
 //! - [`scene`]: the CSG scene format;
+//! - [`check`](mod@check): `mint check` within a memory budget (the
+//!   in-core report, from corners bucketed on disk);
 //! - [`decimate`](mod@decimate): resampling to an intermediate size, then
 //!   meshoptimizer's simplifier to a face target.
 
+pub mod check;
 pub mod decimate;
 pub mod deref;
 pub mod engine;
@@ -32,6 +35,7 @@ pub mod slurm;
 pub mod stages;
 pub mod workdir;
 
+pub use check::{check_file, CheckOptions, CheckStats};
 pub use decimate::{decimate, DecimateOptions, DecimateSummary};
 pub use engine::{boolean, csg, plan_run, resample, run_task, status, summarize_dir, RunStatus, StageStatus, TaskOptions, TaskOutcome};
 pub use deref::Deref;

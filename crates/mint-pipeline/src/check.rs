@@ -1,0 +1,422 @@
+//! `mint check` within a memory budget: the same [`CheckReport`] as the
+//! in-core [`mint_mesh::check()`], for meshes of any size.
+//!
+//! The in-core check classifies every edge and fan from each vertex's own
+//! incident faces. Here those incidences come from disk instead of a table
+//! in memory:
+//! 1. **weld** (unless `--no-weld`): positions go to buckets by a hash of
+//!    their bits; each bucket is sorted, and every vertex gets the smallest
+//!    index at its position (`canonical`, kept only if something welds);
+//! 2. **faces**, one ordered pass: per-face geometry in the in-core chunks
+//!    (so volume and area are the same bits), a union-find over vertices
+//!    for components, and each proper face's three corners `(v, a, b)` sent
+//!    to the bucket of `v`'s block of vertices; collapsed faces' keys to
+//!    their own buckets;
+//! 3. **vertices**, block by block: the block's corners are grouped by
+//!    vertex (a counting sort) and each vertex is judged by
+//!    [`mint_mesh::check::scan_vertex`], the in-core code itself.
+//!
+//! Memory: per vertex a union-find parent (4 bytes), two bits, and 4 more
+//! bytes when welding merges anything; per component its Euler
+//! characteristic; per simple boundary vertex one edge; nothing per face or
+//! per edge beyond the buckets, which spill to disk past `--mem`. The
+//! positions are read through the file's memory map and are not counted.
+//! One vertex's incident faces must fit in memory.
+
+use crate::error::PipelineError;
+use crate::progress::{Phase, Progress};
+use mint_io::{MeshReader, ReadOptions, TriangleChunk, VertexPositions};
+use mint_mesh::check::{fan_pair, is_collapsed, report_from, scan_vertex, Bbox, FaceGeom, TopologyCounts, Totals, VertexScratch, FACE_CHUNK};
+use mint_mesh::weld::position_key;
+use mint_mesh::CheckReport;
+use mint_store::{Buckets, Record, StoreError};
+use std::path::{Path, PathBuf};
+
+/// Welding positions (units: vertices).
+pub const WELD: Phase = Phase::named("check: weld");
+/// Reading faces (units: faces).
+pub const FACES: Phase = Phase::named("check: faces");
+/// Judging vertices (units: vertex blocks).
+pub const VERTICES: Phase = Phase::named("check: vertices");
+
+/// Options of [`check_file`].
+#[derive(Debug, Clone)]
+pub struct CheckOptions {
+    /// Heap budget in bytes (the buckets spill to disk beyond it).
+    pub mem_bytes: u64,
+    /// Weld vertices at identical positions first (as `mint check` does).
+    pub weld: bool,
+    /// Directory for spill files. Default: the system's temporary directory.
+    pub tmp_dir: Option<PathBuf>,
+}
+
+/// What [`check_file`] reports beside the check itself.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct CheckStats {
+    /// Bytes the buckets wrote to disk (0: everything fitted `--mem`).
+    pub bytes_spilled: u64,
+    pub vertex_blocks: u64,
+}
+
+/// A corner `v → a → b` of a proper face, on its way to `v`'s block.
+#[derive(Clone, Copy)]
+struct Corner {
+    v: u32,
+    a: u32,
+    b: u32,
+}
+
+impl Record for Corner {
+    const SIZE: usize = 12;
+    #[inline]
+    fn put(&self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.v.to_le_bytes());
+        out.extend_from_slice(&self.a.to_le_bytes());
+        out.extend_from_slice(&self.b.to_le_bytes());
+    }
+    #[inline]
+    fn get(b: &[u8]) -> Self {
+        let w = |i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap());
+        Corner { v: w(0), a: w(4), b: w(8) }
+    }
+}
+
+/// A position's weld key and its vertex.
+#[derive(Clone, Copy)]
+struct Keyed {
+    key: [u64; 3],
+    v: u32,
+}
+
+impl Record for Keyed {
+    const SIZE: usize = 28;
+    #[inline]
+    fn put(&self, out: &mut Vec<u8>) {
+        for k in self.key {
+            out.extend_from_slice(&k.to_le_bytes());
+        }
+        out.extend_from_slice(&self.v.to_le_bytes());
+    }
+    #[inline]
+    fn get(b: &[u8]) -> Self {
+        let w = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap());
+        Keyed { key: [w(0), w(8), w(16)], v: u32::from_le_bytes(b[24..28].try_into().unwrap()) }
+    }
+}
+
+/// A collapsed face's sorted indices.
+#[derive(Clone, Copy)]
+struct Triple([u32; 3]);
+
+impl Record for Triple {
+    const SIZE: usize = 12;
+    #[inline]
+    fn put(&self, out: &mut Vec<u8>) {
+        for k in self.0 {
+            out.extend_from_slice(&k.to_le_bytes());
+        }
+    }
+    #[inline]
+    fn get(b: &[u8]) -> Self {
+        let w = |i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap());
+        Triple([w(0), w(4), w(8)])
+    }
+}
+
+/// A fixed-size bit set.
+struct Bits(Vec<u64>);
+
+impl Bits {
+    fn new(n: usize) -> Bits {
+        Bits(vec![0; n.div_ceil(64)])
+    }
+    #[inline]
+    fn set(&mut self, i: u32) {
+        self.0[i as usize / 64] |= 1 << (i % 64);
+    }
+    #[inline]
+    fn get(&self, i: u32) -> bool {
+        self.0[i as usize / 64] >> (i % 64) & 1 == 1
+    }
+}
+
+#[inline]
+fn find(p: &mut [u32], mut x: u32) -> u32 {
+    while p[x as usize] != x {
+        let g = p[p[x as usize] as usize];
+        p[x as usize] = g;
+        x = g;
+    }
+    x
+}
+
+/// Links the larger root under the smaller, so `parent[x] <= x` always and
+/// components come out numbered by their smallest vertex, as in core.
+#[inline]
+fn union(p: &mut [u32], a: u32, b: u32) {
+    let (ra, rb) = (find(p, a), find(p, b));
+    if ra < rb {
+        p[rb as usize] = ra;
+    } else if rb < ra {
+        p[ra as usize] = rb;
+    }
+}
+
+fn mix(k: &[u64; 3]) -> u64 {
+    let mut h = 0x9E37_79B9_7F4A_7C15u64;
+    for &x in k {
+        h = (h ^ x).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        h ^= h >> 31;
+    }
+    h
+}
+
+/// Checks the mesh in `path` within `opts.mem_bytes` of heap; see the
+/// module docs. Returns the same report as reading the mesh whole, welding
+/// it (when `opts.weld`) and calling [`mint_mesh::check()`].
+pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> Result<(CheckReport, CheckStats), PipelineError> {
+    let tmp_root = opts.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
+    let tmp = tempfile::Builder::new()
+        .prefix(".mint-check-")
+        .tempdir_in(&tmp_root)
+        .map_err(|source| PipelineError::Temp { path: tmp_root.clone(), op: "creating the check's spill directory", source })?;
+    let dir = tmp.path();
+    let mut reader = MeshReader::open(path, ReadOptions { chunk_triangles: FACE_CHUNK, spill_dir: Some(dir.to_path_buf()), resolve_positions: false })?;
+    let positions = reader.positions();
+    let nv = positions.len();
+    let budget = opts.mem_bytes.max(16 << 20);
+    let mut stats = CheckStats::default();
+
+    // Bounding box over every position (welding never changes it).
+    let mut bbox = Bbox::empty();
+    for i in 0..nv {
+        bbox.add(positions.get(i));
+    }
+
+    // 1. Weld.
+    let (canonical, welded) = if opts.weld { weld(&positions, dir, budget / 2, progress, &mut stats)? } else { (None, 0) };
+    let id = |v: u32| canonical.as_ref().map_or(v, |c: &Vec<u32>| c[v as usize]);
+
+    // 2. Faces.
+    let block_vertices = {
+        // Blocks of vertices whose corners fill about an eighth of the
+        // budget, at 12 bytes a corner and about six corners a vertex.
+        let per_block = (budget / 8 / (12 * 6)).max(1 << 12);
+        per_block.max((nv as u64).div_ceil(4096)).max(1)
+    };
+    let blocks = (nv as u64).div_ceil(block_vertices).max(1);
+    stats.vertex_blocks = blocks;
+    let mut corners = Buckets::<Corner>::new(dir, "corners", blocks as usize, budget / 2);
+    let mut collapsed = Buckets::<Triple>::new(dir, "collapsed", 64, budget / 16);
+    let mut parent: Vec<u32> = (0..nv).collect();
+    let mut referenced = Bits::new(nv as usize);
+    let mut has_collapsed = Bits::new(nv as usize);
+    let mut geom = FaceGeom::default();
+    let mut nfaces = 0u64;
+    progress.start(FACES, reader.info().face_count.unwrap_or(0));
+    let mut chunk = TriangleChunk::new();
+    let push_err = |e: StoreError| PipelineError::from(e);
+    // Geometry is summed over FACE_CHUNK faces at a time, as in core.
+    let mut g = FaceGeom::default();
+    let mut in_chunk = 0usize;
+    while reader.next_chunk(&mut chunk)? {
+        for t in &chunk.indices {
+            let f = t.map(id);
+            // The welded mesh's positions: each vertex's canonical one
+            // (the same point, though -0.0 may have become 0.0).
+            g.add(&f, f.map(|v| positions.get(v)));
+            in_chunk += 1;
+            if in_chunk == FACE_CHUNK {
+                geom = geom.then(&g);
+                g = FaceGeom::default();
+                in_chunk = 0;
+            }
+            for v in f {
+                referenced.set(v);
+            }
+            union(&mut parent, f[0], f[1]);
+            union(&mut parent, f[0], f[2]);
+            if is_collapsed(&f) {
+                has_collapsed.set(f[0]);
+                let mut k = f;
+                k.sort_unstable();
+                collapsed.push((mix(&[k[0] as u64, k[1] as u64, k[2] as u64]) % 64) as usize, Triple(k)).map_err(push_err)?;
+                continue;
+            }
+            for v in f {
+                let (a, b) = fan_pair(&f, v);
+                corners.push((v as u64 / block_vertices) as usize, Corner { v, a, b }).map_err(push_err)?;
+            }
+        }
+        nfaces += chunk.indices.len() as u64;
+        progress.advance(chunk.indices.len() as u64);
+        if progress.cancelled() {
+            return Err(PipelineError::Cancelled);
+        }
+    }
+    if in_chunk > 0 {
+        geom = geom.then(&g);
+    }
+    progress.finish();
+    if nfaces > (u32::MAX / 3) as u64 {
+        return Err(PipelineError::stage(path, format!("{nfaces} faces: `check` handles at most {} (u32 indices)", u32::MAX / 3)));
+    }
+
+    // Component labels, in place (parent[v] <= v), as in core.
+    let mut next = 0u32;
+    let mut nref = 0u64;
+    for v in 0..nv {
+        if !referenced.get(v) {
+            parent[v as usize] = u32::MAX;
+            continue;
+        }
+        nref += 1;
+        let p = parent[v as usize] as usize;
+        parent[v as usize] = if p == v as usize {
+            next += 1;
+            next - 1
+        } else {
+            parent[p]
+        };
+    }
+    let labels = parent;
+    let components = next as u64;
+    let mut chi = vec![0i64; components as usize];
+    let mut bad = vec![false; components as usize];
+    for v in 0..nv {
+        let l = labels[v as usize];
+        if l != u32::MAX {
+            chi[l as usize] += 1;
+            bad[l as usize] |= has_collapsed.get(v);
+        }
+    }
+    drop(has_collapsed);
+    drop(referenced);
+
+    // 3. Vertices, block by block.
+    let mut corners = corners.finish();
+    stats.bytes_spilled += corners.bytes_spilled();
+    let mut counts = TopologyCounts::default();
+    let mut simple: Vec<(u32, u32)> = Vec::new();
+    let mut scratch = VertexScratch::default();
+    let mut start: Vec<u32> = Vec::new();
+    let mut fans: Vec<(u32, u32)> = Vec::new();
+    progress.start(VERTICES, blocks);
+    for blk in 0..blocks {
+        let v0 = (blk * block_vertices) as u32;
+        let v1 = ((blk + 1) * block_vertices).min(nv as u64) as u32;
+        let n = (v1 - v0) as usize;
+        // Counting sort of the block's corners by vertex.
+        let bucket = corners.take(blk as usize);
+        let mut records: Vec<Corner> = Vec::new();
+        bucket.read(|batch| records.extend_from_slice(batch))?;
+        start.clear();
+        start.resize(n + 1, 0);
+        for c in &records {
+            start[(c.v - v0) as usize + 1] += 1;
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        fans.clear();
+        fans.resize(records.len(), (0, 0));
+        let mut at = start.clone();
+        for c in &records {
+            let s = &mut at[(c.v - v0) as usize];
+            fans[*s as usize] = (c.a, c.b);
+            *s += 1;
+        }
+        drop(records);
+        for i in 0..n {
+            let (s, e) = (start[i] as usize, start[i + 1] as usize);
+            if s == e {
+                continue;
+            }
+            let v = v0 + i as u32;
+            let t = scan_vertex(v, &fans[s..e], &mut scratch, &mut counts);
+            let l = labels[v as usize] as usize;
+            chi[l] += t.faces_here as i64 - t.edges_here as i64;
+            bad[l] |= t.bad;
+            if let Some(w) = t.simple_next {
+                simple.push((v, w));
+            }
+        }
+        progress.advance(1);
+        if progress.cancelled() {
+            return Err(PipelineError::Cancelled);
+        }
+    }
+    progress.finish();
+    drop(fans);
+
+    // Duplicates among collapsed faces.
+    let mut collapsed = collapsed.finish();
+    stats.bytes_spilled += collapsed.bytes_spilled();
+    let mut duplicate_collapsed = 0u64;
+    for b in 0..collapsed.len() {
+        let mut keys: Vec<[u32; 3]> = Vec::new();
+        collapsed.read(b, |batch| keys.extend(batch.iter().map(|t| t.0)))?;
+        keys.sort_unstable();
+        duplicate_collapsed += keys.windows(2).filter(|p| p[0] == p[1]).count() as u64;
+    }
+
+    let mut report = report_from(Totals {
+        vertices: nv as u64 - welded,
+        faces: nfaces,
+        referenced: nref,
+        components,
+        bbox,
+        geom,
+        counts,
+        simple: &simple,
+        chi: &chi,
+        bad: &bad,
+        duplicate_collapsed,
+    });
+    report.welded_vertices = welded;
+    Ok((report, stats))
+}
+
+/// Welds by position: each vertex's smallest index at its exact position
+/// (finite positions only), or `None` when nothing welds; and how many
+/// vertices were merged away.
+fn weld(positions: &VertexPositions, dir: &Path, budget: u64, progress: &dyn Progress, stats: &mut CheckStats) -> Result<(Option<Vec<u32>>, u64), PipelineError> {
+    let nv = positions.len();
+    // Buckets that each sort within an eighth of the budget.
+    let nb = ((nv as u64 * 28).div_ceil((budget / 8).max(1))).clamp(1, 4096) as usize;
+    let mut keyed = Buckets::<Keyed>::new(dir, "weld", nb, budget / 2);
+    progress.start(WELD, nv as u64);
+    for v in 0..nv {
+        let p = positions.get(v);
+        if p.iter().all(|c| c.is_finite()) {
+            let key = position_key(&p);
+            keyed.push((mix(&key) % nb as u64) as usize, Keyed { key, v })?;
+        }
+        if v % (1 << 20) == 0 {
+            progress.advance(1 << 20);
+        }
+    }
+    progress.finish();
+    let mut keyed = keyed.finish();
+    stats.bytes_spilled += keyed.bytes_spilled();
+    let mut canonical: Option<Vec<u32>> = None;
+    let mut merged = 0u64;
+    let mut recs: Vec<Keyed> = Vec::new();
+    for b in 0..nb {
+        recs.clear();
+        keyed.read(b, |batch| recs.extend_from_slice(batch))?;
+        recs.sort_unstable_by_key(|r| (r.key, r.v));
+        let mut g = 0;
+        while g < recs.len() {
+            let mut h = g + 1;
+            while h < recs.len() && recs[h].key == recs[g].key {
+                let c = canonical.get_or_insert_with(|| (0..nv).collect());
+                c[recs[h].v as usize] = recs[g].v;
+                merged += 1;
+                h += 1;
+            }
+            g = h;
+        }
+    }
+    Ok((canonical, merged))
+}
