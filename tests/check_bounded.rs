@@ -19,10 +19,10 @@ fn in_core(path: &Path, weld: bool) -> mint_mesh::CheckReport {
 fn same_report(path: &Path, spill_expected: bool) {
     for weld in [true, false] {
         let want = in_core(path, weld);
-        for mem in [1u64 << 30, 1] {
-            let opts = CheckOptions { mem_bytes: mem, weld, tmp_dir: None };
+        for (mem, threads) in [(1u64 << 30, 1), (1, 2), (1, 3)] {
+            let opts = CheckOptions { mem_bytes: mem, weld, tmp_dir: None, threads };
             let (got, stats) = check_file(path, &opts, &NoProgress).unwrap();
-            assert_eq!(got, want, "{} weld {weld} mem {mem}", path.display());
+            assert_eq!(got, want, "{} weld {weld} mem {mem} threads {threads}", path.display());
             if mem == 1 && spill_expected {
                 assert!(stats.bytes_spilled > 0, "{}: a 16 MiB floor was meant to spill", path.display());
             }

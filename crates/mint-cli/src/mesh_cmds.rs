@@ -38,6 +38,9 @@ pub struct CheckArgs {
     /// Directory for spill files [default: the system temp dir].
     #[arg(long)]
     pub tmp: Option<PathBuf>,
+    /// Worker threads [default: all cores]. The report is the same for any value.
+    #[arg(long, default_value_t = 0, hide_default_value = true)]
+    pub threads: usize,
     /// No progress bars.
     #[arg(long, short)]
     pub quiet: bool,
@@ -224,7 +227,8 @@ pub(crate) fn cmd_validate(a: ValidateArgs) -> Result<()> {
 }
 
 pub(crate) fn cmd_check(a: CheckArgs) -> Result<()> {
-    let opts = mint_pipeline::CheckOptions { mem_bytes: a.mem.unwrap_or_else(default_mem), weld: !a.no_weld, tmp_dir: a.tmp.clone() };
+    let threads = if a.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { a.threads };
+    let opts = mint_pipeline::CheckOptions { mem_bytes: a.mem.unwrap_or_else(default_mem), weld: !a.no_weld, tmp_dir: a.tmp.clone(), threads };
     let (r, stats) = mint_pipeline::check_file(&a.file, &opts, &Bars::new(a.quiet || a.json))?;
     let sx = if a.self_intersections {
         let (mut positions, mut faces) = load_mesh(&a.file)?;

@@ -375,7 +375,7 @@ impl FaceGeom {
         let n = cross(sub(b, a), sub(c, a));
         self.area2 += dot(n, n).sqrt();
         self.volume6 += dot(a, cross(b, c));
-        if collinear_exact(a, b, c) {
+        if !surely_not_collinear(a, b, c) && collinear_exact(a, b, c) {
             self.degenerate += 1;
         }
     }
@@ -399,6 +399,25 @@ fn face_geometry(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> FaceGeom {
         .collect();
     // Combine in chunk order: the sum does not depend on the thread count.
     parts.iter().fold(FaceGeom::default(), |acc, g| acc.then(g))
+}
+
+/// A filter before [`collinear_exact`]: true when one component of
+/// `(b-a)×(c-a)`, computed in floating point, is certainly not zero. Each
+/// component is a 2D orientation `l - r` of products of differences;
+/// Shewchuk's bound on its rounding error is about `3.3e-16 * (|l| + |r|)`,
+/// so a computed value beyond three times that cannot come from zero
+/// (checked only well above the subnormal range, and never for NaN). Only
+/// the rest (near-degenerate faces) pay for the exact test.
+#[inline]
+fn surely_not_collinear(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> bool {
+    let (u, v) = (sub(b, a), sub(c, a));
+    let orient = |i: usize, j: usize| {
+        let (l, r) = (u[i] * v[j], u[j] * v[i]);
+        // Far from underflow, where the relative bound holds.
+        let m = l.abs() + r.abs();
+        m > 1e-280 && (l - r).abs() > 1e-15 * m
+    };
+    orient(0, 1) || orient(1, 2) || orient(2, 0)
 }
 
 /// True iff the three points are exactly collinear (or coincident): the

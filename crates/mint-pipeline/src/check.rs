@@ -31,6 +31,8 @@ use mint_mesh::weld::position_key;
 use mint_mesh::CheckReport;
 use mint_store::{Buckets, Record, StoreError};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Mutex;
 
 /// Welding positions (units: vertices).
 pub const WELD: Phase = Phase::named("check: weld");
@@ -48,6 +50,8 @@ pub struct CheckOptions {
     pub weld: bool,
     /// Directory for spill files. Default: the system's temporary directory.
     pub tmp_dir: Option<PathBuf>,
+    /// Worker threads (at least 1). The report is the same for any value.
+    pub threads: usize,
 }
 
 /// What [`check_file`] reports beside the check itself.
@@ -187,81 +191,61 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     let budget = opts.mem_bytes.max(16 << 20);
     let mut stats = CheckStats::default();
 
+    let trace = std::env::var_os("MINT_CHECK_TRACE").is_some();
+    let t0 = std::time::Instant::now();
+    let lap = |what: &str| {
+        if trace {
+            eprintln!("check: {what} at {:.2}s", t0.elapsed().as_secs_f64());
+        }
+    };
     // Bounding box over every position (welding never changes it).
     let mut bbox = Bbox::empty();
     for i in 0..nv {
         bbox.add(positions.get(i));
     }
 
+    lap("bbox");
     // 1. Weld.
     let (canonical, welded) = if opts.weld { weld(&positions, dir, budget / 2, progress, &mut stats)? } else { (None, 0) };
-    let id = |v: u32| canonical.as_ref().map_or(v, |c: &Vec<u32>| c[v as usize]);
 
+    lap("weld");
     // 2. Faces.
+    let threads = opts.threads.max(1);
     let block_vertices = {
         // Blocks of vertices whose corners fill about an eighth of the
-        // budget, at 12 bytes a corner and about six corners a vertex.
-        let per_block = (budget / 8 / (12 * 6)).max(1 << 12);
+        // budget per worker, at 12 bytes a corner and about six corners a
+        // vertex.
+        let per_block = (budget / 8 / threads as u64 / (12 * 6)).max(1 << 12);
         per_block.max((nv as u64).div_ceil(4096)).max(1)
     };
     let blocks = (nv as u64).div_ceil(block_vertices).max(1);
     stats.vertex_blocks = blocks;
-    let mut corners = Buckets::<Corner>::new(dir, "corners", blocks as usize, budget / 2);
-    let mut collapsed = Buckets::<Triple>::new(dir, "collapsed", 64, budget / 16);
-    let mut parent: Vec<u32> = (0..nv).collect();
-    let mut referenced = Bits::new(nv as usize);
-    let mut has_collapsed = Bits::new(nv as usize);
-    let mut geom = FaceGeom::default();
-    let mut nfaces = 0u64;
-    progress.start(FACES, reader.info().face_count.unwrap_or(0));
-    let mut chunk = TriangleChunk::new();
-    let push_err = |e: StoreError| PipelineError::from(e);
-    // Geometry is summed over FACE_CHUNK faces at a time, as in core.
-    let mut g = FaceGeom::default();
-    let mut in_chunk = 0usize;
-    while reader.next_chunk(&mut chunk)? {
-        for t in &chunk.indices {
-            let f = t.map(id);
-            // The welded mesh's positions: each vertex's canonical one
-            // (the same point, though -0.0 may have become 0.0).
-            g.add(&f, f.map(|v| positions.get(v)));
-            in_chunk += 1;
-            if in_chunk == FACE_CHUNK {
-                geom = geom.then(&g);
-                g = FaceGeom::default();
-                in_chunk = 0;
-            }
-            for v in f {
-                referenced.set(v);
-            }
-            union(&mut parent, f[0], f[1]);
-            union(&mut parent, f[0], f[2]);
-            if is_collapsed(&f) {
-                has_collapsed.set(f[0]);
-                let mut k = f;
-                k.sort_unstable();
-                collapsed.push((mix(&[k[0] as u64, k[1] as u64, k[2] as u64]) % 64) as usize, Triple(k)).map_err(push_err)?;
-                continue;
-            }
-            for v in f {
-                let (a, b) = fan_pair(&f, v);
-                corners.push((v as u64 / block_vertices) as usize, Corner { v, a, b }).map_err(push_err)?;
-            }
-        }
-        nfaces += chunk.indices.len() as u64;
-        progress.advance(chunk.indices.len() as u64);
-        if progress.cancelled() {
-            return Err(PipelineError::Cancelled);
+    let id = |v: u32| canonical.as_ref().map_or(v, |c: &Vec<u32>| c[v as usize]);
+    let sink = |n: usize, t: usize| Sink {
+        corners: Buckets::new(dir, &format!("corners-{t}"), blocks as usize, budget / 2 / n as u64),
+        collapsed: Buckets::new(dir, &format!("collapsed-{t}"), 64, budget / 16 / n as u64),
+        block_vertices,
+    };
+    let records = reader.triangle_records()?;
+    let mut pass = None;
+    if let Some(records) = &records {
+        match faces_direct(records, &id, &positions, threads, &sink, progress) {
+            Ok(p) => pass = Some(p),
+            // Polygons in a fixed-record file: read it as a stream.
+            Err(PipelineError::Io(e)) if e.kind() == mint_io::ErrorKind::Unsupported => {}
+            Err(e) => return Err(e),
         }
     }
-    if in_chunk > 0 {
-        geom = geom.then(&g);
-    }
-    progress.finish();
+    let pass = match pass {
+        Some(p) => p,
+        None => faces_streamed(&mut reader, &id, &positions, sink(1, 0), progress)?,
+    };
+    let FacePass { mut parent, referenced, has_collapsed, geom, nfaces, sinks } = pass;
     if nfaces > (u32::MAX / 3) as u64 {
         return Err(PipelineError::stage(path, format!("{nfaces} faces: `check` handles at most {} (u32 indices)", u32::MAX / 3)));
     }
 
+    lap("faces");
     // Component labels, in place (parent[v] <= v), as in core.
     let mut next = 0u32;
     let mut nref = 0u64;
@@ -293,69 +277,28 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     drop(has_collapsed);
     drop(referenced);
 
-    // 3. Vertices, block by block.
-    let mut corners = corners.finish();
-    stats.bytes_spilled += corners.bytes_spilled();
-    let mut counts = TopologyCounts::default();
-    let mut simple: Vec<(u32, u32)> = Vec::new();
-    let mut scratch = VertexScratch::default();
-    let mut start: Vec<u32> = Vec::new();
-    let mut fans: Vec<(u32, u32)> = Vec::new();
-    progress.start(VERTICES, blocks);
-    for blk in 0..blocks {
-        let v0 = (blk * block_vertices) as u32;
-        let v1 = ((blk + 1) * block_vertices).min(nv as u64) as u32;
-        let n = (v1 - v0) as usize;
-        // Counting sort of the block's corners by vertex.
-        let bucket = corners.take(blk as usize);
-        let mut records: Vec<Corner> = Vec::new();
-        bucket.read(|batch| records.extend_from_slice(batch))?;
-        start.clear();
-        start.resize(n + 1, 0);
-        for c in &records {
-            start[(c.v - v0) as usize + 1] += 1;
-        }
-        for i in 0..n {
-            start[i + 1] += start[i];
-        }
-        fans.clear();
-        fans.resize(records.len(), (0, 0));
-        let mut at = start.clone();
-        for c in &records {
-            let s = &mut at[(c.v - v0) as usize];
-            fans[*s as usize] = (c.a, c.b);
-            *s += 1;
-        }
-        drop(records);
-        for i in 0..n {
-            let (s, e) = (start[i] as usize, start[i + 1] as usize);
-            if s == e {
-                continue;
-            }
-            let v = v0 + i as u32;
-            let t = scan_vertex(v, &fans[s..e], &mut scratch, &mut counts);
-            let l = labels[v as usize] as usize;
-            chi[l] += t.faces_here as i64 - t.edges_here as i64;
-            bad[l] |= t.bad;
-            if let Some(w) = t.simple_next {
-                simple.push((v, w));
-            }
-        }
-        progress.advance(1);
-        if progress.cancelled() {
-            return Err(PipelineError::Cancelled);
-        }
+    // 3. Vertices, blocks in parallel.
+    let mut corner_sets = Vec::new();
+    let mut collapsed_sets = Vec::new();
+    for s in sinks {
+        let c = s.corners.finish();
+        stats.bytes_spilled += c.bytes_spilled();
+        corner_sets.push(Mutex::new(c));
+        collapsed_sets.push(s.collapsed.finish());
     }
-    progress.finish();
-    drop(fans);
+    let (counts, mut simple) = vertices(&corner_sets, &labels, nv, block_vertices, blocks, threads, &mut chi, &mut bad, progress)?;
+    simple.sort_unstable();
+    drop(corner_sets);
 
-    // Duplicates among collapsed faces.
-    let mut collapsed = collapsed.finish();
-    stats.bytes_spilled += collapsed.bytes_spilled();
+    lap("vertices");
+    // Duplicates among collapsed faces: bucket b of every worker's set.
     let mut duplicate_collapsed = 0u64;
-    for b in 0..collapsed.len() {
+    for b in 0..64 {
         let mut keys: Vec<[u32; 3]> = Vec::new();
-        collapsed.read(b, |batch| keys.extend(batch.iter().map(|t| t.0)))?;
+        for set in &mut collapsed_sets {
+            stats.bytes_spilled += if b == 0 { set.bytes_spilled() } else { 0 };
+            set.read(b, |batch| keys.extend(batch.iter().map(|t| t.0)))?;
+        }
         keys.sort_unstable();
         duplicate_collapsed += keys.windows(2).filter(|p| p[0] == p[1]).count() as u64;
     }
@@ -375,6 +318,279 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     });
     report.welded_vertices = welded;
     Ok((report, stats))
+}
+
+/// Where one worker's corners and collapsed faces go.
+struct Sink {
+    corners: Buckets<Corner>,
+    collapsed: Buckets<Triple>,
+    block_vertices: u64,
+}
+
+impl Sink {
+    /// One face (welded indices): its corners, or its key if collapsed.
+    #[inline]
+    fn face(&mut self, f: [u32; 3]) -> Result<(), StoreError> {
+        if is_collapsed(&f) {
+            let mut k = f;
+            k.sort_unstable();
+            return self.collapsed.push((mix(&[k[0] as u64, k[1] as u64, k[2] as u64]) % 64) as usize, Triple(k));
+        }
+        for v in f {
+            let (a, b) = fan_pair(&f, v);
+            self.corners.push((v as u64 / self.block_vertices) as usize, Corner { v, a, b })?;
+        }
+        Ok(())
+    }
+}
+
+/// What the pass over the faces leaves.
+struct FacePass {
+    parent: Vec<u32>,
+    referenced: Bits,
+    has_collapsed: Bits,
+    geom: FaceGeom,
+    nfaces: u64,
+    sinks: Vec<Sink>,
+}
+
+/// The union-find side of one face (welded indices).
+#[inline]
+fn link(parent: &mut [u32], referenced: &mut Bits, has_collapsed: &mut Bits, f: [u32; 3]) {
+    for v in f {
+        referenced.set(v);
+    }
+    union(parent, f[0], f[1]);
+    union(parent, f[0], f[2]);
+    if is_collapsed(&f) {
+        has_collapsed.set(f[0]);
+    }
+}
+
+/// The faces of a file with fixed-size records: one thread runs the
+/// union-find over all faces in order, while `threads` workers take chunks
+/// of [`FACE_CHUNK`] faces for geometry (combined in chunk order) and
+/// corners (each into its own buckets).
+fn faces_direct(
+    records: &mint_io::TriangleRecords,
+    id: &(dyn Fn(u32) -> u32 + Sync),
+    positions: &VertexPositions,
+    threads: usize,
+    sink: &(dyn Fn(usize, usize) -> Sink + Sync),
+    progress: &dyn Progress,
+) -> Result<FacePass, PipelineError> {
+    let n = records.len();
+    let nv = positions.len();
+    let chunks = n.div_ceil(FACE_CHUNK as u64) as usize;
+    let next = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
+    let geoms: Mutex<Vec<FaceGeom>> = Mutex::new(vec![FaceGeom::default(); chunks]);
+    progress.start(FACES, n);
+    let (uf, sinks) = std::thread::scope(|s| {
+        let uf = s.spawn(|| -> Result<(Vec<u32>, Bits, Bits), PipelineError> {
+            let mut parent: Vec<u32> = (0..nv).collect();
+            let mut referenced = Bits::new(nv as usize);
+            let mut has_collapsed = Bits::new(nv as usize);
+            records.visit_indices(0, n, |_, t| link(&mut parent, &mut referenced, &mut has_collapsed, t.map(id)))?;
+            Ok((parent, referenced, has_collapsed))
+        });
+        let workers: Vec<_> = (0..threads)
+            .map(|w| {
+                let (next, stop, failed, geoms) = (&next, &stop, &failed, &geoms);
+                s.spawn(move || {
+                    let mut out = sink(threads, w);
+                    loop {
+                        let c = next.fetch_add(1, Ordering::Relaxed);
+                        if c >= chunks || stop.load(Ordering::Relaxed) {
+                            return out;
+                        }
+                        let (a, b) = (c as u64 * FACE_CHUNK as u64, ((c + 1) as u64 * FACE_CHUNK as u64).min(n));
+                        let mut g = FaceGeom::default();
+                        let mut err = None;
+                        let visited = records.visit_indices(a, b, |_, t| {
+                            let f = t.map(id);
+                            // The welded mesh's positions: each vertex's
+                            // canonical one (-0.0 may have become 0.0).
+                            g.add(&f, f.map(|v| positions.get(v)));
+                            if err.is_none() {
+                                err = out.face(f).err();
+                            }
+                        });
+                        let e = match (visited, err) {
+                            (Err(e), _) => Some(PipelineError::from(e)),
+                            (_, Some(e)) => Some(e.into()),
+                            _ if progress.cancelled() => Some(PipelineError::Cancelled),
+                            _ => None,
+                        };
+                        if let Some(e) = e {
+                            failed.lock().unwrap().get_or_insert(e);
+                            stop.store(true, Ordering::Relaxed);
+                            return out;
+                        }
+                        geoms.lock().unwrap()[c] = g;
+                        progress.advance(b - a);
+                    }
+                })
+            })
+            .collect();
+        let sinks: Vec<Sink> = workers.into_iter().map(|w| w.join().expect("check worker panicked")).collect();
+        (uf.join().expect("union-find panicked"), sinks)
+    });
+    if let Some(e) = failed.into_inner().unwrap() {
+        return Err(e);
+    }
+    let (parent, referenced, has_collapsed) = uf?;
+    progress.finish();
+    let geom = geoms.into_inner().unwrap().iter().fold(FaceGeom::default(), |acc, g| acc.then(g));
+    Ok(FacePass { parent, referenced, has_collapsed, geom, nfaces: n, sinks })
+}
+
+/// The faces of any file, streamed in order by one thread.
+fn faces_streamed(reader: &mut MeshReader, id: &dyn Fn(u32) -> u32, positions: &VertexPositions, mut out: Sink, progress: &dyn Progress) -> Result<FacePass, PipelineError> {
+    let nv = positions.len();
+    let mut parent: Vec<u32> = (0..nv).collect();
+    let mut referenced = Bits::new(nv as usize);
+    let mut has_collapsed = Bits::new(nv as usize);
+    let mut geom = FaceGeom::default();
+    let mut nfaces = 0u64;
+    progress.start(FACES, reader.info().face_count.unwrap_or(0));
+    let mut chunk = TriangleChunk::new();
+    // Geometry is summed over FACE_CHUNK faces at a time, as in core.
+    let mut g = FaceGeom::default();
+    let mut in_chunk = 0usize;
+    while reader.next_chunk(&mut chunk)? {
+        for t in &chunk.indices {
+            let f = t.map(id);
+            g.add(&f, f.map(|v| positions.get(v)));
+            in_chunk += 1;
+            if in_chunk == FACE_CHUNK {
+                geom = geom.then(&g);
+                g = FaceGeom::default();
+                in_chunk = 0;
+            }
+            link(&mut parent, &mut referenced, &mut has_collapsed, f);
+            out.face(f)?;
+        }
+        nfaces += chunk.indices.len() as u64;
+        progress.advance(chunk.indices.len() as u64);
+        if progress.cancelled() {
+            return Err(PipelineError::Cancelled);
+        }
+    }
+    if in_chunk > 0 {
+        geom = geom.then(&g);
+    }
+    progress.finish();
+    Ok(FacePass { parent, referenced, has_collapsed, geom, nfaces, sinks: vec![out] })
+}
+
+/// Judges every vertex, blocks in parallel: each worker gathers a block's
+/// corners from every set, groups them by vertex (a counting sort), and
+/// scans each vertex; Euler characteristics and flags go to the vertex's
+/// component. Returns the counts and the simple boundary edges (unsorted).
+#[allow(clippy::too_many_arguments)]
+fn vertices(
+    sets: &[Mutex<mint_store::BucketReader<Corner>>],
+    labels: &[u32],
+    nv: u32,
+    block_vertices: u64,
+    blocks: u64,
+    threads: usize,
+    chi: &mut [i64],
+    bad: &mut [bool],
+    progress: &dyn Progress,
+) -> Result<(TopologyCounts, Vec<(u32, u32)>), PipelineError> {
+    let next = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
+    let shared = Mutex::new((chi, bad));
+    progress.start(VERTICES, blocks);
+    let parts: Vec<(TopologyCounts, Vec<(u32, u32)>)> = std::thread::scope(|s| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                let (next, stop, failed, shared) = (&next, &stop, &failed, &shared);
+                s.spawn(move || {
+                    let mut counts = TopologyCounts::default();
+                    let mut simple = Vec::new();
+                    let mut scratch = VertexScratch::default();
+                    let (mut start, mut fans, mut records, mut deltas): (Vec<u32>, Vec<(u32, u32)>, Vec<Corner>, Vec<(u32, i64, bool)>) = Default::default();
+                    loop {
+                        let blk = next.fetch_add(1, Ordering::Relaxed) as u64;
+                        if blk >= blocks || stop.load(Ordering::Relaxed) {
+                            return (counts, simple);
+                        }
+                        let v0 = (blk * block_vertices) as u32;
+                        let v1 = ((blk + 1) * block_vertices).min(nv as u64) as u32;
+                        let n = (v1 - v0) as usize;
+                        records.clear();
+                        for set in sets {
+                            let bucket = set.lock().unwrap().take(blk as usize);
+                            if let Err(e) = bucket.read(|batch| records.extend_from_slice(batch)) {
+                                failed.lock().unwrap().get_or_insert(e.into());
+                                stop.store(true, Ordering::Relaxed);
+                                return (counts, simple);
+                            }
+                        }
+                        start.clear();
+                        start.resize(n + 1, 0);
+                        for c in &records {
+                            start[(c.v - v0) as usize + 1] += 1;
+                        }
+                        for i in 0..n {
+                            start[i + 1] += start[i];
+                        }
+                        fans.clear();
+                        fans.resize(records.len(), (0, 0));
+                        let mut at = start.clone();
+                        for c in &records {
+                            let s = &mut at[(c.v - v0) as usize];
+                            fans[*s as usize] = (c.a, c.b);
+                            *s += 1;
+                        }
+                        deltas.clear();
+                        for i in 0..n {
+                            let (s, e) = (start[i] as usize, start[i + 1] as usize);
+                            if s == e {
+                                continue;
+                            }
+                            let v = v0 + i as u32;
+                            let t = scan_vertex(v, &fans[s..e], &mut scratch, &mut counts);
+                            deltas.push((labels[v as usize], t.faces_here as i64 - t.edges_here as i64, t.bad));
+                            if let Some(w) = t.simple_next {
+                                simple.push((v, w));
+                            }
+                        }
+                        {
+                            let mut g = shared.lock().unwrap();
+                            for &(l, d, b) in &deltas {
+                                g.0[l as usize] += d;
+                                g.1[l as usize] |= b;
+                            }
+                        }
+                        progress.advance(1);
+                        if progress.cancelled() {
+                            failed.lock().unwrap().get_or_insert(PipelineError::Cancelled);
+                            stop.store(true, Ordering::Relaxed);
+                            return (counts, simple);
+                        }
+                    }
+                })
+            })
+            .collect();
+        workers.into_iter().map(|w| w.join().expect("check worker panicked")).collect()
+    });
+    if let Some(e) = failed.into_inner().unwrap() {
+        return Err(e);
+    }
+    progress.finish();
+    let mut counts = TopologyCounts::default();
+    let mut simple = Vec::new();
+    for (c, s) in parts {
+        counts.add(&c);
+        simple.extend(s);
+    }
+    Ok((counts, simple))
 }
 
 /// Welds by position: each vertex's smallest index at its exact position
