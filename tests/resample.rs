@@ -179,12 +179,13 @@ fn resample_under_limit(faces: u64) {
     let m = load(&out);
     let r = mint_mesh::check(&m.positions, &m.faces);
     assert!(r.watertight && r.genus_total == 0, "{r:?}");
-    // The in-core check of the input fits the same limit at this size
-    // (about 50 bytes per face with welding).
-    let o = std::process::Command::new("prlimit").arg("--data=268435456").arg(mint_bin()).arg("check").arg(&input).arg("--json").output().unwrap();
-    assert!(o.status.success(), "check under 256 MiB failed: {}", String::from_utf8_lossy(&o.stderr));
+    // The check of the input stays within --mem (its corners spill to disk)
+    // under half that limit.
+    let o = std::process::Command::new("prlimit").arg("--data=134217728").arg(mint_bin()).args(["check", &input.display().to_string(), "--json", "--mem", "48M"]).output().unwrap();
+    assert!(o.status.success(), "check under 128 MiB failed: {}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!((v["watertight"].as_bool(), v["faces"].as_u64()), (Some(true), Some(faces)));
+    assert!(v["spilled_bytes"].as_u64().unwrap() > 0, "the check was meant to spill under --mem 48M");
     // A picture of the input streams through the same limit.
     let png = dir.path().join("in.png");
     let o = std::process::Command::new("prlimit").arg("--data=268435456").arg(mint_bin()).arg("render").arg(&input).arg(&png).args(["--json", "--quiet"]).output().unwrap();

@@ -245,6 +245,7 @@ pub(crate) fn cmd_check(a: CheckArgs) -> Result<()> {
     if a.json {
         let mut v = serde_json::to_value(&r)?;
         v["file"] = a.file.display().to_string().into();
+        v["spilled_bytes"] = stats.bytes_spilled.into();
         if let Some(x) = &sx {
             v["self_intersections"] = serde_json::to_value(x)?;
         }
