@@ -20,7 +20,7 @@ fn same_report(path: &Path, spill_expected: bool) {
     for weld in [true, false] {
         let want = in_core(path, weld);
         for (mem, threads) in [(1u64 << 30, 1), (1, 2), (1, 3)] {
-            let opts = CheckOptions { mem_bytes: mem, weld, tmp_dir: None, threads };
+            let opts = CheckOptions { mem_bytes: mem, weld, tmp_dir: None, threads, list_boundary: 0 };
             let (got, stats) = check_file(path, &opts, &NoProgress).unwrap();
             assert_eq!(got, want, "{} weld {weld} mem {mem} threads {threads}", path.display());
             if mem == 1 && spill_expected {

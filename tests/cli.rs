@@ -367,6 +367,40 @@ fn check_welds_stl_soups_and_obj_seams_and_no_weld_does_not() {
     assert_eq!(verdict(&[p(&obj), "--no-weld"])["watertight"].as_bool(), Some(false));
 }
 
+/// `mint render --show-boundary` draws exactly the boundary `mint check`
+/// counts: on a closed sphere the picture is unchanged; on a scan with
+/// holes it changes and the count is check's. `--wireframe` changes the
+/// picture and keeps it the same on one and two threads.
+#[test]
+fn render_shows_boundaries_where_check_finds_them_and_draws_wireframes() {
+    let d = tempfile::tempdir().unwrap();
+    let sphere = d.path().join("s.ply");
+    ok(&["gen", "sphere", p(&sphere), "--faces", "20000"]);
+    let scan = d.path().join("scan.ply");
+    ok(&["gen", "scan", p(&scan), "--faces", "60000"]);
+    let png = |name: &str, args: &[&str]| {
+        let out = d.path().join(name);
+        let mut a = vec!["render", args[0], p(&out), "--size", "300x200", "--json"];
+        a.extend_from_slice(&args[1..]);
+        let j: serde_json::Value = serde_json::from_str(&ok(&a)).unwrap();
+        (std::fs::read(&out).unwrap(), j)
+    };
+    let (plain, _) = png("a.png", &[p(&sphere)]);
+    let (marked, j) = png("b.png", &[p(&sphere), "--show-boundary"]);
+    assert!(plain == marked, "a closed sphere has no boundary to draw");
+    assert_eq!(j["boundary_edges"][0].as_u64(), Some(0));
+    let (plain, _) = png("c.png", &[p(&scan)]);
+    let (marked, j) = png("d.png", &[p(&scan), "--show-boundary"]);
+    assert!(plain != marked, "the scan's holes are drawn");
+    let c: serde_json::Value = serde_json::from_str(&ok(&["check", p(&scan), "--json"])).unwrap();
+    assert!(c["boundary_edges"].as_u64().unwrap() > 0);
+    assert_eq!(j["boundary_edges"][0], c["boundary_edges"]);
+    let (wire1, _) = png("e.png", &[p(&sphere), "--wireframe", "--threads", "1"]);
+    let (wire2, _) = png("f.png", &[p(&sphere), "--wireframe", "--threads", "2"]);
+    let (plain, _) = png("g.png", &[p(&sphere)]);
+    assert!(wire1 == wire2 && wire1 != plain);
+}
+
 /// `mint render`: a sphere's silhouette has the analytic area (orthographic
 /// camera), the bytes are the same on every run, and `--preview` writes the
 /// input and output side by side.

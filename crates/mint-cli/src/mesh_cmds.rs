@@ -228,7 +228,7 @@ pub(crate) fn cmd_validate(a: ValidateArgs) -> Result<()> {
 
 pub(crate) fn cmd_check(a: CheckArgs) -> Result<()> {
     let threads = if a.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { a.threads };
-    let opts = mint_pipeline::CheckOptions { mem_bytes: a.mem.unwrap_or_else(default_mem), weld: !a.no_weld, tmp_dir: a.tmp.clone(), threads };
+    let opts = mint_pipeline::CheckOptions { mem_bytes: a.mem.unwrap_or_else(default_mem), weld: !a.no_weld, tmp_dir: a.tmp.clone(), threads, list_boundary: 0 };
     let (r, stats) = mint_pipeline::check_file(&a.file, &opts, &Bars::new(a.quiet || a.json))?;
     let sx = if a.self_intersections {
         let (mut positions, mut faces) = load_mesh(&a.file)?;

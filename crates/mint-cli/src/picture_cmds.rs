@@ -25,6 +25,20 @@ pub struct RenderArgs {
     /// a colour bar: where a resampling or decimation lost detail.
     #[arg(long, value_enum, default_value_t = ColorArg::Shading)]
     pub color: ColorArg,
+    /// Draw every triangle's edges in dark grey (edges hidden by the surface
+    /// stay hidden). On a mesh with more triangles than pixels this turns
+    /// the surface grey: use it on small meshes or zoomed views.
+    #[arg(long)]
+    pub wireframe: bool,
+    /// Draw the boundary edges (edges used by one face, after welding
+    /// vertices at identical positions) thick and red, so that holes show.
+    /// Finds them as `mint check` does, within --mem; draws at most the
+    /// first 10 million per mesh.
+    #[arg(long)]
+    pub show_boundary: bool,
+    /// Heap budget of --show-boundary's check, e.g. 512M [default: a quarter of RAM].
+    #[arg(long, value_parser = crate::units::parse_bytes)]
+    pub mem: Option<u64>,
     /// Worker threads [default: all cores]. The picture is the same for any value.
     #[arg(long, default_value_t = 0, hide_default_value = true)]
     pub threads: usize,
@@ -87,13 +101,36 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         crate::paths::check_not_input(output, &[r.as_path()])?;
     }
     let threads = if a.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { a.threads };
-    let o = mint_render::RenderOptions { width: a.size.0, height: a.size.1, view, threads, distance_to };
     let bars = Bars::new(a.quiet || a.json);
+    let mut marks = Vec::new();
+    let mut boundary_edges = Vec::new();
+    if a.show_boundary {
+        const MOST: usize = 10_000_000;
+        for input in inputs {
+            let opts = mint_pipeline::CheckOptions { mem_bytes: a.mem.unwrap_or_else(crate::jobs::default_mem), weld: true, tmp_dir: None, threads, list_boundary: MOST };
+            let (report, stats) = mint_pipeline::check_file(input, &opts, &bars)?;
+            let positions = mint_io::MeshReader::open(input, mint_io::ReadOptions::default())?.positions();
+            marks.push(stats.boundary.iter().map(|&[v, w]| [positions.get(v), positions.get(w)]).collect::<Vec<_>>());
+            if report.boundary_edges as usize > MOST && !a.quiet {
+                eprintln!("warning: {}: {} boundary edges; drawing the first {MOST}", input.display(), report.boundary_edges);
+            }
+            boundary_edges.push(report.boundary_edges);
+        }
+    }
+    let o = mint_render::RenderOptions { width: a.size.0, height: a.size.1, view, threads, distance_to, wireframe: a.wireframe, marks };
     let s = mint_render::render_files(&refs, output, &o, &bars)?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&s)?);
+        let mut v = serde_json::to_value(&s)?;
+        if a.show_boundary {
+            v["boundary_edges"] = boundary_edges.clone().into();
+        }
+        println!("{}", serde_json::to_string_pretty(&v)?);
     } else if !a.quiet {
         eprintln!("rendered {} triangles -> {} ({}x{}, {} pixels covered) in {:.2}s", s.triangles, s.output, s.width, s.height, s.covered_pixels, s.seconds);
+        if a.show_boundary {
+            let list: Vec<String> = boundary_edges.iter().map(u64::to_string).collect();
+            eprintln!("  boundary edges (red): {}", list.join(", "));
+        }
         if let (Some(max), Some(mean)) = (s.distance_max, s.distance_mean) {
             eprintln!("  distance to the reference over the visible surface: mean {mean:.3e}, max {max:.3e} (the colour bar's top)");
         }

@@ -625,12 +625,14 @@ pub fn fan_pair(f: &[u32; 3], v: u32) -> (u32, u32) {
     }
 }
 
-/// Reused buffers of [`scan_vertex`].
+/// Reused buffers of [`scan_vertex`]; after a scan, `boundary_out` holds
+/// the far ends `w` of the boundary edges `v → w` that leave the vertex.
 #[derive(Default)]
 pub struct VertexScratch {
     keys: Vec<u64>,
     lp: Vec<u32>,
     dup: Vec<u64>,
+    pub boundary_out: Vec<u32>,
 }
 
 /// What [`scan_vertex`] finds at one vertex.
@@ -657,6 +659,7 @@ pub fn scan_vertex(v: u32, fan: &[(u32, u32)], s: &mut VertexScratch, counts: &m
     let (keys, lp, dup) = (&mut s.keys, &mut s.lp, &mut s.dup);
     keys.clear();
     dup.clear();
+    s.boundary_out.clear();
     let mut faces_here = 0u32;
     for (k, &(a, b)) in fan.iter().enumerate() {
         // Key: neighbour (32 bits), direction (1 bit, 1 = v→w), local face
@@ -700,6 +703,7 @@ pub fn scan_vertex(v: u32, fan: &[(u32, u32)], s: &mut VertexScratch, counts: &m
             if n_out == 1 {
                 bout += 1;
                 next = w;
+                s.boundary_out.push(w);
             } else {
                 bin += 1;
             }

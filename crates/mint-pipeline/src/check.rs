@@ -52,6 +52,8 @@ pub struct CheckOptions {
     pub tmp_dir: Option<PathBuf>,
     /// Worker threads (at least 1). The report is the same for any value.
     pub threads: usize,
+    /// Also list up to this many boundary edges (for pictures). Default 0.
+    pub list_boundary: usize,
 }
 
 /// What [`check_file`] reports beside the check itself.
@@ -60,6 +62,10 @@ pub struct CheckStats {
     /// Bytes the buckets wrote to disk (0: everything fitted `--mem`).
     pub bytes_spilled: u64,
     pub vertex_blocks: u64,
+    /// Up to `list_boundary` boundary edges `v → w` (welded vertex ids,
+    /// which index the file's positions), smallest `v` first.
+    #[serde(skip)]
+    pub boundary: Vec<[u32; 2]>,
 }
 
 /// A corner `v → a → b` of a proper face, on its way to `v`'s block.
@@ -286,8 +292,11 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
         corner_sets.push(Mutex::new(c));
         collapsed_sets.push(s.collapsed.finish());
     }
-    let (counts, mut simple) = vertices(&corner_sets, &labels, nv, block_vertices, blocks, threads, &mut chi, &mut bad, progress)?;
+    let (counts, mut simple, mut boundary) = vertices(&corner_sets, &labels, nv, block_vertices, blocks, threads, opts.list_boundary, &mut chi, &mut bad, progress)?;
     simple.sort_unstable();
+    boundary.sort_unstable();
+    boundary.truncate(opts.list_boundary);
+    stats.boundary = boundary;
     drop(corner_sets);
 
     lap("vertices");
@@ -497,28 +506,30 @@ fn vertices(
     block_vertices: u64,
     blocks: u64,
     threads: usize,
+    list_boundary: usize,
     chi: &mut [i64],
     bad: &mut [bool],
     progress: &dyn Progress,
-) -> Result<(TopologyCounts, Vec<(u32, u32)>), PipelineError> {
+) -> Result<(TopologyCounts, Vec<(u32, u32)>, Vec<[u32; 2]>), PipelineError> {
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
     let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
     let shared = Mutex::new((chi, bad));
     progress.start(VERTICES, blocks);
-    let parts: Vec<(TopologyCounts, Vec<(u32, u32)>)> = std::thread::scope(|s| {
+    let parts: Vec<(TopologyCounts, Vec<(u32, u32)>, Vec<[u32; 2]>)> = std::thread::scope(|s| {
         let workers: Vec<_> = (0..threads)
             .map(|_| {
                 let (next, stop, failed, shared) = (&next, &stop, &failed, &shared);
                 s.spawn(move || {
                     let mut counts = TopologyCounts::default();
                     let mut simple = Vec::new();
+                    let mut listed: Vec<[u32; 2]> = Vec::new();
                     let mut scratch = VertexScratch::default();
                     let (mut start, mut fans, mut records, mut deltas): (Vec<u32>, Vec<(u32, u32)>, Vec<Corner>, Vec<(u32, i64, bool)>) = Default::default();
                     loop {
                         let blk = next.fetch_add(1, Ordering::Relaxed) as u64;
                         if blk >= blocks || stop.load(Ordering::Relaxed) {
-                            return (counts, simple);
+                            return (counts, simple, listed);
                         }
                         let v0 = (blk * block_vertices) as u32;
                         let v1 = ((blk + 1) * block_vertices).min(nv as u64) as u32;
@@ -529,7 +540,7 @@ fn vertices(
                             if let Err(e) = bucket.read(|batch| records.extend_from_slice(batch)) {
                                 failed.lock().unwrap().get_or_insert(e.into());
                                 stop.store(true, Ordering::Relaxed);
-                                return (counts, simple);
+                                return (counts, simple, listed);
                             }
                         }
                         start.clear();
@@ -560,6 +571,11 @@ fn vertices(
                             if let Some(w) = t.simple_next {
                                 simple.push((v, w));
                             }
+                            // Each worker keeps its smallest; the caller
+                            // sorts and keeps the smallest overall.
+                            if listed.len() < list_boundary {
+                                listed.extend(scratch.boundary_out.iter().map(|&w| [v, w]));
+                            }
                         }
                         {
                             let mut g = shared.lock().unwrap();
@@ -572,7 +588,7 @@ fn vertices(
                         if progress.cancelled() {
                             failed.lock().unwrap().get_or_insert(PipelineError::Cancelled);
                             stop.store(true, Ordering::Relaxed);
-                            return (counts, simple);
+                            return (counts, simple, listed);
                         }
                     }
                 })
@@ -586,11 +602,13 @@ fn vertices(
     progress.finish();
     let mut counts = TopologyCounts::default();
     let mut simple = Vec::new();
-    for (c, s) in parts {
+    let mut listed = Vec::new();
+    for (c, s, l) in parts {
         counts.add(&c);
         simple.extend(s);
+        listed.extend(l);
     }
-    Ok((counts, simple))
+    Ok((counts, simple, listed))
 }
 
 /// Welds by position: each vertex's smallest index at its exact position

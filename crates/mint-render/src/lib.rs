@@ -162,7 +162,16 @@ pub struct Canvas {
     pub order: u64,
     /// Pixels covered by at least one triangle.
     pub covered: u64,
+    /// Per line layer ([`WIRE`], [`BOUNDARY`]), the nearest depth of a line
+    /// at each pixel (empty until the layer is drawn on).
+    lines: [Vec<f32>; 2],
 }
+
+/// The line layer of `--wireframe`: every triangle's edges, dark grey.
+pub const WIRE: usize = 0;
+/// The line layer of `--show-boundary`: boundary edges, red and thick.
+pub const BOUNDARY: usize = 1;
+const LINE_COLOURS: [[u8; 3]; 2] = [[50, 50, 60], [220, 20, 30]];
 
 /// The background colour.
 pub const BACKGROUND: [u8; 3] = [250, 250, 250];
@@ -172,7 +181,58 @@ const BACK: [f64; 3] = [0.95, 0.55, 0.15];
 impl Canvas {
     pub fn new(width: u32, height: u32) -> Canvas {
         let n = width as usize * height as usize;
-        Canvas { width, height, depth: vec![f32::INFINITY; n], rgb: vec![BACKGROUND; n], shade: vec![0.0; n], index: vec![u64::MAX; n], order: 0, covered: 0 }
+        Canvas { width, height, depth: vec![f32::INFINITY; n], rgb: vec![BACKGROUND; n], shade: vec![0.0; n], index: vec![u64::MAX; n], order: 0, covered: 0, lines: [Vec::new(), Vec::new()] }
+    }
+
+    /// Draws the segment `a`–`b` seen by `cam` into line `layer`, keeping
+    /// the nearest depth per pixel (one pixel wide; three for
+    /// [`BOUNDARY`]). Lines show where [`Canvas::show_lines`] finds them not
+    /// hidden by the surface.
+    pub fn segment(&mut self, cam: &Camera, a: [f64; 3], b: [f64; 3], layer: usize) {
+        let (p, q) = (cam.project(a), cam.project(b));
+        if !(p.iter().chain(&q).all(|c| c.is_finite())) {
+            return;
+        }
+        if self.lines[layer].is_empty() {
+            self.lines[layer] = vec![f32::INFINITY; self.depth.len()];
+        }
+        let r: i64 = if layer == BOUNDARY { 1 } else { 0 };
+        let steps = (q[0] - p[0]).abs().max((q[1] - p[1]).abs()).ceil().min(1e5) as u64 + 1;
+        let (w, h) = (self.width as i64, self.height as i64);
+        for k in 0..=steps {
+            let t = k as f64 / steps as f64;
+            let (x, y, z) = (p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1]), (p[2] + t * (q[2] - p[2])) as f32);
+            let (xi, yi) = (x.floor() as i64, y.floor() as i64);
+            for dy in -r..=r {
+                for dx in -r..=r {
+                    let (px, py) = (xi + dx, yi + dy);
+                    if px >= 0 && py >= 0 && px < w && py < h {
+                        let i = py as usize * self.width as usize + px as usize;
+                        let l = &mut self.lines[layer][i];
+                        if z < *l {
+                            *l = z;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Paints the line layers over the picture where a line is not behind
+    /// the surface by more than `bias` (in depth units): wires first, then
+    /// boundaries on top.
+    pub fn show_lines(&mut self, bias: f32) {
+        for layer in [WIRE, BOUNDARY] {
+            if self.lines[layer].is_empty() {
+                continue;
+            }
+            for i in 0..self.depth.len() {
+                let l = self.lines[layer][i];
+                if l.is_finite() && l <= self.depth[i] + bias {
+                    self.rgb[i] = LINE_COLOURS[layer];
+                }
+            }
+        }
     }
 
     /// Draws one triangle seen by `cam`, flat-shaded.
@@ -258,6 +318,17 @@ impl Canvas {
                 self.rgb[i] = other.rgb[i];
                 self.shade[i] = other.shade[i];
                 self.index[i] = k;
+            }
+        }
+        for layer in [WIRE, BOUNDARY] {
+            if other.lines[layer].is_empty() {
+                continue;
+            }
+            if self.lines[layer].is_empty() {
+                self.lines[layer] = vec![f32::INFINITY; self.depth.len()];
+            }
+            for (l, &o) in self.lines[layer].iter_mut().zip(&other.lines[layer]) {
+                *l = l.min(o);
             }
         }
     }
@@ -403,11 +474,17 @@ pub struct RenderOptions {
     /// a BVH), on one scale for the whole picture, with a colour bar and
     /// its top value at the right. Default `None`: shading only.
     pub distance_to: Option<PathBuf>,
+    /// Draw every triangle's edges (hidden ones stay hidden). Default off.
+    pub wireframe: bool,
+    /// Segments drawn thick in red over each input (one list per input, in
+    /// order; empty lists draw nothing): the boundary edges for
+    /// `--show-boundary`, which the caller finds. Default: none.
+    pub marks: Vec<Vec<[[f64; 3]; 2]>>,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions { width: 1200, height: 900, view: View::Iso, threads: std::thread::available_parallelism().map_or(1, |n| n.get()), distance_to: None }
+        RenderOptions { width: 1200, height: 900, view: View::Iso, threads: std::thread::available_parallelism().map_or(1, |n| n.get()), distance_to: None, wireframe: false, marks: Vec::new() }
     }
 }
 
@@ -509,6 +586,11 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
                                 for (tile, cam) in tiles.iter_mut().zip(cams) {
                                     tile.order = base + k as u64;
                                     tile.triangle(cam, p);
+                                    if o.wireframe {
+                                        for e in 0..3 {
+                                            tile.segment(cam, p[e], p[(e + 1) % 3], WIRE);
+                                        }
+                                    }
                                 }
                             }
                             let _ = free_tx.try_send(chunk);
@@ -550,6 +632,17 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
         drop(worker_tiles);
         summary.triangles += r.stats().triangles;
         progress.finish();
+        // Lines may sit up to two pixels' worth of depth behind the surface
+        // they lie on (rasterization rounding on slanted faces).
+        let bias = (2.0 / cams[0].scale) as f32;
+        for (tile, cam) in tiles.iter_mut().zip(&cams) {
+            for seg in o.marks.get(col).into_iter().flatten() {
+                tile.segment(cam, seg[0], seg[1], BOUNDARY);
+            }
+            if reference.is_none() {
+                tile.show_lines(bias);
+            }
+        }
         for (row, tile) in tiles.iter().enumerate() {
             summary.covered_pixels += tile.covered;
             if let Some(bvh) = &reference {
@@ -575,6 +668,7 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
             for &(i, x) in d {
                 tile.tint(i, if max > 0.0 { x / max } else { 0.0 });
             }
+            tile.show_lines((2.0 / summary.scale) as f32);
             picture.blit(tile, *col * o.width, *row * o.height);
         }
         let (x0, h) = (o.width * inputs.len() as u32 + 20, picture.height.saturating_sub(80).min(600));
@@ -600,6 +694,27 @@ mod tests {
         c.triangle(&cam, &[a, cc, d]);
         // The square spans 90% of the tile: 90 x 90 pixel centres.
         assert_eq!(c.covered, 90 * 90);
+    }
+
+    #[test]
+    fn lines_show_on_the_surface_and_hide_behind_it() {
+        let cam = Camera::fit(View::Top, [0.0, 0.0, -1.0], [1.0, 1.0, 0.0], 100, 100);
+        let mut c = Canvas::new(100, 100);
+        // A square at z = 0 seen from above; one segment on it, one below it
+        // (z = -1, hidden), one beside it over the background.
+        c.triangle(&cam, &[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]);
+        c.triangle(&cam, &[[0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]]);
+        c.segment(&cam, [0.1, 0.5, 0.0], [0.9, 0.5, 0.0], WIRE);
+        c.segment(&cam, [0.5, 0.1, -1.0], [0.5, 0.9, -1.0], WIRE);
+        c.segment(&cam, [0.5, 0.2, 0.0], [0.5, 0.4, 0.0], BOUNDARY);
+        c.show_lines((2.0 / cam.scale) as f32);
+        let px = |x: f64, y: f64| {
+            let q = cam.project([x, y, 0.0]);
+            c.rgb[q[1] as usize * 100 + q[0] as usize]
+        };
+        assert_eq!(px(0.3, 0.5), LINE_COLOURS[WIRE], "a wire on the surface shows");
+        assert_ne!(px(0.5, 0.75), LINE_COLOURS[WIRE], "a wire behind the surface stays hidden");
+        assert_eq!(px(0.5, 0.3), LINE_COLOURS[BOUNDARY], "boundaries draw over the surface");
     }
 
     #[test]
