@@ -399,6 +399,17 @@ fn render_shows_boundaries_where_check_finds_them_and_draws_wireframes() {
     let (wire2, _) = png("f.png", &[p(&sphere), "--wireframe", "--threads", "2"]);
     let (plain, _) = png("g.png", &[p(&sphere)]);
     assert!(wire1 == wire2 && wire1 != plain);
+    // --preview on contours and zipper: OUT.png beside the output.
+    let pro = d.path().join("s.pro");
+    ok(&["slice", p(&sphere), p(&pro), "--sections", "12", "--quiet"]);
+    let c = d.path().join("c.ply");
+    ok(&["contours", p(&pro), p(&c), "--method", "mc", "--caps", "--preview", "--quiet"]);
+    assert!(d.path().join("c.png").is_file());
+    let scans = d.path().join("scans");
+    ok(&["scan", p(&sphere), p(&scans), "--views", "4"]);
+    let z = d.path().join("z.ply");
+    ok(&["zipper", p(&scans.join("scans.conf")), p(&z), "--preview", "--json"]);
+    assert!(d.path().join("z.png").is_file());
 }
 
 /// `mint render`: a sphere's silhouette has the analytic area (orthographic

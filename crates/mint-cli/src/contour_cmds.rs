@@ -94,6 +94,10 @@ pub struct ContoursArgs {
     /// Write vertex coordinates as f64 instead of f32.
     #[arg(long)]
     pub double: bool,
+    /// Also write OUT.png beside the output: a picture of the surface (see
+    /// `mint render`).
+    #[arg(long)]
+    pub preview: bool,
     /// Write the status file (time, counts, parameters) as JSON here.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
@@ -191,6 +195,9 @@ pub fn cmd_slice(a: SliceArgs) -> Result<()> {
 
 pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
     crate::paths::check_output(&a.output, &[&a.input])?;
+    if a.preview {
+        crate::paths::check_output(&crate::jobs::preview_path(&a.output), &[&a.input])?;
+    }
     if let Some(st) = &a.stats {
         crate::paths::check_output(st, &[&a.input, &a.output])?;
     }
@@ -240,6 +247,9 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
         s.vertices,
         s.faces
     );
+    if a.preview {
+        crate::picture_cmds::write_preview(&[a.output.as_path()], &a.output, a.quiet || a.json, &crate::progress::Bars::new(a.quiet || a.json))?;
+    }
     report(&s, &a.stats, a.quiet, a.json, line)
 }
 

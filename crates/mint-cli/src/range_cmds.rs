@@ -162,6 +162,10 @@ pub struct ZipperArgs {
     /// scan units [default: the larger of 1.5 cells and 3 sampling distances].
     #[arg(long)]
     pub band: Option<f64>,
+    /// Also write OUT.png beside the output: a picture of the merged surface
+    /// (see `mint render`).
+    #[arg(long)]
+    pub preview: bool,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -294,6 +298,9 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
     let mut inputs: Vec<&std::path::Path> = vec![&a.set];
     inputs.extend(set.entries.iter().map(|e| e.path.as_path()));
     crate::paths::check_output(&a.output, &inputs)?;
+    if a.preview {
+        crate::paths::check_output(&crate::jobs::preview_path(&a.output), &inputs)?;
+    }
     let bars = crate::progress::Bars::new(a.json);
     let scans = mint_range::ScanFiles::open_with(&set, &a.set, &MeshOptions::default(), a.mem as usize, &bars)?;
     let poses: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
@@ -324,6 +331,9 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
     w.finish()?;
     let secs = t.elapsed().as_secs_f64();
     let check = mint_mesh::check(&pos, &faces);
+    if a.preview {
+        crate::picture_cmds::write_preview(&[a.output.as_path()], &a.output, a.json, &bars)?;
+    }
     if a.json {
         let key = match report {
             MergeReport::Zipper(_) => "zipper",
