@@ -32,6 +32,7 @@ mod backend;
 pub mod convert;
 pub mod error;
 pub mod format;
+mod formats;
 mod mapped;
 mod mesh;
 mod obj;

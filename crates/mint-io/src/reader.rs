@@ -21,7 +21,6 @@ use crate::mapped::Mapped;
 use crate::positions::{Emit, Positions};
 pub use crate::backend::{ElementInfo, MeshInfo, RangeGrid, ReadStats};
 use crate::backend::FaceStream;
-use crate::{mesh, obj, off, ply, raw, stl, three_ds, vrml};
 
 /// Reads what the file says about itself without streaming its faces.
 ///
@@ -32,16 +31,7 @@ use crate::{mesh, obj, off, ply, raw, stl, three_ds, vrml};
 pub fn read_info(path: &Path) -> Result<MeshInfo, Error> {
     let format = Format::from_path(path)?;
     let map = Mapped::open(path, &std::env::temp_dir())?;
-    match format {
-        Format::Ply => Ok(ply::read::info_from_header(&ply::header::parse(map.bytes(), path)?)),
-        Format::Obj => obj::info(path, map.bytes()),
-        Format::Stl => stl::info(path, map.bytes()),
-        Format::Off => off::info(path, map.bytes()),
-        Format::Mesh => mesh::info(path, map.bytes()),
-        Format::Raw => raw::info(path, map.bytes()),
-        Format::Vrml => vrml::info(path, map.bytes()),
-        Format::ThreeDs => three_ds::info(path, map.bytes()),
-    }
+    (crate::formats::backend(format).info)(path, map.bytes())
 }
 
 /// Reads a whole mesh into memory: every vertex position and every
@@ -240,16 +230,7 @@ impl MeshReader {
         let spill_dir = opts.spill_dir();
         let map = Arc::new(Mapped::open(path, &spill_dir)?);
         let bytes_total = map.bytes().len() as u64;
-        let opened = match format {
-            Format::Ply => ply::read::open(path, map, &spill_dir)?,
-            Format::Obj => obj::open(path, map, &spill_dir)?,
-            Format::Stl => stl::open(path, map, &spill_dir)?,
-            Format::Off => off::open(path, map, &spill_dir)?,
-            Format::Mesh => mesh::open(path, map, &spill_dir)?,
-            Format::Raw => raw::open(path, map, &spill_dir)?,
-            Format::Vrml => vrml::open(path, map, &spill_dir)?,
-            Format::ThreeDs => three_ds::open(path, map, &spill_dir)?,
-        };
+        let opened = (crate::formats::backend(format).open)(path, map, &spill_dir)?;
         Ok(MeshReader {
             path: path.to_path_buf(),
             info: opened.info,

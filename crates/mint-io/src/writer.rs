@@ -20,7 +20,6 @@ use mint_core::{MeshSink, SinkError};
 
 use crate::error::{Error, ErrorKind};
 use crate::format::Format;
-use crate::{mesh, obj, off, ply, raw, stl, three_ds, vrml};
 pub use crate::backend::WriteOptions;
 use crate::backend::FormatWriter;
 
@@ -66,17 +65,9 @@ impl MeshWriter {
     /// Starts writing `path` in `format`: creates a temporary file beside
     /// it (the target appears only at [`finish`](MeshWriter::finish)).
     pub fn create(path: &Path, format: Format, opts: WriteOptions) -> Result<MeshWriter, Error> {
-        let inner: Box<dyn FormatWriter> = match format {
-            Format::Ply => Box::new(ply::write::PlyWriter::create(path, &opts)?),
-            Format::Obj => Box::new(obj::ObjWriter::create(path, &opts)?),
-            Format::Stl => Box::new(stl::StlWriter::create(path, &opts)?),
-            Format::Off => Box::new(off::OffWriter::create(path, &opts)?),
-            Format::Mesh => Box::new(mesh::MeshFmtWriter::create(path, &opts)?),
-            Format::Raw => Box::new(raw::RawWriter::create(path, &opts)?),
-            Format::Vrml => Box::new(vrml::VrmlWriter::create(path, &opts)?),
-            Format::ThreeDs => Box::new(three_ds::ThreeDsWriter::create(path, &opts)?),
-        };
-        let f32_out = !opts.double || matches!(format, Format::Stl | Format::ThreeDs);
+        let backend = crate::formats::backend(format);
+        let inner = (backend.create)(path, &opts)?;
+        let f32_out = !opts.double || backend.f32_only;
         Ok(MeshWriter { path: path.to_path_buf(), format, inner, f32_out, vertices: 0, faces: 0 })
     }
 
