@@ -225,10 +225,13 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
             "grid {}x{}x{} cells of {:.6}, {} non-canonical cells",
             d.grid_cells[0], d.grid_cells[1], d.grid_cells[2], d.cube_size, d.non_canonical_cells
         ),
-        MethodStats::Angle(d) => format!(
-            "{} tubes, {} splits, {} caps, {} unsplit and {} complex branchings",
-            d.tubes, d.splits, d.caps, d.unsplit_groups, d.complex_groups
-        ),
+        MethodStats::Angle(d) => {
+            let f = &d.fallback_slabs;
+            format!(
+                "{} tubes ({} by the paper's march, {} from another start pair, {} by minimum area), {} splits, {} bridged groups, {} capped apart, {} caps; section pairs using each fallback: restart {}, minimum area {}, split {}, bridge {}, apart {}",
+                d.tubes, d.tiled.march, d.tiled.restart, d.tiled.min_area, d.splits, d.bridged, d.apart, d.caps, f.restart, f.min_area, f.split, f.bridge, f.apart
+            )
+        }
         _ => String::new(),
     };
     let line = format!(

@@ -63,6 +63,8 @@
 use crate::error::ContourError;
 use crate::geom2d::{centroid, first_crossing, inside, orient, segments_touch, signed_area, P2};
 use crate::profile::Section;
+use crate::slabcheck::SlabCheck;
+use crate::tiling::{decide, march, min_cost, other_starts, start_pair, Cost, Tiling};
 use crate::triangulate::triangulate;
 use mint_core::MeshSink;
 use serde::Serialize;
@@ -85,24 +87,59 @@ impl Default for AngleOptions {
     }
 }
 
+/// Tubes by how they were tiled (the first tiling of the fallback order
+/// whose triangles cross nothing).
+#[derive(Debug, Default, Clone, Serialize, PartialEq, Eq)]
+pub struct TilingCounts {
+    /// The paper's march from the paper's start pair.
+    pub march: u64,
+    /// The paper's march from another start pair.
+    pub restart: u64,
+    /// A minimum-area (or, failing that, minimum-span) tiling.
+    pub min_area: u64,
+}
+
+/// Section pairs (slabs) that needed each fallback at least once.
+#[derive(Debug, Default, Clone, Serialize, PartialEq, Eq)]
+pub struct FallbackCounts {
+    /// Some tube was marched from another start pair.
+    pub restart: u64,
+    /// Some tube was tiled by minimum area or span.
+    pub min_area: u64,
+    /// Some group was split by a chord of its single contour.
+    pub split: u64,
+    /// Some group was joined into one ring per side by bridges.
+    pub bridge: u64,
+    /// Some group found no tiling without crossings and was capped apart.
+    pub apart: u64,
+}
+
 /// What one reconstruction did.
 #[derive(Debug, Default, Clone, Serialize, PartialEq, Eq)]
 pub struct AngleStats {
-    /// Contour pairs joined by a strip of triangles.
+    /// Strips of triangles between a lower and an upper ring (a contour, a
+    /// part of a split contour, or contours joined by bridges).
     pub tubes: u64,
-    /// Contours split to pair with several contours of the next or previous
-    /// section (branches and merges).
+    /// One contour facing several, split by chords into one part per
+    /// partner (branches).
     pub splits: u64,
-    /// Branching groups whose split failed; they were joined one to one by
-    /// overlap instead, and the contours left over capped (or left open).
-    pub unsplit_groups: u64,
-    /// Groups of several contours facing several, joined pairwise by overlap.
-    pub complex_groups: u64,
+    /// Groups whose contours were joined by bridges into one ring per side
+    /// (merges, many-to-many, and branches whose split failed).
+    pub bridged: u64,
+    /// Groups for which no tiling without crossings was found: their
+    /// contours were capped on both sides of the slab instead of joined.
+    pub apart: u64,
     /// Caps triangulated (regions, each with its holes).
     pub caps: u64,
     /// Contours with no partner in either neighbouring section: they have
     /// no thickness and are left out (no faces).
     pub isolated: u64,
+    /// Open polylines (`open`) left unpaired in a group of several.
+    pub unpaired: u64,
+    /// How the tubes were tiled.
+    pub tiled: TilingCounts,
+    /// Section pairs that needed each fallback.
+    pub fallback_slabs: FallbackCounts,
     /// Ears forced while triangulating caps (0 on valid input).
     pub forced_ears: u64,
     pub vertices: u64,
@@ -124,7 +161,37 @@ struct Ring {
 #[derive(Debug, Clone)]
 struct Prepared {
     rings: Vec<Ring>,
+    /// Id of the first vertex, and every vertex in id order: in space and
+    /// in the section plane.
+    base: u32,
+    pos: Vec<[f64; 3]>,
+    uv: Vec<P2>,
 }
+
+impl Prepared {
+    fn uv_of(&self, id: u32) -> P2 {
+        self.uv[(id - self.base) as usize]
+    }
+}
+
+/// A ring to tile: ids and positions in the section plane.
+type Part = (Vec<u32>, Vec<P2>);
+
+/// The slab being joined: its check and what it used.
+struct Slab {
+    check: SlabCheck,
+    /// Fallbacks used (bits: [`FallbackCounts`] fields in order).
+    used: u8,
+    /// Bridges placed in the lower and upper planes (vertex ids).
+    lower_bridges: Vec<[u32; 2]>,
+    upper_bridges: Vec<[u32; 2]>,
+}
+
+const USED_RESTART: u8 = 1;
+const USED_MIN_AREA: u8 = 2;
+const USED_SPLIT: u8 = 4;
+const USED_BRIDGE: u8 = 8;
+const USED_APART: u8 = 16;
 
 /// The angle-criterion reconstruction of a stack streamed section by
 /// section: [`push`](AngleReconstructor::push) each section in order, then
@@ -134,6 +201,8 @@ pub struct AngleReconstructor {
     prev: Option<Prepared>,
     /// For each ring of `prev`: does it have a partner below?
     prev_has_below: Vec<bool>,
+    /// Bridges in `prev`'s plane placed by the slab below it.
+    prev_bridges: Vec<[u32; 2]>,
     emitted: u64,
     stats: AngleStats,
 }
@@ -141,7 +210,7 @@ pub struct AngleReconstructor {
 impl AngleReconstructor {
     /// Starts a reconstruction.
     pub fn new(opts: AngleOptions) -> AngleReconstructor {
-        AngleReconstructor { opts, prev: None, prev_has_below: Vec::new(), emitted: 0, stats: AngleStats::default() }
+        AngleReconstructor { opts, prev: None, prev_has_below: Vec::new(), prev_bridges: Vec::new(), emitted: 0, stats: AngleStats::default() }
     }
 
     /// Adds the next section: sends its vertices, joins it to the previous
@@ -149,14 +218,16 @@ impl AngleReconstructor {
     pub fn push(&mut self, section: &Section, sink: &mut dyn MeshSink) -> Result<(), ContourError> {
         let cur = self.prepare(section, sink)?;
         let mut cur_has_below = vec![false; cur.rings.len()];
+        let mut cur_bridges = Vec::new();
         if let Some(prev) = self.prev.take() {
             let mut prev_has_above = vec![false; prev.rings.len()];
-            self.join(&prev, &cur, &mut prev_has_above, &mut cur_has_below, sink)?;
             let below = std::mem::take(&mut self.prev_has_below);
+            cur_bridges = self.join(&prev, &cur, &below, &mut prev_has_above, &mut cur_has_below, sink)?;
             self.close_ends(&prev, &below, &prev_has_above, sink)?;
         }
         self.prev = Some(cur);
         self.prev_has_below = cur_has_below;
+        self.prev_bridges = cur_bridges;
         Ok(())
     }
 
@@ -191,7 +262,11 @@ impl AngleReconstructor {
     /// Sends a section's vertices and builds its rings.
     fn prepare(&mut self, s: &Section, sink: &mut dyn MeshSink) -> Result<Prepared, ContourError> {
         let mut rings = Vec::with_capacity(s.contours.len());
+        let first = self.emitted as u32;
+        let (mut pos, mut all_uv) = (Vec::new(), Vec::new());
         for c in &s.contours {
+            pos.extend_from_slice(&c.points);
+            all_uv.extend_from_slice(&c.uv);
             let base = self.emitted as u32;
             for p in &c.points {
                 sink.vertex(*p)?;
@@ -216,11 +291,20 @@ impl AngleReconstructor {
                 }
             }
         }
-        Ok(Prepared { rings })
+        Ok(Prepared { rings, base: first, pos, uv: all_uv })
     }
 
-    /// Links overlapping rings of two sections and triangulates each group.
-    fn join(&mut self, lower: &Prepared, upper: &Prepared, has_above: &mut [bool], has_below: &mut [bool], sink: &mut dyn MeshSink) -> Result<(), ContourError> {
+    /// Links overlapping rings of two sections and triangulates each group;
+    /// returns the bridges placed in the upper plane.
+    fn join(
+        &mut self,
+        lower: &Prepared,
+        upper: &Prepared,
+        below: &[bool],
+        has_above: &mut [bool],
+        has_below: &mut [bool],
+        sink: &mut dyn MeshSink,
+    ) -> Result<Vec<[u32; 2]>, ContourError> {
         let (nl, nu) = (lower.rings.len(), upper.rings.len());
         let mut links: Vec<(usize, usize, f64)> = Vec::new();
         for i in 0..nl {
@@ -266,60 +350,156 @@ impl AngleReconstructor {
                 g.1.push(j);
             }
         }
-        for (_, (ls, us)) in groups {
-            match (ls.len(), us.len()) {
-                (1, 1) => {
-                    self.tube(&lower.rings[ls[0]].ids, &lower.rings[ls[0]].uv, &upper.rings[us[0]].ids, &upper.rings[us[0]].uv, sink)?;
-                    has_above[ls[0]] = true;
-                    has_below[us[0]] = true;
-                }
-                (1, _) | (_, 1) if !self.opts.open => {
-                    // One contour against several: split the single one.
-                    let single_is_lower = ls.len() == 1;
-                    let (single, many, single_sec, many_sec) =
-                        if single_is_lower { (ls[0], &us, lower, upper) } else { (us[0], &ls, upper, lower) };
-                    let partners: Vec<&Ring> = many.iter().map(|&k| &many_sec.rings[k]).collect();
-                    let others: Vec<&[P2]> = single_sec.rings.iter().enumerate().filter(|&(k, _)| k != single).map(|(_, r)| r.uv.as_slice()).collect();
-                    let ring = &single_sec.rings[single];
-                    match split_for(ring, &partners, &others) {
-                        Some(parts) => {
-                            self.stats.splits += 1;
-                            for (part, k) in parts {
-                                let m = &many_sec.rings[many[k]];
-                                if single_is_lower {
-                                    self.tube(&part.0, &part.1, &m.ids, &m.uv, sink)?;
-                                } else {
-                                    self.tube(&m.ids, &m.uv, &part.0, &part.1, sink)?;
-                                }
-                            }
-                            for &i in &ls {
-                                has_above[i] = true;
-                            }
-                            for &j in &us {
-                                has_below[j] = true;
-                            }
-                        }
-                        None => {
-                            // No chord: pair the best overlap, cap the rest.
-                            self.stats.unsplit_groups += 1;
-                            self.pair_by_overlap(&links, &ls, &us, lower, upper, has_above, has_below, sink)?;
-                        }
+        if self.opts.open {
+            for (_, (ls, us)) in groups {
+                self.pair_open(&links, &ls, &us, lower, upper, has_above, has_below, sink)?;
+            }
+            return Ok(Vec::new());
+        }
+        debug_assert_eq!(upper.base as usize, lower.base as usize + lower.pos.len());
+        let pos: Vec<[f64; 3]> = lower.pos.iter().chain(&upper.pos).copied().collect();
+        let uv: Vec<P2> = lower.uv.iter().chain(&upper.uv).copied().collect();
+        let mut slab = Slab { check: SlabCheck::new(lower.base, pos, uv), used: 0, lower_bridges: Vec::new(), upper_bridges: Vec::new() };
+        for (_, (mut ls, mut us)) in groups {
+            ls.sort_unstable();
+            us.sort_unstable();
+            let tris = self.group(&mut slab, lower, upper, below, &ls, &us);
+            match tris {
+                Some(tris) => {
+                    for &i in &ls {
+                        has_above[i] = true;
+                    }
+                    for &j in &us {
+                        has_below[j] = true;
+                    }
+                    for f in tris {
+                        sink.face(f)?;
+                        self.stats.faces += 1;
                     }
                 }
-                _ => {
-                    // Several against several: best overlaps first, one to one.
-                    self.stats.complex_groups += 1;
-                    self.pair_by_overlap(&links, &ls, &us, lower, upper, has_above, has_below, sink)?;
+                None => {
+                    // Last resort: cap both sides apart (close_ends does it).
+                    self.stats.apart += 1;
+                    slab.used |= USED_APART;
                 }
             }
         }
-        Ok(())
+        let f = &mut self.stats.fallback_slabs;
+        for (bit, c) in [(USED_RESTART, &mut f.restart), (USED_MIN_AREA, &mut f.min_area), (USED_SPLIT, &mut f.split), (USED_BRIDGE, &mut f.bridge), (USED_APART, &mut f.apart)] {
+            *c += (slab.used & bit != 0) as u64;
+        }
+        Ok(slab.upper_bridges)
     }
 
-    /// Joins the group's contours one to one, best overlap first; the rest
-    /// stay unmatched (and are capped).
+    /// The triangles joining one group of linked contours (accepted by the
+    /// slab's check), or `None` when every way tried crosses something.
     #[allow(clippy::too_many_arguments)]
-    fn pair_by_overlap(
+    fn group(&mut self, slab: &mut Slab, lower: &Prepared, upper: &Prepared, below: &[bool], ls: &[usize], us: &[usize]) -> Option<Vec<[u32; 3]>> {
+        let ring = |sec: &Prepared, k: usize| -> Part { (sec.rings[k].ids.clone(), sec.rings[k].uv.clone()) };
+        if ls.len() == 1 && us.len() == 1 {
+            return self.tile(slab, &ring(lower, ls[0]), &ring(upper, us[0]));
+        }
+        let mark = slab.check.mark();
+        // A branch whose single contour goes on below: split it by chords
+        // (in the lower plane, inside a contour that is not capped there).
+        if ls.len() == 1 && below[ls[0]] {
+            let single = &lower.rings[ls[0]];
+            let partners: Vec<&Ring> = us.iter().map(|&k| &upper.rings[k]).collect();
+            let others: Vec<&[P2]> = lower.rings.iter().enumerate().filter(|&(k, _)| k != ls[0]).map(|(_, r)| r.uv.as_slice()).collect();
+            if let Some(parts) = split_for(single, &partners, &others) {
+                let mut all = Vec::new();
+                let mut ok = true;
+                for (part, k) in parts {
+                    match self.tile(slab, &part, &ring(upper, us[k])) {
+                        Some(t) => all.extend(t),
+                        None => {
+                            ok = false;
+                            break;
+                        }
+                    }
+                }
+                if ok {
+                    self.stats.splits += 1;
+                    slab.used |= USED_SPLIT;
+                    return Some(all);
+                }
+                slab.check.rollback(mark);
+            }
+        }
+        // Join each side into one ring by bridges (Christiansen and
+        // Sederberg), then tile the two rings.
+        let mut forbid_lower: Vec<[u32; 2]> = self.prev_bridges.clone();
+        forbid_lower.extend_from_slice(&slab.lower_bridges);
+        let (lb, ub) = (slab.lower_bridges.len(), slab.upper_bridges.len());
+        let p = bridge_rings(lower, ls, &forbid_lower, &mut slab.lower_bridges);
+        let q = p.as_ref().and_then(|_| {
+            let forbid_upper = slab.upper_bridges.clone();
+            bridge_rings(upper, us, &forbid_upper, &mut slab.upper_bridges)
+        });
+        if let (Some(p), Some(q)) = (p, q) {
+            if let Some(t) = self.tile(slab, &p, &q) {
+                self.stats.bridged += 1;
+                slab.used |= USED_BRIDGE;
+                return Some(t);
+            }
+        }
+        slab.lower_bridges.truncate(lb);
+        slab.upper_bridges.truncate(ub);
+        slab.check.rollback(mark);
+        None
+    }
+
+    /// Tiles a lower ring to an upper ring: the paper's march, then the
+    /// fallbacks in order, until a tiling crosses nothing in the slab. The
+    /// triangles returned are accepted by the slab's check.
+    fn tile(&mut self, slab: &mut Slab, p: &Part, q: &Part) -> Option<Vec<[u32; 3]>> {
+        let (pid, puv) = (&p.0, &p.1);
+        let (qid, quv) = (&q.0, &q.1);
+        let t = self.opts.threshold;
+        let check = &mut slab.check;
+        let accept = |tiling: Tiling, check: &mut SlabCheck| -> Option<Vec<[u32; 3]>> {
+            let tris = tiling.triangles(pid, qid);
+            (spans_distinct(&tiling, pid, qid) && check.try_add(&tris)).then_some(tris)
+        };
+        let first = start_pair(puv, quv);
+        if let Some(tris) = accept(march(puv, quv, first.0, first.1, t), check) {
+            self.stats.tubes += 1;
+            self.stats.tiled.march += 1;
+            return Some(tris);
+        }
+        let starts = other_starts(puv, quv, first, 6);
+        for &(i0, j0) in &starts {
+            if let Some(tris) = accept(march(puv, quv, i0, j0, t), check) {
+                self.stats.tubes += 1;
+                self.stats.tiled.restart += 1;
+                slab.used |= USED_RESTART;
+                return Some(tris);
+            }
+        }
+        let pxyz: Vec<[f64; 3]> = pid.iter().map(|&i| check.point(i)).collect();
+        let qxyz: Vec<[f64; 3]> = qid.iter().map(|&i| check.point(i)).collect();
+        for cost in [Cost::Area, Cost::Span] {
+            for &(i0, j0) in std::iter::once(&first).chain(&starts) {
+                if let Some(tris) = accept(min_cost(&pxyz, &qxyz, i0, j0, cost), check) {
+                    self.stats.tubes += 1;
+                    self.stats.tiled.min_area += 1;
+                    slab.used |= USED_MIN_AREA;
+                    return Some(tris);
+                }
+            }
+        }
+        if std::env::var_os("MINT_DEBUG_ANGLE").is_some() {
+            let a = crate::geom2d::signed_area(puv);
+            let b = crate::geom2d::signed_area(quv);
+            eprintln!("FAILED tube n={} m={} areas {a:.3e} {b:.3e} z {:?} {:?} p0 {:?}", pid.len(), qid.len(), pxyz[0], qxyz[0], puv[0]);
+        }
+        None
+    }
+
+    /// Open polylines: joins the group's polylines one to one, best overlap
+    /// first; the rest stay unpaired.
+    #[allow(clippy::too_many_arguments)]
+    fn pair_open(
         &mut self,
         links: &[(usize, usize, f64)],
         ls: &[usize],
@@ -336,68 +516,45 @@ impl AngleReconstructor {
             if has_above[i] || has_below[j] {
                 continue;
             }
-            self.tube(&lower.rings[i].ids, &lower.rings[i].uv, &upper.rings[j].ids, &upper.rings[j].uv, sink)?;
+            self.open_strip(&lower.rings[i].ids, &lower.rings[i].uv, &upper.rings[j].ids, &upper.rings[j].uv, sink)?;
             has_above[i] = true;
             has_below[j] = true;
         }
+        self.stats.unpaired += ls.iter().filter(|&&i| !has_above[i]).count() as u64 + us.iter().filter(|&&j| !has_below[j]).count() as u64;
         Ok(())
     }
 
-    /// One strip of triangles between a lower and an upper ring.
-    fn tube(&mut self, pid: &[u32], puv: &[P2], qid: &[u32], quv: &[P2], sink: &mut dyn MeshSink) -> Result<(), ContourError> {
+    /// One strip of triangles between a lower and an upper open polyline.
+    fn open_strip(&mut self, pid: &[u32], puv: &[P2], qid: &[u32], quv: &[P2], sink: &mut dyn MeshSink) -> Result<(), ContourError> {
         self.stats.tubes += 1;
+        self.stats.tiled.march += 1;
         let t = self.opts.threshold;
         let (n, m) = (pid.len(), qid.len());
         let mut emit = |f: [u32; 3], stats: &mut AngleStats| -> Result<(), ContourError> {
             stats.faces += 1;
             Ok(sink.face(f)?)
         };
-        if self.opts.open {
-            // Orient Q like P, then march from the first to the last vertices.
-            let d = |a: P2, b: P2| (a[0] - b[0]).hypot(a[1] - b[1]);
-            let same = d(puv[0], quv[0]) + d(puv[n - 1], quv[m - 1]);
-            let rev = d(puv[0], quv[m - 1]) + d(puv[n - 1], quv[0]);
-            let qmap: Vec<usize> = if rev < same { (0..m).rev().collect() } else { (0..m).collect() };
-            let (mut i, mut j) = (0usize, 0usize);
-            while i + 1 < n || j + 1 < m {
-                let take_p = if i + 1 == n {
-                    false
-                } else if j + 1 == m {
-                    true
-                } else {
-                    let p = |k: usize| puv[k];
-                    let q = |k: usize| quv[qmap[k]];
-                    decide(p(i), p(i + 1), (i > 0).then(|| p(i - 1)), q(j), q(j + 1), (j > 0).then(|| q(j - 1)), t)
-                };
-                if take_p {
-                    emit([pid[i], pid[i + 1], qid[qmap[j]]], &mut self.stats)?;
-                    i += 1;
-                } else {
-                    emit([pid[i], qid[qmap[j + 1]], qid[qmap[j]]], &mut self.stats)?;
-                    j += 1;
-                }
-            }
-            return Ok(());
-        }
-        let (i0, j0) = start_pair(puv, quv);
-        let p = |k: usize| puv[(i0 + k) % n];
-        let q = |k: usize| quv[(j0 + k) % m];
-        let pi = |k: usize| pid[(i0 + k) % n];
-        let qi = |k: usize| qid[(j0 + k) % m];
+        // Orient Q like P, then march from the first to the last vertices.
+        let d = |a: P2, b: P2| (a[0] - b[0]).hypot(a[1] - b[1]);
+        let same = d(puv[0], quv[0]) + d(puv[n - 1], quv[m - 1]);
+        let rev = d(puv[0], quv[m - 1]) + d(puv[n - 1], quv[0]);
+        let qmap: Vec<usize> = if rev < same { (0..m).rev().collect() } else { (0..m).collect() };
         let (mut i, mut j) = (0usize, 0usize);
-        while i < n || j < m {
-            let take_p = if i == n {
+        while i + 1 < n || j + 1 < m {
+            let take_p = if i + 1 == n {
                 false
-            } else if j == m {
+            } else if j + 1 == m {
                 true
             } else {
-                decide(p(i), p(i + 1), Some(p(i + n - 1)), q(j), q(j + 1), Some(q(j + m - 1)), t)
+                let p = |k: usize| puv[k];
+                let q = |k: usize| quv[qmap[k]];
+                decide(p(i), p(i + 1), (i > 0).then(|| p(i - 1)), q(j), q(j + 1), (j > 0).then(|| q(j - 1)), t)
             };
             if take_p {
-                emit([pi(i), pi(i + 1), qi(j)], &mut self.stats)?;
+                emit([pid[i], pid[i + 1], qid[qmap[j]]], &mut self.stats)?;
                 i += 1;
             } else {
-                emit([pi(i), qi(j + 1), qi(j)], &mut self.stats)?;
+                emit([pid[i], qid[qmap[j + 1]], qid[qmap[j]]], &mut self.stats)?;
                 j += 1;
             }
         }
@@ -475,66 +632,6 @@ fn make_ring(ids: Vec<u32>, uv: Vec<P2>, depth: usize) -> Ring {
     Ring { ids, uv, depth, centroid, lo, hi }
 }
 
-/// The paper's next-vertex rule: true to advance on P.
-fn decide(p0: P2, p1: P2, pm: Option<P2>, q0: P2, q1: P2, qm: Option<P2>, t: f64) -> bool {
-    let d2 = |a: P2, b: P2| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2);
-    let cos = |a0: P2, a1: P2, b0: P2, b1: P2| -> f64 {
-        let (u, v) = ([a1[0] - a0[0], a1[1] - a0[1]], [b1[0] - b0[0], b1[1] - b0[1]]);
-        let l = (u[0] * u[0] + u[1] * u[1]).sqrt() * (v[0] * v[0] + v[1] * v[1]).sqrt();
-        if l > 0.0 {
-            (u[0] * v[0] + u[1] * v[1]) / l
-        } else {
-            -1.0
-        }
-    };
-    let p_shorter = d2(p1, q0) <= d2(p0, q1);
-    if p_shorter {
-        // α: P_i→P_i+1 vs Q_j-1→Q_j; β: P_i-1→P_i vs Q_j→Q_j+1.
-        if qm.is_some_and(|qm| cos(p0, p1, qm, q0) > t) {
-            return true;
-        }
-        if pm.is_some_and(|pm| cos(pm, p0, q0, q1) > t) {
-            return false;
-        }
-        true
-    } else {
-        if pm.is_some_and(|pm| cos(q0, q1, pm, p0) > t) {
-            return false;
-        }
-        if qm.is_some_and(|qm| cos(qm, q0, p0, p1) > t) {
-            return true;
-        }
-        false
-    }
-}
-
-/// The start pair (§2.2.1): P's vertex farthest from P's centroid, then Q's
-/// vertex with the largest inner product of centroid vectors among those
-/// within 45° of that direction (all of Q if none is).
-fn start_pair(p: &[P2], q: &[P2]) -> (usize, usize) {
-    let (cp, cq) = (centroid(p), centroid(q));
-    let i0 = (0..p.len())
-        .max_by(|&a, &b| {
-            let da = (p[a][0] - cp[0]).powi(2) + (p[a][1] - cp[1]).powi(2);
-            let db = (p[b][0] - cp[0]).powi(2) + (p[b][1] - cp[1]).powi(2);
-            da.total_cmp(&db).then(b.cmp(&a))
-        })
-        .unwrap();
-    let u = [p[i0][0] - cp[0], p[i0][1] - cp[1]];
-    let lu = u[0].hypot(u[1]);
-    let score = |j: usize| {
-        let v = [q[j][0] - cq[0], q[j][1] - cq[1]];
-        (u[0] * v[0] + u[1] * v[1], v[0].hypot(v[1]))
-    };
-    let similar = |j: usize| {
-        let (d, lv) = score(j);
-        lu > 0.0 && lv > 0.0 && d / (lu * lv) >= std::f64::consts::FRAC_1_SQRT_2
-    };
-    let pick = |filter: &dyn Fn(usize) -> bool| (0..q.len()).filter(|&j| filter(j)).max_by(|&a, &b| score(a).0.total_cmp(&score(b).0).then(b.cmp(&a)));
-    let j0 = pick(&similar).or_else(|| pick(&|_| true)).unwrap();
-    (i0, j0)
-}
-
 /// Whether two rings of consecutive sections overlap in projection, with a
 /// score (the fractions of each one's vertices inside the other), or `None`.
 /// Open polylines overlap when their bounding boxes do.
@@ -554,8 +651,6 @@ fn overlap(p: &Ring, q: &Ring, open: bool) -> Option<f64> {
     first_crossing(&[&p.uv, &q.uv]).map(|_| 1e-6)
 }
 
-/// A part of a split ring: ids and positions, solid on the left.
-type Part = (Vec<u32>, Vec<P2>);
 
 /// Splits `ring` into one part per partner by chords between its vertices;
 /// returns each part with its partner's index, or `None` when no valid chord
@@ -716,6 +811,129 @@ fn valid_chord(uv: &[P2], a: usize, b: usize, others: &[&[P2]]) -> bool {
     true
 }
 
+/// True if no edge between the rings (span) appears twice in the tiling:
+/// rings joined by bridges visit the bridges' ends twice, and a span used
+/// twice would carry four triangles.
+fn spans_distinct(t: &Tiling, pid: &[u32], qid: &[u32]) -> bool {
+    let (n, m) = (pid.len(), qid.len());
+    let (mut i, mut j) = (t.i0, t.j0);
+    let mut spans: Vec<(u32, u32)> = Vec::with_capacity(t.steps.len());
+    for &p in &t.steps {
+        spans.push((pid[i % n], qid[j % m]));
+        if p {
+            i += 1;
+        } else {
+            j += 1;
+        }
+    }
+    spans.sort_unstable();
+    spans.windows(2).all(|w| w[0] != w[1])
+}
+
+/// True if `t` lies strictly outside the region enclosed by a ring near its
+/// vertex `v` (neighbours `a` before and `c` after; `ccw`: the ring turns
+/// counter-clockwise), and on neither edge's line through `v`... that is,
+/// not in the closed enclosed wedge.
+fn outside_at(a: P2, v: P2, c: P2, ccw: bool, t: P2) -> bool {
+    let (x, z) = if ccw { (a, c) } else { (c, a) };
+    let (s1, s2) = (orient(x, v, t), orient(v, z, t));
+    if orient(x, v, z) >= 0.0 {
+        !(s1 >= 0.0 && s2 >= 0.0)
+    } else {
+        !(s1 >= 0.0 || s2 >= 0.0)
+    }
+}
+
+/// Joins the rings `which` of a section into one ring by bridges: segments
+/// between vertices of two rings that leave both into the region outside
+/// them and touch no contour of the section, no bridge in `forbid` and no
+/// bridge placed before (not even at an end). Each bridge is walked twice,
+/// once each way, so the joined ring keeps the solid on its left: the
+/// triangles on a bridge meet it from both sides, as a ridge. Shortest
+/// bridges first, greedily (a spanning tree from the largest ring). New
+/// bridges are appended to `placed`; `None` if some ring cannot be reached.
+fn bridge_rings(sec: &Prepared, which: &[usize], forbid: &[[u32; 2]], placed: &mut Vec<[u32; 2]>) -> Option<Part> {
+    let rings = &sec.rings;
+    if which.len() == 1 {
+        let r = &rings[which[0]];
+        return Some((r.ids.clone(), r.uv.clone()));
+    }
+    // Every edge of the section, and where each vertex of `which` sits.
+    let mut edges: Vec<(u32, u32)> = Vec::new();
+    for r in rings {
+        let n = r.ids.len();
+        for k in 0..n {
+            edges.push((r.ids[k], r.ids[(k + 1) % n]));
+        }
+    }
+    let mut used: std::collections::HashSet<u32> = forbid.iter().chain(placed.iter()).flatten().copied().collect();
+    let mut walls: Vec<(P2, P2)> = forbid.iter().chain(placed.iter()).map(|b| (sec.uv_of(b[0]), sec.uv_of(b[1]))).collect();
+    let outside = |r: usize, k: usize, t: P2| {
+        let ring = &rings[r];
+        let n = ring.uv.len();
+        outside_at(ring.uv[(k + n - 1) % n], ring.uv[k], ring.uv[(k + 1) % n], ring.depth % 2 == 0, t)
+    };
+    let first = *which
+        .iter()
+        .max_by(|&&a, &&b| signed_area(&rings[a].uv).abs().total_cmp(&signed_area(&rings[b].uv).abs()).then(b.cmp(&a)))
+        .unwrap();
+    let mut joined: Vec<u32> = rings[first].ids.clone();
+    let mut members: Vec<usize> = vec![first];
+    let mut rest: Vec<usize> = which.iter().copied().filter(|&r| r != first).collect();
+    while !rest.is_empty() {
+        // Candidate pairs (member vertex, other vertex), shortest first:
+        // for each vertex of the other rings its nearest member vertex,
+        // then, if none of those will do, every pair.
+        let d2 = |a: P2, b: P2| (a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2);
+        let from: Vec<(usize, usize)> = members.iter().flat_map(|&r| (0..rings[r].ids.len()).map(move |k| (r, k))).filter(|&(r, k)| !used.contains(&rings[r].ids[k])).collect();
+        let to: Vec<(usize, usize)> = rest.iter().flat_map(|&r| (0..rings[r].ids.len()).map(move |k| (r, k))).filter(|&(r, k)| !used.contains(&rings[r].ids[k])).collect();
+        let valid = |a: (usize, usize), b: (usize, usize), walls: &[(P2, P2)]| -> bool {
+            let (pa, pb) = (rings[a.0].uv[a.1], rings[b.0].uv[b.1]);
+            let (ia, ib) = (rings[a.0].ids[a.1], rings[b.0].ids[b.1]);
+            if pa == pb || !outside(a.0, a.1, pb) || !outside(b.0, b.1, pa) {
+                return false;
+            }
+            if walls.iter().any(|w| segments_touch(pa, pb, w.0, w.1)) {
+                return false;
+            }
+            !edges.iter().any(|&(e, f)| e != ia && f != ia && e != ib && f != ib && segments_touch(pa, pb, sec.uv_of(e), sec.uv_of(f)))
+        };
+        let mut cand: Vec<(f64, (usize, usize), (usize, usize))> = to
+            .iter()
+            .filter_map(|&b| {
+                let pb = rings[b.0].uv[b.1];
+                from.iter().map(|&a| (d2(rings[a.0].uv[a.1], pb), a, b)).min_by(|x, y| x.0.total_cmp(&y.0))
+            })
+            .collect();
+        cand.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+        let mut found = cand.iter().find(|c| valid(c.1, c.2, &walls)).copied();
+        if found.is_none() && from.len() * to.len() <= 4_000_000 {
+            let mut all: Vec<(f64, (usize, usize), (usize, usize))> = from.iter().flat_map(|&a| to.iter().map(move |&b| (a, b))).map(|(a, b)| (d2(rings[a.0].uv[a.1], rings[b.0].uv[b.1]), a, b)).collect();
+            all.sort_by(|x, y| x.0.total_cmp(&y.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+            found = all.iter().take(20_000).find(|c| valid(c.1, c.2, &walls)).copied();
+        }
+        let (_, a, b) = found?;
+        let (ia, ib) = (rings[a.0].ids[a.1], rings[b.0].ids[b.1]);
+        // Splice: ..., a, b, (around b's ring), b, a, ...
+        let at = joined.iter().position(|&x| x == ia).expect("a member vertex");
+        let other = &rings[b.0].ids;
+        let n = other.len();
+        let mut next: Vec<u32> = Vec::with_capacity(joined.len() + n + 2);
+        next.extend_from_slice(&joined[..=at]);
+        next.extend((0..=n).map(|k| other[(b.1 + k) % n]));
+        next.extend_from_slice(&joined[at..]);
+        joined = next;
+        used.insert(ia);
+        used.insert(ib);
+        walls.push((rings[a.0].uv[a.1], rings[b.0].uv[b.1]));
+        placed.push([ia, ib]);
+        members.push(b.0);
+        rest.retain(|&r| r != b.0);
+    }
+    let uv = joined.iter().map(|&i| sec.uv_of(i)).collect();
+    Some((joined, uv))
+}
+
 /// Reconstructs sections held in memory (tests and small stacks).
 pub fn reconstruct(sections: &[Section], opts: AngleOptions, sink: &mut dyn MeshSink) -> Result<AngleStats, ContourError> {
     let mut r = AngleReconstructor::new(opts);
@@ -811,7 +1029,7 @@ mod tests {
         let s = stack(&t);
         let mut m = TriMesh::default();
         let st = reconstruct(&s, AngleOptions { caps: true, ..Default::default() }, &mut m).unwrap();
-        assert_eq!((st.splits, st.unsplit_groups), (1, 0));
+        assert_eq!((st.splits, st.bridged, st.apart), (1, 0, 0));
         let c = mint_testkit::topology::check_closed_oriented(&m).unwrap();
         assert_eq!((c.components, c.genus), (1, 0));
     }

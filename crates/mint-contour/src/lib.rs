@@ -34,7 +34,9 @@ pub mod mc;
 pub mod optimize;
 pub mod profile;
 pub mod run;
+pub mod slabcheck;
 pub mod slice;
+pub mod tiling;
 pub mod triangulate;
 
 pub use error::{ContourError, ProfileError, ProfileErrorKind};

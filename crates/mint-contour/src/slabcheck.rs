@@ -1,0 +1,216 @@
+//! [`SlabCheck`]: the exact test that keeps a slab's triangles from
+//! crossing. A slab is the space between two consecutive sections; every
+//! triangle the angle method makes between them is offered to the slab's
+//! check as part of a batch (one tiling), and a batch is accepted only if
+//! none of its triangles intersects an accepted triangle or another
+//! triangle of the batch, in the sense of `mint_mesh::selfx` (the test
+//! `mint check --self-intersections` applies to the whole output: faces
+//! sharing a vertex or an edge count only when they overlap beyond it).
+//!
+//! Triangles of different slabs can meet only in a section plane, where
+//! they share contour edges and vertices (and the in-plane edges the
+//! branching code places, which it keeps apart itself); caps lie in the
+//! planes. So a check per slab is enough for the tubes.
+//!
+//! Broad phase: a uniform grid over the slab's projection on the section
+//! plane, about one cell per vertex; a triangle is listed in the cells its
+//! projected box overlaps. The narrow phase is exact (Shewchuk's
+//! predicates, through `mint_mesh::selfx::faces_intersect`) on the world
+//! positions the output file gets, so a batch accepted here is a pair-free
+//! part of `mint check --self-intersections` on `--double` output.
+
+use crate::geom2d::P2;
+
+type P3 = [f64; 3];
+
+/// The triangles accepted so far in one slab, with their grid.
+pub struct SlabCheck {
+    /// Id of the slab's first vertex; the slab's vertices have consecutive ids.
+    base: u32,
+    pos: Vec<P3>,
+    uv: Vec<P2>,
+    lo: P2,
+    inv: [f64; 2],
+    dims: [usize; 2],
+    cells: Vec<Vec<u32>>,
+    /// Accepted triangles (local ids) and their boxes in space.
+    tris: Vec<[u32; 3]>,
+    boxes: Vec<(P3, P3)>,
+    stamp: Vec<u32>,
+    epoch: u32,
+    /// Exact triangle pair tests made (for the stats).
+    pub tests: u64,
+}
+
+impl SlabCheck {
+    /// A check for the vertices with ids `base..base + pos.len()`: positions
+    /// in space and in the section plane.
+    pub fn new(base: u32, pos: Vec<P3>, uv: Vec<P2>) -> SlabCheck {
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for p in &uv {
+            for d in 0..2 {
+                lo[d] = lo[d].min(p[d]);
+                hi[d] = hi[d].max(p[d]);
+            }
+        }
+        let ext = [(hi[0] - lo[0]).max(f64::MIN_POSITIVE), (hi[1] - lo[1]).max(f64::MIN_POSITIVE)];
+        let cells = (uv.len().max(1)) as f64;
+        let h = (ext[0] * ext[1] / cells).sqrt().max(ext[0].max(ext[1]) / 4096.0);
+        let dims = [((ext[0] / h) as usize).clamp(1, 4096), ((ext[1] / h) as usize).clamp(1, 4096)];
+        let inv = [dims[0] as f64 / ext[0], dims[1] as f64 / ext[1]];
+        SlabCheck { base, pos, uv, lo, inv, dims, cells: vec![Vec::new(); dims[0] * dims[1]], tris: Vec::new(), boxes: Vec::new(), stamp: Vec::new(), epoch: 0, tests: 0 }
+    }
+
+    /// Position in space of the vertex with global id `id`.
+    pub fn point(&self, id: u32) -> P3 {
+        self.pos[(id - self.base) as usize]
+    }
+
+    fn cell(&self, p: P2, d: usize) -> usize {
+        (((p[d] - self.lo[d]) * self.inv[d]).floor().max(0.0) as usize).min(self.dims[d] - 1)
+    }
+
+    /// Cells covered by the projected box of local triangle `t`.
+    fn range(&self, t: [u32; 3]) -> ([usize; 2], [usize; 2]) {
+        let q = t.map(|i| self.uv[i as usize]);
+        let lo = [q[0][0].min(q[1][0]).min(q[2][0]), q[0][1].min(q[1][1]).min(q[2][1])];
+        let hi = [q[0][0].max(q[1][0]).max(q[2][0]), q[0][1].max(q[1][1]).max(q[2][1])];
+        ([self.cell(lo, 0), self.cell(lo, 1)], [self.cell(hi, 0), self.cell(hi, 1)])
+    }
+
+    fn local(&self, f: [u32; 3]) -> [u32; 3] {
+        f.map(|i| {
+            debug_assert!(i >= self.base && ((i - self.base) as usize) < self.pos.len(), "vertex {i} is not in this slab");
+            i - self.base
+        })
+    }
+
+    fn push(&mut self, t: [u32; 3]) {
+        let p = t.map(|i| self.pos[i as usize]);
+        let b = ([0, 1, 2].map(|d| p[0][d].min(p[1][d]).min(p[2][d])), [0, 1, 2].map(|d| p[0][d].max(p[1][d]).max(p[2][d])));
+        let k = self.tris.len() as u32;
+        let (a, z) = self.range(t);
+        for x in a[0]..=z[0] {
+            for y in a[1]..=z[1] {
+                self.cells[x * self.dims[1] + y].push(k);
+            }
+        }
+        self.tris.push(t);
+        self.boxes.push(b);
+        self.stamp.push(0);
+    }
+
+    fn pop(&mut self) {
+        let t = self.tris.pop().expect("a triangle to take back");
+        self.boxes.pop();
+        self.stamp.pop();
+        let (a, z) = self.range(t);
+        for x in a[0]..=z[0] {
+            for y in a[1]..=z[1] {
+                self.cells[x * self.dims[1] + y].pop();
+            }
+        }
+    }
+
+    /// The first accepted (or earlier in the batch) triangle that the
+    /// latest pushed triangle intersects.
+    fn clash_of_last(&mut self) -> Option<usize> {
+        let k = self.tris.len() - 1;
+        let t = self.tris[k];
+        let b = self.boxes[k];
+        self.epoch = self.epoch.wrapping_add(1);
+        if self.epoch == 0 {
+            self.stamp.iter_mut().for_each(|s| *s = 0);
+            self.epoch = 1;
+        }
+        let (a, z) = self.range(t);
+        for x in a[0]..=z[0] {
+            for y in a[1]..=z[1] {
+                let c = x * self.dims[1] + y;
+                for idx in 0..self.cells[c].len() {
+                    let o = self.cells[c][idx] as usize;
+                    if o == k || self.stamp[o] == self.epoch {
+                        continue;
+                    }
+                    self.stamp[o] = self.epoch;
+                    let u = self.tris[o];
+                    if t.iter().all(|v| u.contains(v)) {
+                        // The same three vertices twice: a fin of no volume.
+                        return Some(o);
+                    }
+                    let ob = self.boxes[o];
+                    if (0..3).any(|d| ob.1[d] < b.0[d] || b.1[d] < ob.0[d]) {
+                        continue;
+                    }
+                    self.tests += 1;
+                    if mint_mesh::selfx::faces_intersect(&self.pos, t, self.tris[o]) {
+                        return Some(o);
+                    }
+                }
+            }
+        }
+        None
+    }
+
+    /// The number of accepted triangles, to [`rollback`](SlabCheck::rollback) to.
+    pub fn mark(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// Takes back every triangle accepted after `mark`.
+    pub fn rollback(&mut self, mark: usize) {
+        while self.tris.len() > mark {
+            self.pop();
+        }
+    }
+
+    /// Accepts the batch `faces` (global ids) if none of its triangles
+    /// intersects an accepted triangle or another one of the batch;
+    /// otherwise accepts nothing and returns false.
+    pub fn try_add(&mut self, faces: &[[u32; 3]]) -> bool {
+        let start = self.tris.len();
+        for &f in faces {
+            let t = self.local(f);
+            self.push(t);
+            if self.clash_of_last().is_some() {
+                self.rollback(start);
+                return false;
+            }
+        }
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn crossing_batches_are_refused_and_leave_nothing_behind() {
+        // A unit square below, the same square above; vertices 10..18.
+        let pos: Vec<P3> = vec![
+            [0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.0, 1.0, 1.0],
+        ];
+        let uv: Vec<P2> = pos.iter().map(|p| [p[0], p[1]]).collect();
+        let mut c = SlabCheck::new(10, pos, uv);
+        // The front wall y = 0.
+        assert!(c.try_add(&[[10, 11, 14], [11, 15, 14]]));
+        // Two diagonal triangles (planes x = y and x + y = 1) that cross
+        // each other: refused together, and nothing is left behind.
+        assert!(!c.try_add(&[[10, 12, 16], [11, 13, 17]]));
+        assert_eq!(c.tris.len(), 2);
+        // One of them alone touches the wall only at a shared vertex.
+        assert!(c.try_add(&[[10, 12, 16]]));
+        assert!(!c.try_add(&[[11, 13, 17]]));
+        // Folded onto the wall across a shared edge: refused.
+        assert!(!c.try_add(&[[10, 11, 15]]));
+        // The same three vertices as an accepted triangle.
+        assert!(!c.try_add(&[[16, 12, 10]]));
+        assert_eq!(c.tris.len(), 3);
+        let m = c.mark();
+        assert!(c.try_add(&[[12, 13, 17]]));
+        c.rollback(m);
+        assert_eq!(c.tris.len(), 3);
+    }
+}
