@@ -64,7 +64,14 @@ use crate::error::ContourError;
 use crate::geom2d::{centroid, first_crossing, inside, orient, segments_touch, signed_area, P2};
 use crate::profile::Section;
 use crate::slabcheck::SlabCheck;
-use crate::tiling::{decide, march, min_cost, other_starts, start_pair, Cost, Tiling};
+use crate::tiling::{decide, march, min_area_avoiding, other_starts, start_pair, Tiling};
+
+/// Rounds of the minimum-area tiling per start pair, each forbidding the
+/// triangles that crossed something in the round before; and the most
+/// rounds per tube, over all start pairs. (On the real test data the first
+/// start pair always did, within 10 rounds.)
+const DP_ROUNDS: usize = 16;
+const DP_RUNS: usize = 40;
 use crate::triangulate::triangulate;
 use mint_core::MeshSink;
 use serde::Serialize;
@@ -203,6 +210,9 @@ pub struct AngleReconstructor {
     prev_has_below: Vec<bool>,
     /// Bridges in `prev`'s plane placed by the slab below it.
     prev_bridges: Vec<[u32; 2]>,
+    /// The coordinate axis most nearly along the stack normal (from the
+    /// first contour), for the exact projection filter of [`SlabCheck`].
+    drop: Option<usize>,
     emitted: u64,
     stats: AngleStats,
 }
@@ -210,7 +220,7 @@ pub struct AngleReconstructor {
 impl AngleReconstructor {
     /// Starts a reconstruction.
     pub fn new(opts: AngleOptions) -> AngleReconstructor {
-        AngleReconstructor { opts, prev: None, prev_has_below: Vec::new(), prev_bridges: Vec::new(), emitted: 0, stats: AngleStats::default() }
+        AngleReconstructor { opts, prev: None, prev_has_below: Vec::new(), prev_bridges: Vec::new(), drop: None, emitted: 0, stats: AngleStats::default() }
     }
 
     /// Adds the next section: sends its vertices, joins it to the previous
@@ -263,6 +273,10 @@ impl AngleReconstructor {
     fn prepare(&mut self, s: &Section, sink: &mut dyn MeshSink) -> Result<Prepared, ContourError> {
         let mut rings = Vec::with_capacity(s.contours.len());
         let first = self.emitted as u32;
+        if self.drop.is_none() {
+            let n = crate::profile::newell(&s.contours[0].points);
+            self.drop = Some((0..3).max_by(|&a, &b| n[a].abs().total_cmp(&n[b].abs()).then(b.cmp(&a))).unwrap());
+        }
         let (mut pos, mut all_uv) = (Vec::new(), Vec::new());
         for c in &s.contours {
             pos.extend_from_slice(&c.points);
@@ -359,7 +373,7 @@ impl AngleReconstructor {
         debug_assert_eq!(upper.base as usize, lower.base as usize + lower.pos.len());
         let pos: Vec<[f64; 3]> = lower.pos.iter().chain(&upper.pos).copied().collect();
         let uv: Vec<P2> = lower.uv.iter().chain(&upper.uv).copied().collect();
-        let mut slab = Slab { check: SlabCheck::new(lower.base, pos, uv), used: 0, lower_bridges: Vec::new(), upper_bridges: Vec::new() };
+        let mut slab = Slab { check: SlabCheck::new(lower.base, pos, uv, self.drop.unwrap_or(2)), used: 0, lower_bridges: Vec::new(), upper_bridges: Vec::new() };
         for (_, (mut ls, mut us)) in groups {
             ls.sort_unstable();
             us.sort_unstable();
@@ -383,6 +397,9 @@ impl AngleReconstructor {
                     slab.used |= USED_APART;
                 }
             }
+        }
+        if std::env::var_os("MINT_DEBUG_ANGLE").is_some() {
+            eprintln!("slab: {} tris, {} visits, {} exact tests, grid {:?}", slab.check.mark(), slab.check.visits, slab.check.tests, slab.check.dims());
         }
         let f = &mut self.stats.fallback_slabs;
         for (bit, c) in [(USED_RESTART, &mut f.restart), (USED_MIN_AREA, &mut f.min_area), (USED_SPLIT, &mut f.split), (USED_BRIDGE, &mut f.bridge), (USED_APART, &mut f.apart)] {
@@ -478,20 +495,43 @@ impl AngleReconstructor {
         }
         let pxyz: Vec<[f64; 3]> = pid.iter().map(|&i| check.point(i)).collect();
         let qxyz: Vec<[f64; 3]> = qid.iter().map(|&i| check.point(i)).collect();
-        for cost in [Cost::Area, Cost::Span] {
-            for &(i0, j0) in std::iter::once(&first).chain(&starts) {
-                if let Some(tris) = accept(min_cost(&pxyz, &qxyz, i0, j0, cost), check) {
+        // Minimum area from each start pair; triangles that cross something
+        // are forbidden and the program run again, a few rounds.
+        let (n, m) = (pid.len(), qid.len());
+        let mut budget = DP_RUNS;
+        for &(i0, j0) in std::iter::once(&first).chain(&starts) {
+            let mut forbidden = std::collections::HashSet::new();
+            for _ in 0..DP_ROUNDS {
+                if budget == 0 {
+                    break;
+                }
+                budget -= 1;
+                let Some(tiling) = min_area_avoiding(&pxyz, &qxyz, i0, j0, &forbidden) else { break };
+                if let Some(tris) = accept(tiling.clone(), check) {
                     self.stats.tubes += 1;
                     self.stats.tiled.min_area += 1;
                     slab.used |= USED_MIN_AREA;
                     return Some(tris);
                 }
+                let bad = check.clashes(&tiling.triangles(pid, qid));
+                if bad.is_empty() {
+                    break;
+                }
+                let steps = tiling.step_list(n, m);
+                forbidden.extend(bad.into_iter().map(|k| steps[k]));
             }
         }
         if std::env::var_os("MINT_DEBUG_ANGLE").is_some() {
             let a = crate::geom2d::signed_area(puv);
             let b = crate::geom2d::signed_area(quv);
             eprintln!("FAILED tube n={} m={} areas {a:.3e} {b:.3e} z {:?} {:?} p0 {:?}", pid.len(), qid.len(), pxyz[0], qxyz[0], puv[0]);
+            let tris = min_area_avoiding(&pxyz, &qxyz, first.0, first.1, &Default::default()).unwrap().triangles(pid, qid);
+            check.try_add(&tris);
+            if let Some((x, y)) = check.last_clash {
+                eprintln!("  clash {:?} {:?}\n  {:?}\n  {:?}", x, y, x.map(|i| check.point(i)), y.map(|i| check.point(i)));
+                let pi = |v: u32| pid.iter().position(|&z| z == v).map(|k| format!("P{k}")).or_else(|| qid.iter().position(|&z| z == v).map(|k| format!("Q{k}"))).unwrap_or(format!("other{v}"));
+                eprintln!("  as ring indices {:?} {:?}", x.map(pi), y.map(pi));
+            }
         }
         None
     }

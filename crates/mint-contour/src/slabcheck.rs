@@ -19,7 +19,7 @@
 //! positions the output file gets, so a batch accepted here is a pair-free
 //! part of `mint check --self-intersections` on `--double` output.
 
-use crate::geom2d::P2;
+use crate::geom2d::{orient, P2};
 
 type P3 = [f64; 3];
 
@@ -29,6 +29,8 @@ pub struct SlabCheck {
     base: u32,
     pos: Vec<P3>,
     uv: Vec<P2>,
+    /// The positions projected along a coordinate axis (exactly).
+    flat: Vec<P2>,
     lo: P2,
     inv: [f64; 2],
     dims: [usize; 2],
@@ -40,12 +42,21 @@ pub struct SlabCheck {
     epoch: u32,
     /// Exact triangle pair tests made (for the stats).
     pub tests: u64,
+    /// Candidate pairs looked at (boxes overlapping in the grid).
+    pub visits: u64,
+    /// The last pair that made [`try_add`](SlabCheck::try_add) refuse a
+    /// batch (global ids: the batch's triangle, then the other one).
+    pub last_clash: Option<([u32; 3], [u32; 3])>,
 }
 
 impl SlabCheck {
     /// A check for the vertices with ids `base..base + pos.len()`: positions
-    /// in space and in the section plane.
-    pub fn new(base: u32, pos: Vec<P3>, uv: Vec<P2>) -> SlabCheck {
+    /// in space and in the section plane. `drop` is the coordinate axis most
+    /// nearly along the stack normal: the exact filter works on the
+    /// positions with that coordinate dropped (a projection that rounds
+    /// nothing).
+    pub fn new(base: u32, pos: Vec<P3>, uv: Vec<P2>, drop: usize) -> SlabCheck {
+        let flat: Vec<P2> = pos.iter().map(|p| [p[(drop + 1) % 3], p[(drop + 2) % 3]]).collect();
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for p in &uv {
             for d in 0..2 {
@@ -54,11 +65,23 @@ impl SlabCheck {
             }
         }
         let ext = [(hi[0] - lo[0]).max(f64::MIN_POSITIVE), (hi[1] - lo[1]).max(f64::MIN_POSITIVE)];
-        let cells = (uv.len().max(1)) as f64;
-        let h = (ext[0] * ext[1] / cells).sqrt().max(ext[0].max(ext[1]) / 4096.0);
-        let dims = [((ext[0] / h) as usize).clamp(1, 4096), ((ext[1] / h) as usize).clamp(1, 4096)];
+        // Cells of about twice the mean edge length (vertices in id order
+        // run along the contours), at most 8 per vertex.
+        let mean = uv.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum::<f64>() / uv.len().max(2) as f64;
+        let mut h = (2.0 * mean).max(ext[0].max(ext[1]) / 4096.0);
+        let count = |h: f64| [((ext[0] / h) as usize).clamp(1, 4096), ((ext[1] / h) as usize).clamp(1, 4096)];
+        let mut dims = count(h);
+        while dims[0] * dims[1] > 8 * uv.len() + 16 {
+            h *= 1.25;
+            dims = count(h);
+        }
         let inv = [dims[0] as f64 / ext[0], dims[1] as f64 / ext[1]];
-        SlabCheck { base, pos, uv, lo, inv, dims, cells: vec![Vec::new(); dims[0] * dims[1]], tris: Vec::new(), boxes: Vec::new(), stamp: Vec::new(), epoch: 0, tests: 0 }
+        SlabCheck { base, pos, uv, flat, lo, inv, dims, cells: vec![Vec::new(); dims[0] * dims[1]], tris: Vec::new(), boxes: Vec::new(), stamp: Vec::new(), epoch: 0, tests: 0, visits: 0, last_clash: None }
+    }
+
+    /// The grid's size in cells.
+    pub fn dims(&self) -> [usize; 2] {
+        self.dims
     }
 
     /// Position in space of the vertex with global id `id`.
@@ -115,6 +138,16 @@ impl SlabCheck {
     /// The first accepted (or earlier in the batch) triangle that the
     /// latest pushed triangle intersects.
     fn clash_of_last(&mut self) -> Option<usize> {
+        self.clashes_of_last(true).into_iter().next()
+    }
+
+    /// Every accepted (or earlier) triangle the latest one intersects.
+    fn all_clashes_of_last(&mut self) -> Vec<usize> {
+        self.clashes_of_last(false)
+    }
+
+    fn clashes_of_last(&mut self, first_only: bool) -> Vec<usize> {
+        let mut found = Vec::new();
         let k = self.tris.len() - 1;
         let t = self.tris[k];
         let b = self.boxes[k];
@@ -133,23 +166,34 @@ impl SlabCheck {
                         continue;
                     }
                     self.stamp[o] = self.epoch;
+                    self.visits += 1;
                     let u = self.tris[o];
                     if t.iter().all(|v| u.contains(v)) {
                         // The same three vertices twice: a fin of no volume.
-                        return Some(o);
+                        found.push(o);
+                        if first_only {
+                            return found;
+                        }
+                        continue;
                     }
                     let ob = self.boxes[o];
                     if (0..3).any(|d| ob.1[d] < b.0[d] || b.1[d] < ob.0[d]) {
                         continue;
                     }
+                    if apart_in_projection(&self.flat, t, u) {
+                        continue;
+                    }
                     self.tests += 1;
                     if mint_mesh::selfx::faces_intersect(&self.pos, t, self.tris[o]) {
-                        return Some(o);
+                        found.push(o);
+                        if first_only {
+                            return found;
+                        }
                     }
                 }
             }
         }
-        None
+        found
     }
 
     /// The number of accepted triangles, to [`rollback`](SlabCheck::rollback) to.
@@ -164,6 +208,26 @@ impl SlabCheck {
         }
     }
 
+    /// The triangles of the batch `faces` (by index in the batch) that
+    /// intersect an accepted triangle or another triangle of the batch.
+    /// Accepts nothing.
+    pub fn clashes(&mut self, faces: &[[u32; 3]]) -> Vec<usize> {
+        let start = self.tris.len();
+        let mut bad = vec![false; faces.len()];
+        for (k, &f) in faces.iter().enumerate() {
+            let t = self.local(f);
+            self.push(t);
+            for o in self.all_clashes_of_last() {
+                bad[k] = true;
+                if o >= start {
+                    bad[o - start] = true;
+                }
+            }
+        }
+        self.rollback(start);
+        (0..faces.len()).filter(|&k| bad[k]).collect()
+    }
+
     /// Accepts the batch `faces` (global ids) if none of its triangles
     /// intersects an accepted triangle or another one of the batch;
     /// otherwise accepts nothing and returns false.
@@ -172,13 +236,52 @@ impl SlabCheck {
         for &f in faces {
             let t = self.local(f);
             self.push(t);
-            if self.clash_of_last().is_some() {
+            if let Some(o) = self.clash_of_last() {
+                let g = |t: [u32; 3]| t.map(|i| i + self.base);
+                self.last_clash = Some((g(t), g(self.tris[o])));
                 self.rollback(start);
                 return false;
             }
         }
         true
     }
+}
+
+/// True if the projections of triangles `a` and `b` (indices into `flat`)
+/// show that they meet at most in the vertices they share, so that they do
+/// not intersect in space either: a line (through an edge of one of them)
+/// has the one triangle on one side and the other strictly on the other,
+/// touching the line only at shared vertices. Exact (`orient2d` signs);
+/// false when unsure.
+fn apart_in_projection(flat: &[P2], a: [u32; 3], b: [u32; 3]) -> bool {
+    let shared = a.iter().filter(|v| b.contains(v)).count();
+    if shared >= 2 {
+        return false;
+    }
+    for (s, t) in [(a, b), (b, a)] {
+        for k in 0..3 {
+            let (e0, e1, r) = (s[k], s[(k + 1) % 3], s[(k + 2) % 3]);
+            let (p, q) = (flat[e0 as usize], flat[e1 as usize]);
+            let side = orient(p, q, flat[r as usize]);
+            if side == 0.0 {
+                continue;
+            }
+            // Every vertex of t strictly on the other side, except a vertex
+            // shared with s at an end of this edge (then the other two must
+            // be strictly across).
+            let ok = t.iter().all(|&v| {
+                if v == e0 || v == e1 {
+                    return true;
+                }
+                let o = orient(p, q, flat[v as usize]);
+                o != 0.0 && (o > 0.0) != (side > 0.0)
+            });
+            if ok && !t.contains(&r) {
+                return true;
+            }
+        }
+    }
+    false
 }
 
 #[cfg(test)]
@@ -193,7 +296,7 @@ mod tests {
             [0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0], [0.0, 1.0, 1.0],
         ];
         let uv: Vec<P2> = pos.iter().map(|p| [p[0], p[1]]).collect();
-        let mut c = SlabCheck::new(10, pos, uv);
+        let mut c = SlabCheck::new(10, pos, uv, 2);
         // The front wall y = 0.
         assert!(c.try_add(&[[10, 11, 14], [11, 15, 14]]));
         // Two diagonal triangles (planes x = y and x + y = 1) that cross

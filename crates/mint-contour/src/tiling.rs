@@ -171,21 +171,44 @@ pub fn other_starts(p: &[P2], q: &[P2], first: (usize, usize), k: usize) -> Vec<
     out
 }
 
-/// Cost of a triangle in [`min_area`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Cost {
-    /// Area in space (Fuchs, Kedem and Uselton).
-    Area,
-    /// Length of the new edge between the rings (in space): the sum over a
-    /// tiling is the total length of its spans.
-    Span,
+/// The tiling of least area from the fixed start pair `(i0, j0)` (a
+/// dynamic program over the `(n + 1) × (m + 1)` grid of the toroidal graph
+/// cut open at the start pair). `p3` and `q3` are the rings' points in
+/// space. Time O(nm), memory one byte per grid node.
+pub fn min_area(p3: &[[f64; 3]], q3: &[[f64; 3]], i0: usize, j0: usize) -> Tiling {
+    min_area_avoiding(p3, q3, i0, j0, &Default::default()).expect("a tiling with nothing forbidden")
 }
 
-/// The cheapest tiling from the fixed start pair `(i0, j0)` (a dynamic
-/// program over the `(n + 1) × (m + 1)` grid of the toroidal graph cut open
-/// at the start pair). `p3` and `q3` are the rings' points in space. Time
-/// O(nm), memory one byte per grid node.
-pub fn min_cost(p3: &[[f64; 3]], q3: &[[f64; 3]], i0: usize, j0: usize, cost: Cost) -> Tiling {
+/// A triangle of a tiling, by the ring vertices it starts from: a step on
+/// P from `(i, j)` makes `(P_i, P_i+1, Q_j)`, a step on Q makes
+/// `(P_i, Q_j+1, Q_j)`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Step {
+    pub on_p: bool,
+    pub i: usize,
+    pub j: usize,
+}
+
+impl Tiling {
+    /// The steps of the tiling, in order, with ring indices (mod n and m).
+    pub fn step_list(&self, n: usize, m: usize) -> Vec<Step> {
+        let (mut i, mut j) = (self.i0, self.j0);
+        let mut out = Vec::with_capacity(self.steps.len());
+        for &p in &self.steps {
+            out.push(Step { on_p: p, i: i % n, j: j % m });
+            if p {
+                i += 1;
+            } else {
+                j += 1;
+            }
+        }
+        out
+    }
+}
+
+/// [`min_area`] without the triangles in `forbidden`: `None` when every
+/// tiling from the start pair uses one of them.
+pub fn min_area_avoiding(p3: &[[f64; 3]], q3: &[[f64; 3]], i0: usize, j0: usize, forbidden: &std::collections::HashSet<Step>) -> Option<Tiling> {
     let (n, m) = (p3.len(), q3.len());
     let pp = |k: usize| p3[(i0 + k) % n];
     let qq = |k: usize| q3[(j0 + k) % m];
@@ -195,21 +218,36 @@ pub fn min_cost(p3: &[[f64; 3]], q3: &[[f64; 3]], i0: usize, j0: usize, cost: Co
         let x = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
         (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt()
     };
-    let len = |a: [f64; 3], b: [f64; 3]| {
-        let d = sub(a, b);
-        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
-    };
     // Step costs: advancing on P from (i, j) makes (P_i, P_i+1, Q_j).
-    let step_p = |i: usize, j: usize| match cost {
-        Cost::Area => area(pp(i), pp(i + 1), qq(j)),
-        Cost::Span => len(pp(i + 1), qq(j)),
+    // Forbidden steps on the grid: bit 1 for a step on P, 2 on Q.
+    let w = m + 1;
+    let mut ban = vec![0u8; if forbidden.is_empty() { 0 } else { (n + 1) * w }];
+    for st in forbidden {
+        let (i, j) = ((st.i + n - i0 % n) % n, (st.j + m - j0 % m) % m);
+        let bit = if st.on_p { 1 } else { 2 };
+        // Grid column m is column 0 again (and row n row 0).
+        for ii in [i, i + n] {
+            for jj in [j, j + m] {
+                if ii <= n && jj <= m {
+                    ban[ii * w + jj] |= bit;
+                }
+            }
+        }
+    }
+    let banned = |on_p: bool, i: usize, j: usize| !ban.is_empty() && ban[i * w + j] & if on_p { 1 } else { 2 } != 0;
+    let step_p = |i: usize, j: usize| {
+        if banned(true, i, j) {
+            return f64::INFINITY;
+        }
+        area(pp(i), pp(i + 1), qq(j))
     };
-    let step_q = |i: usize, j: usize| match cost {
-        Cost::Area => area(pp(i), qq(j + 1), qq(j)),
-        Cost::Span => len(pp(i), qq(j + 1)),
+    let step_q = |i: usize, j: usize| {
+        if banned(false, i, j) {
+            return f64::INFINITY;
+        }
+        area(pp(i), qq(j + 1), qq(j))
     };
     // from[i * (m + 1) + j]: true if (i, j) was reached by a step on P.
-    let w = m + 1;
     let mut from = vec![false; (n + 1) * w];
     let mut row = vec![0.0f64; w];
     for j in 1..=m {
@@ -231,6 +269,9 @@ pub fn min_cost(p3: &[[f64; 3]], q3: &[[f64; 3]], i0: usize, j0: usize, cost: Co
         }
         row = next;
     }
+    if !row[m].is_finite() {
+        return None;
+    }
     let (mut i, mut j) = (n, m);
     let mut steps = Vec::with_capacity(n + m);
     while i > 0 || j > 0 {
@@ -243,7 +284,7 @@ pub fn min_cost(p3: &[[f64; 3]], q3: &[[f64; 3]], i0: usize, j0: usize, cost: Co
         }
     }
     steps.reverse();
-    Tiling { i0, j0, steps }
+    Some(Tiling { i0, j0, steps })
 }
 
 #[cfg(test)]
@@ -263,7 +304,7 @@ mod tests {
         }).collect();
         let (p2, q2): (Vec<P2>, Vec<P2>) = (p.iter().map(|x| [x[0], x[1]]).collect(), q.iter().map(|x| [x[0], x[1]]).collect());
         let (pid, qid): (Vec<u32>, Vec<u32>) = ((0..4).collect(), (4..11).collect());
-        for t in [march(&p2, &q2, 1, 3, 0.5), min_cost(&p, &q, 2, 5, Cost::Area), min_cost(&p, &q, 0, 0, Cost::Span)] {
+        for t in [march(&p2, &q2, 1, 3, 0.5), min_area(&p, &q, 2, 5), min_area(&p, &q, 0, 0)] {
             assert_eq!(t.steps.iter().filter(|&&s| s).count(), 4);
             let tris = t.triangles(&pid, &qid);
             assert_eq!(tris.len(), 11);
@@ -285,7 +326,7 @@ mod tests {
     #[test]
     fn min_area_between_equal_squares_makes_no_long_diagonals() {
         let (p, q) = (square(0.0, 1.0), square(1.0, 1.0));
-        let t = min_cost(&p, &q, 0, 0, Cost::Area);
+        let t = min_area(&p, &q, 0, 0);
         // Each side face is a unit square split in two: total area 4.
         let tris = t.triangles(&[0, 1, 2, 3], &[4, 5, 6, 7]);
         let all: Vec<[f64; 3]> = p.iter().chain(&q).copied().collect();
