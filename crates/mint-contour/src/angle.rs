@@ -160,6 +160,9 @@ struct Ring {
     ids: Vec<u32>,
     uv: Vec<P2>,
     depth: usize,
+    /// The rings nested directly inside this one (its holes, or a hole's
+    /// islands): with them it bounds a region of solid or of void.
+    children: Vec<usize>,
     centroid: P2,
     lo: P2,
     hi: P2,
@@ -296,6 +299,11 @@ impl AngleReconstructor {
             let depths: Vec<usize> = (0..rings.len())
                 .map(|i| (0..rings.len()).filter(|&j| j != i && inside(&rings[j].uv, rings[i].uv[0])).count())
                 .collect();
+            for i in 0..rings.len() {
+                if let Some(parent) = (0..rings.len()).find(|&j| depths[j] + 1 == depths[i] && inside(&rings[j].uv, rings[i].uv[0])) {
+                    rings[parent].children.push(i);
+                }
+            }
             for (r, d) in rings.iter_mut().zip(depths) {
                 r.depth = d;
                 let ccw = signed_area(&r.uv) > 0.0;
@@ -327,7 +335,7 @@ impl AngleReconstructor {
                 if p.depth % 2 != q.depth % 2 {
                     continue;
                 }
-                if let Some(score) = overlap(p, q, self.opts.open) {
+                if let Some(score) = overlap(lower, i, upper, j, self.opts.open) {
                     links.push((i, j, score));
                 }
             }
@@ -669,13 +677,17 @@ fn make_ring(ids: Vec<u32>, uv: Vec<P2>, depth: usize) -> Ring {
         }
     }
     let centroid = centroid(&uv);
-    Ring { ids, uv, depth, centroid, lo, hi }
+    Ring { ids, uv, depth, children: Vec::new(), centroid, lo, hi }
 }
 
 /// Whether two rings of consecutive sections overlap in projection, with a
-/// score (the fractions of each one's vertices inside the other), or `None`.
+/// score, or `None`. A ring stands for its region: inside it and outside
+/// its children (a solid without its holes, or a hole without its
+/// islands). The score is the fraction of each one's vertices inside the
+/// other's region; rings whose boundaries cross overlap with a tiny score.
 /// Open polylines overlap when their bounding boxes do.
-fn overlap(p: &Ring, q: &Ring, open: bool) -> Option<f64> {
+fn overlap(ps: &Prepared, i: usize, qs: &Prepared, j: usize, open: bool) -> Option<f64> {
+    let (p, q) = (&ps.rings[i], &qs.rings[j]);
     if p.hi[0] < q.lo[0] || q.hi[0] < p.lo[0] || p.hi[1] < q.lo[1] || q.hi[1] < p.lo[1] {
         return None;
     }
@@ -683,8 +695,9 @@ fn overlap(p: &Ring, q: &Ring, open: bool) -> Option<f64> {
         let w = (p.hi[0].min(q.hi[0]) - p.lo[0].max(q.lo[0])).max(0.0) * (p.hi[1].min(q.hi[1]) - p.lo[1].max(q.lo[1])).max(0.0);
         return Some(w + 1e-300);
     }
-    let a = p.uv.iter().filter(|&&x| inside(&q.uv, x)).count() as f64 / p.uv.len() as f64;
-    let b = q.uv.iter().filter(|&&x| inside(&p.uv, x)).count() as f64 / q.uv.len() as f64;
+    let in_region = |sec: &Prepared, r: &Ring, x: P2| inside(&r.uv, x) && !r.children.iter().any(|&c| inside(&sec.rings[c].uv, x));
+    let a = p.uv.iter().filter(|&&x| in_region(qs, q, x)).count() as f64 / p.uv.len() as f64;
+    let b = q.uv.iter().filter(|&&x| in_region(ps, p, x)).count() as f64 / q.uv.len() as f64;
     if a + b > 0.0 {
         return Some(a + b);
     }
@@ -712,25 +725,26 @@ fn split_for(ring: &Ring, partners: &[&Ring], others: &[&[P2]]) -> Option<Vec<(P
     let mut order: Vec<usize> = (0..partners.len()).collect();
     order.sort_by(|&a, &b| (cs[a][0] * axis[0] + cs[a][1] * axis[1]).total_cmp(&(cs[b][0] * axis[0] + cs[b][1] * axis[1])).then(a.cmp(&b)));
     let mut out = Vec::new();
-    split_rec((ring.ids.clone(), ring.uv.clone()), &order, partners, others, &mut out)?;
+    let ccw = ring.depth % 2 == 0;
+    split_rec((ring.ids.clone(), ring.uv.clone()), ccw, &order, partners, others, &mut out)?;
     Some(out)
 }
 
-fn split_rec(part: Part, group: &[usize], partners: &[&Ring], others: &[&[P2]], out: &mut Vec<(Part, usize)>) -> Option<()> {
+fn split_rec(part: Part, ccw: bool, group: &[usize], partners: &[&Ring], others: &[&[P2]], out: &mut Vec<(Part, usize)>) -> Option<()> {
     if group.len() == 1 {
         out.push((part, group[0]));
         return Some(());
     }
     let half = group.len() / 2;
     let (g1, g2) = group.split_at(half);
-    let (a, b) = split_two(part, g1, g2, partners, others)?;
-    split_rec(a, g1, partners, others, out)?;
-    split_rec(b, g2, partners, others, out)
+    let (a, b) = split_two(part, ccw, g1, g2, partners, others)?;
+    split_rec(a, ccw, g1, partners, others, out)?;
+    split_rec(b, ccw, g2, partners, others, out)
 }
 
 /// Splits a ring by one chord into the part facing group `g1` and the part
 /// facing `g2`.
-fn split_two(part: Part, g1: &[usize], g2: &[usize], partners: &[&Ring], others: &[&[P2]]) -> Option<(Part, Part)> {
+fn split_two(part: Part, ccw: bool, g1: &[usize], g2: &[usize], partners: &[&Ring], others: &[&[P2]]) -> Option<(Part, Part)> {
     let (ids, uv) = part;
     let n = uv.len();
     if n < 4 {
@@ -782,7 +796,7 @@ fn split_two(part: Part, g1: &[usize], g2: &[usize], partners: &[&Ring], others:
             if best.is_some_and(|(s, _, _)| s <= score) {
                 continue;
             }
-            if valid_chord(&uv, a, b, others) {
+            if valid_chord(&uv, ccw, a, b, others) {
                 best = Some((score, a, b));
             }
         }
@@ -812,9 +826,10 @@ fn split_two(part: Part, g1: &[usize], g2: &[usize], partners: &[&Ring], others:
 }
 
 /// True if the chord between ring vertices `a` and `b` lies inside the
-/// ring: it leaves both ends into the interior, touches no ring edge except
-/// at its ends, and touches no other contour of the section.
-fn valid_chord(uv: &[P2], a: usize, b: usize, others: &[&[P2]]) -> bool {
+/// ring (the region it encloses: solid for a counter-clockwise ring, void
+/// for a hole): it leaves both ends into the interior, touches no ring edge
+/// except at its ends, and touches no other contour of the section.
+fn valid_chord(uv: &[P2], ccw: bool, a: usize, b: usize, others: &[&[P2]]) -> bool {
     let n = uv.len();
     let (pa, pb) = (uv[a], uv[b]);
     if pa == pb {
@@ -822,6 +837,7 @@ fn valid_chord(uv: &[P2], a: usize, b: usize, others: &[&[P2]]) -> bool {
     }
     let locally_inside = |i: usize, towards: P2| {
         let (x, y, z) = (uv[(i + n - 1) % n], uv[i], uv[(i + 1) % n]);
+        let (x, z) = if ccw { (x, z) } else { (z, x) };
         if orient(x, y, z) >= 0.0 {
             orient(x, y, towards) > 0.0 && orient(y, z, towards) > 0.0
         } else {
