@@ -228,13 +228,13 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
         MethodStats::Angle(d) => {
             let f = &d.fallback_slabs;
             format!(
-                "{} tubes ({} by the paper's march, {} from another start pair, {} by minimum area), {} splits, {} bridged groups, {} capped apart, {} caps; section pairs using each fallback: restart {}, minimum area {}, split {}, bridge {}, apart {}",
-                d.tubes, d.tiled.march, d.tiled.restart, d.tiled.min_area, d.splits, d.bridged, d.apart, d.caps, f.restart, f.min_area, f.split, f.bridge, f.apart
+                "{} tubes ({} by the paper's march, {} from another start pair, {} by minimum area), {} splits, {} bridged groups, {} paired, {} capped apart, {} caps\n  section pairs using each fallback: restart {}, minimum area {}, split {}, bridge {}, pairs {}, apart {}",
+                d.tubes, d.tiled.march, d.tiled.restart, d.tiled.min_area, d.splits, d.bridged, d.paired, d.apart, d.caps, f.restart, f.min_area, f.split, f.bridge, f.pairs, f.apart
             )
         }
         _ => String::new(),
     };
-    let line = format!(
+    let mut line = format!(
         "reconstructed {} ({} sections, {} contour vertices) -> {}: {} vertices, {} faces; {extra}",
         a.input.display(),
         s.input_faces_or_sections,
@@ -243,6 +243,10 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
         s.vertices,
         s.faces
     );
+    if let Some(v) = &s.volume {
+        let diff = v.relative_difference.map_or("n/a".to_string(), |d| format!("{:+.2}%", 100.0 * d));
+        line += &format!("\n  volume: mesh {:.6e}, planimetric {:.6e} (contour areas x section spacing), difference {diff}", v.mesh, v.planimetric);
+    }
     report(&s, &a.stats, a.quiet, a.json, line)
 }
 

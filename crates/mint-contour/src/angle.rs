@@ -117,6 +117,9 @@ pub struct FallbackCounts {
     pub split: u64,
     /// Some group was joined into one ring per side by bridges.
     pub bridge: u64,
+    /// Some group was joined pair by pair, best overlap first, with the
+    /// contours left over capped.
+    pub pairs: u64,
     /// Some group found no tiling without crossings and was capped apart.
     pub apart: u64,
 }
@@ -133,8 +136,12 @@ pub struct AngleStats {
     /// Groups whose contours were joined by bridges into one ring per side
     /// (merges, many-to-many, and branches whose split failed).
     pub bridged: u64,
-    /// Groups for which no tiling without crossings was found: their
-    /// contours were capped on both sides of the slab instead of joined.
+    /// Groups that neither a split nor bridges could join without
+    /// crossings, joined instead pair by pair (best overlap first); the
+    /// contours left over are capped.
+    pub paired: u64,
+    /// Groups with no tiling without crossings at all: their contours are
+    /// capped on both sides of the slab instead of joined.
     pub apart: u64,
     /// Caps triangulated (regions, each with its holes).
     pub caps: u64,
@@ -201,7 +208,8 @@ const USED_RESTART: u8 = 1;
 const USED_MIN_AREA: u8 = 2;
 const USED_SPLIT: u8 = 4;
 const USED_BRIDGE: u8 = 8;
-const USED_APART: u8 = 16;
+const USED_PAIRS: u8 = 16;
+const USED_APART: u8 = 32;
 
 /// The angle-criterion reconstruction of a stack streamed section by
 /// section: [`push`](AngleReconstructor::push) each section in order, then
@@ -385,8 +393,7 @@ impl AngleReconstructor {
         for (_, (mut ls, mut us)) in groups {
             ls.sort_unstable();
             us.sort_unstable();
-            let tris = self.group(&mut slab, lower, upper, below, &ls, &us);
-            match tris {
+            let tris = match self.group(&mut slab, lower, upper, below, &ls, &us) {
                 Some(tris) => {
                     for &i in &ls {
                         has_above[i] = true;
@@ -394,23 +401,29 @@ impl AngleReconstructor {
                     for &j in &us {
                         has_below[j] = true;
                     }
-                    for f in tris {
-                        sink.face(f)?;
-                        self.stats.faces += 1;
-                    }
+                    tris
                 }
                 None => {
-                    // Last resort: cap both sides apart (close_ends does it).
-                    self.stats.apart += 1;
-                    slab.used |= USED_APART;
+                    // Last resorts: join pairs by overlap, cap the rest (or
+                    // all, if no pair can be tiled); close_ends caps them.
+                    let (tris, joined) = self.pairs(&mut slab, lower, upper, &links, &ls, &us, has_above, has_below);
+                    if joined > 0 {
+                        self.stats.paired += 1;
+                        slab.used |= USED_PAIRS;
+                    } else {
+                        self.stats.apart += 1;
+                        slab.used |= USED_APART;
+                    }
+                    tris
                 }
+            };
+            for f in tris {
+                sink.face(f)?;
+                self.stats.faces += 1;
             }
         }
-        if std::env::var_os("MINT_DEBUG_ANGLE").is_some() {
-            eprintln!("slab: {} tris, {} visits, {} exact tests, grid {:?}", slab.check.mark(), slab.check.visits, slab.check.tests, slab.check.dims());
-        }
         let f = &mut self.stats.fallback_slabs;
-        for (bit, c) in [(USED_RESTART, &mut f.restart), (USED_MIN_AREA, &mut f.min_area), (USED_SPLIT, &mut f.split), (USED_BRIDGE, &mut f.bridge), (USED_APART, &mut f.apart)] {
+        for (bit, c) in [(USED_RESTART, &mut f.restart), (USED_MIN_AREA, &mut f.min_area), (USED_SPLIT, &mut f.split), (USED_BRIDGE, &mut f.bridge), (USED_PAIRS, &mut f.pairs), (USED_APART, &mut f.apart)] {
             *c += (slab.used & bit != 0) as u64;
         }
         Ok(slab.upper_bridges)
@@ -418,7 +431,6 @@ impl AngleReconstructor {
 
     /// The triangles joining one group of linked contours (accepted by the
     /// slab's check), or `None` when every way tried crosses something.
-    #[allow(clippy::too_many_arguments)]
     fn group(&mut self, slab: &mut Slab, lower: &Prepared, upper: &Prepared, below: &[bool], ls: &[usize], us: &[usize]) -> Option<Vec<[u32; 3]>> {
         let ring = |sec: &Prepared, k: usize| -> Part { (sec.rings[k].ids.clone(), sec.rings[k].uv.clone()) };
         if ls.len() == 1 && us.len() == 1 {
@@ -474,6 +486,39 @@ impl AngleReconstructor {
         None
     }
 
+    /// Joins a group's contours one to one, best overlap first, each pair
+    /// tiled with the fallbacks; marks the joined ones and returns the
+    /// triangles and the number of pairs.
+    #[allow(clippy::too_many_arguments)]
+    fn pairs(
+        &mut self,
+        slab: &mut Slab,
+        lower: &Prepared,
+        upper: &Prepared,
+        links: &[(usize, usize, f64)],
+        ls: &[usize],
+        us: &[usize],
+        has_above: &mut [bool],
+        has_below: &mut [bool],
+    ) -> (Vec<[u32; 3]>, usize) {
+        let mut cand: Vec<&(usize, usize, f64)> = links.iter().filter(|l| ls.contains(&l.0) && us.contains(&l.1)).collect();
+        cand.sort_by(|a, b| b.2.total_cmp(&a.2).then((a.0, a.1).cmp(&(b.0, b.1))));
+        let (mut tris, mut joined) = (Vec::new(), 0);
+        for &&(i, j, _) in &cand {
+            if has_above[i] || has_below[j] {
+                continue;
+            }
+            let ring = |sec: &Prepared, k: usize| -> Part { (sec.rings[k].ids.clone(), sec.rings[k].uv.clone()) };
+            if let Some(t) = self.tile(slab, &ring(lower, i), &ring(upper, j)) {
+                tris.extend(t);
+                has_above[i] = true;
+                has_below[j] = true;
+                joined += 1;
+            }
+        }
+        (tris, joined)
+    }
+
     /// Tiles a lower ring to an upper ring: the paper's march, then the
     /// fallbacks in order, until a tiling crosses nothing in the slab. The
     /// triangles returned are accepted by the slab's check.
@@ -527,18 +572,6 @@ impl AngleReconstructor {
                 }
                 let steps = tiling.step_list(n, m);
                 forbidden.extend(bad.into_iter().map(|k| steps[k]));
-            }
-        }
-        if std::env::var_os("MINT_DEBUG_ANGLE").is_some() {
-            let a = crate::geom2d::signed_area(puv);
-            let b = crate::geom2d::signed_area(quv);
-            eprintln!("FAILED tube n={} m={} areas {a:.3e} {b:.3e} z {:?} {:?} p0 {:?}", pid.len(), qid.len(), pxyz[0], qxyz[0], puv[0]);
-            let tris = min_area_avoiding(&pxyz, &qxyz, first.0, first.1, &Default::default()).unwrap().triangles(pid, qid);
-            check.try_add(&tris);
-            if let Some((x, y)) = check.last_clash {
-                eprintln!("  clash {:?} {:?}\n  {:?}\n  {:?}", x, y, x.map(|i| check.point(i)), y.map(|i| check.point(i)));
-                let pi = |v: u32| pid.iter().position(|&z| z == v).map(|k| format!("P{k}")).or_else(|| qid.iter().position(|&z| z == v).map(|k| format!("Q{k}"))).unwrap_or(format!("other{v}"));
-                eprintln!("  as ring indices {:?} {:?}", x.map(pi), y.map(pi));
             }
         }
         None

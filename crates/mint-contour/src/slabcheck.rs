@@ -40,13 +40,6 @@ pub struct SlabCheck {
     boxes: Vec<(P3, P3)>,
     stamp: Vec<u32>,
     epoch: u32,
-    /// Exact triangle pair tests made (for the stats).
-    pub tests: u64,
-    /// Candidate pairs looked at (boxes overlapping in the grid).
-    pub visits: u64,
-    /// The last pair that made [`try_add`](SlabCheck::try_add) refuse a
-    /// batch (global ids: the batch's triangle, then the other one).
-    pub last_clash: Option<([u32; 3], [u32; 3])>,
 }
 
 impl SlabCheck {
@@ -76,12 +69,7 @@ impl SlabCheck {
             dims = count(h);
         }
         let inv = [dims[0] as f64 / ext[0], dims[1] as f64 / ext[1]];
-        SlabCheck { base, pos, uv, flat, lo, inv, dims, cells: vec![Vec::new(); dims[0] * dims[1]], tris: Vec::new(), boxes: Vec::new(), stamp: Vec::new(), epoch: 0, tests: 0, visits: 0, last_clash: None }
-    }
-
-    /// The grid's size in cells.
-    pub fn dims(&self) -> [usize; 2] {
-        self.dims
+        SlabCheck { base, pos, uv, flat, lo, inv, dims, cells: vec![Vec::new(); dims[0] * dims[1]], tris: Vec::new(), boxes: Vec::new(), stamp: Vec::new(), epoch: 0 }
     }
 
     /// Position in space of the vertex with global id `id`.
@@ -166,7 +154,6 @@ impl SlabCheck {
                         continue;
                     }
                     self.stamp[o] = self.epoch;
-                    self.visits += 1;
                     let u = self.tris[o];
                     if t.iter().all(|v| u.contains(v)) {
                         // The same three vertices twice: a fin of no volume.
@@ -183,7 +170,6 @@ impl SlabCheck {
                     if apart_in_projection(&self.flat, t, u) {
                         continue;
                     }
-                    self.tests += 1;
                     if mint_mesh::selfx::faces_intersect(&self.pos, t, self.tris[o]) {
                         found.push(o);
                         if first_only {
@@ -236,9 +222,7 @@ impl SlabCheck {
         for &f in faces {
             let t = self.local(f);
             self.push(t);
-            if let Some(o) = self.clash_of_last() {
-                let g = |t: [u32; 3]| t.map(|i| i + self.base);
-                self.last_clash = Some((g(t), g(self.tris[o])));
+            if self.clash_of_last().is_some() {
                 self.rollback(start);
                 return false;
             }

@@ -7,7 +7,7 @@
 //! by a branch at the same contour. With caps, both methods must give a
 //! watertight surface (`mint_mesh::check`) with no intersecting faces
 //! (`mint_mesh::selfx`, exact), and the angle method must join every group
-//! (none capped apart).
+//! (none paired off or capped apart).
 use super::util::{ellipse, parse, profile_text};
 use mint_contour::angle::{self, AngleOptions, AngleStats};
 use mint_contour::mc::{self, McOptions};
@@ -134,7 +134,7 @@ fn both(name: &str, stack: &Stack) -> AngleStats {
     let st = angle::reconstruct(&s, AngleOptions { caps: true, ..Default::default() }, &mut a).unwrap();
     eprintln!("{name} angle: {st:?}");
     assert_clean(&format!("{name} angle"), &a);
-    assert_eq!((st.apart, st.isolated, st.forced_ears), (0, 0, 0), "{name} angle");
+    assert_eq!((st.paired, st.apart, st.isolated, st.forced_ears), (0, 0, 0, 0), "{name} angle");
     st
 }
 
