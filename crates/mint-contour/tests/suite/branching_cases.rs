@@ -219,3 +219,64 @@ fn a_hole_forks_and_two_holes_join() {
     let st = both("hole join", &s);
     assert_eq!((st.splits, st.bridged), (0, 1));
 }
+
+/// A random stack of wobbly blobs: 1 to 3 per section, placed apart, some
+/// with a hole, so that consecutive sections branch, merge, appear and
+/// vanish in every combination.
+fn random_blobs(seed: u64) -> Stack {
+    let mut rng = super::util::Rng(seed);
+    let sections = 4 + (rng.next_u64() % 6) as usize;
+    let mut s = Stack::new();
+    for k in 0..sections {
+        let z = DZ * k as f64;
+        let mut blobs: Vec<([f64; 2], f64)> = Vec::new();
+        let want = 1 + (rng.next_u64() % 3) as usize;
+        for _ in 0..20 {
+            if blobs.len() == want {
+                break;
+            }
+            let (c, r) = ([rng.range(-3.0, 3.0), rng.range(-3.0, 3.0)], rng.range(0.4, 1.8));
+            if blobs.iter().all(|&(d, q)| (c[0] - d[0]).hypot(c[1] - d[1]) > 1.45 * (r + q) + 0.05) {
+                blobs.push((c, r));
+            }
+        }
+        let mut sec = Vec::new();
+        for (c, r) in blobs {
+            let n = 12 + (rng.next_u64() % 30) as usize;
+            let (a, f, ph) = (rng.range(0.0, 0.35), 1.0 + (rng.next_u64() % 5) as f64, rng.range(0.0, 6.3));
+            sec.push(
+                (0..n)
+                    .map(|i| {
+                        let t = std::f64::consts::TAU * i as f64 / n as f64;
+                        let rr = r * (1.0 + a * (f * t + ph).sin());
+                        [c[0] + rr * t.cos(), c[1] + rr * t.sin(), z]
+                    })
+                    .collect(),
+            );
+            if r > 1.0 && rng.f64() < 0.3 {
+                sec.push(circle([c[0] + rng.range(-0.1, 0.1), c[1]], 0.25 * r, z, 10));
+            }
+        }
+        s.push(sec);
+    }
+    s
+}
+
+#[test]
+fn random_blob_stacks_are_watertight_and_crossing_free() {
+    let (mut paired, mut apart) = (0, 0);
+    let seeds: u64 = std::env::var("MINT_BLOB_SEEDS").ok().and_then(|v| v.parse().ok()).unwrap_or(150);
+    for seed in 0..seeds {
+        let stack = random_blobs(seed);
+        let (_, s) = parse(&profile_text(&stack));
+        let mut a = TriMesh::default();
+        let st = angle::reconstruct(&s, AngleOptions { caps: true, ..Default::default() }, &mut a).unwrap();
+        if a.faces.is_empty() {
+            continue;
+        }
+        assert_clean(&format!("blobs {seed} angle"), &a);
+        paired += st.paired;
+        apart += st.apart;
+    }
+    eprintln!("random blobs: {paired} groups paired, {apart} capped apart");
+}
