@@ -210,8 +210,9 @@ impl Tiling {
 /// tiling from the start pair uses one of them.
 pub fn min_area_avoiding(p3: &[[f64; 3]], q3: &[[f64; 3]], i0: usize, j0: usize, forbidden: &std::collections::HashSet<Step>) -> Option<Tiling> {
     let (n, m) = (p3.len(), q3.len());
-    let pp = |k: usize| p3[(i0 + k) % n];
-    let qq = |k: usize| q3[(j0 + k) % m];
+    // The rings from the start pair on, the first vertex repeated at the end.
+    let pr: Vec<[f64; 3]> = (0..=n).map(|k| p3[(i0 + k) % n]).collect();
+    let qr: Vec<[f64; 3]> = (0..=m).map(|k| q3[(j0 + k) % m]).collect();
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let area = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
         let (u, v) = (sub(b, a), sub(c, a));
@@ -239,22 +240,22 @@ pub fn min_area_avoiding(p3: &[[f64; 3]], q3: &[[f64; 3]], i0: usize, j0: usize,
         if banned(true, i, j) {
             return f64::INFINITY;
         }
-        area(pp(i), pp(i + 1), qq(j))
+        area(pr[i], pr[i + 1], qr[j])
     };
     let step_q = |i: usize, j: usize| {
         if banned(false, i, j) {
             return f64::INFINITY;
         }
-        area(pp(i), qq(j + 1), qq(j))
+        area(pr[i], qr[j + 1], qr[j])
     };
     // from[i * (m + 1) + j]: true if (i, j) was reached by a step on P.
     let mut from = vec![false; (n + 1) * w];
     let mut row = vec![0.0f64; w];
+    let mut next = vec![0.0f64; w];
     for j in 1..=m {
         row[j] = row[j - 1] + step_q(0, j - 1);
     }
     for i in 1..=n {
-        let mut next = vec![0.0f64; w];
         next[0] = row[0] + step_p(i - 1, 0);
         from[i * w] = true;
         for j in 1..=m {
@@ -267,7 +268,7 @@ pub fn min_area_avoiding(p3: &[[f64; 3]], q3: &[[f64; 3]], i0: usize, j0: usize,
                 next[j] = b;
             }
         }
-        row = next;
+        std::mem::swap(&mut row, &mut next);
     }
     if !row[m].is_finite() {
         return None;
