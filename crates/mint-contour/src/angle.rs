@@ -396,7 +396,7 @@ impl AngleReconstructor {
                 if p.depth % 2 != q.depth % 2 {
                     continue;
                 }
-                if let Some(score) = overlap(lower, i, upper, j, self.opts.open) {
+                if let Some(score) = overlap(lower, i, upper, j, self.opts.open, false) {
                     links.push((i, j, score));
                 }
             }
@@ -554,10 +554,14 @@ impl AngleReconstructor {
         has_above: &mut [bool],
         has_below: &mut [bool],
     ) -> (Vec<[u32; 3]>, usize) {
-        let mut cand: Vec<&(usize, usize, f64)> = links.iter().filter(|l| ls.contains(&l.0) && us.contains(&l.1)).collect();
+        let mut cand: Vec<(usize, usize, f64)> = links
+            .iter()
+            .filter(|l| ls.contains(&l.0) && us.contains(&l.1))
+            .map(|&(i, j, _)| (i, j, overlap(lower, i, upper, j, false, true).unwrap_or(0.0)))
+            .collect();
         cand.sort_by(|a, b| b.2.total_cmp(&a.2).then((a.0, a.1).cmp(&(b.0, b.1))));
         let (mut tris, mut joined) = (Vec::new(), 0);
-        for &&(i, j, _) in &cand {
+        for &(i, j, _) in &cand {
             if has_above[i] || has_below[j] {
                 continue;
             }
@@ -769,10 +773,12 @@ fn make_ring(ids: Vec<u32>, uv: Vec<P2>, depth: usize) -> Ring {
 /// Whether two rings of consecutive sections overlap in projection, with a
 /// score, or `None`. A ring stands for its region: inside it and outside
 /// its children (a solid without its holes, or a hole without its
-/// islands). The score is the fraction of each one's vertices inside the
-/// other's region; rings whose boundaries cross overlap with a tiny score.
-/// Open polylines overlap when their bounding boxes do.
-fn overlap(ps: &Prepared, i: usize, qs: &Prepared, j: usize, open: bool) -> Option<f64> {
+/// islands). With `score`, the score is the fraction of each one's
+/// vertices inside the other's region (rings whose boundaries cross
+/// overlap with a tiny score); without, the first vertex found inside
+/// decides and the score is 1. Open polylines overlap when their bounding
+/// boxes do, scored by the boxes' common area.
+fn overlap(ps: &Prepared, i: usize, qs: &Prepared, j: usize, open: bool, score: bool) -> Option<f64> {
     let (p, q) = (&ps.rings[i], &qs.rings[j]);
     if p.hi[0] < q.lo[0] || q.hi[0] < p.lo[0] || p.hi[1] < q.lo[1] || q.hi[1] < p.lo[1] {
         return None;
@@ -782,6 +788,12 @@ fn overlap(ps: &Prepared, i: usize, qs: &Prepared, j: usize, open: bool) -> Opti
         return Some(w + 1e-300);
     }
     let in_region = |sec: &Prepared, r: &Ring, x: P2| inside(&r.uv, x) && !r.children.iter().any(|&c| inside(&sec.rings[c].uv, x));
+    if !score {
+        if p.uv.iter().any(|&x| in_region(qs, q, x)) || q.uv.iter().any(|&x| in_region(ps, p, x)) {
+            return Some(1.0);
+        }
+        return first_crossing(&[&p.uv, &q.uv]).map(|_| 1e-6);
+    }
     let a = p.uv.iter().filter(|&&x| in_region(qs, q, x)).count() as f64 / p.uv.len() as f64;
     let b = q.uv.iter().filter(|&&x| in_region(ps, p, x)).count() as f64 / q.uv.len() as f64;
     if a + b > 0.0 {

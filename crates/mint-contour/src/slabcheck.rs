@@ -13,8 +13,9 @@
 //! planes. So a check per slab is enough for the tubes.
 //!
 //! Broad phase: a uniform grid over the slab's projection on the section
-//! plane, about one cell per vertex; a triangle is listed in the cells its
-//! projected box overlaps. The narrow phase is exact (Shewchuk's
+//! plane, cells of about twice the mean edge length; a triangle is listed
+//! in the cells its projection may touch (per column of cells, its extent
+//! there, padded by a cell). The narrow phase is exact (Shewchuk's
 //! predicates, through `mint_mesh::selfx::faces_intersect`) on the world
 //! positions the output file gets, so a batch accepted here is a pair-free
 //! part of `mint check --self-intersections` on `--double` output.
@@ -81,12 +82,46 @@ impl SlabCheck {
         (((p[d] - self.lo[d]) * self.inv[d]).floor().max(0.0) as usize).min(self.dims[d] - 1)
     }
 
-    /// Cells covered by the projected box of local triangle `t`.
-    fn range(&self, t: [u32; 3]) -> ([usize; 2], [usize; 2]) {
+    /// The cells the projection of local triangle `t` may touch, as
+    /// column ranges `(x, y0, y1)`: per column, the triangle's extent in
+    /// that column's strip, padded by a cell on each side (rounding and
+    /// non-axis frames), so that two triangles whose projections meet share
+    /// a cell. A long thin triangle lists O(w + h) cells, not its box's w·h.
+    fn columns(&self, t: [u32; 3]) -> Vec<(usize, usize, usize)> {
         let q = t.map(|i| self.uv[i as usize]);
-        let lo = [q[0][0].min(q[1][0]).min(q[2][0]), q[0][1].min(q[1][1]).min(q[2][1])];
-        let hi = [q[0][0].max(q[1][0]).max(q[2][0]), q[0][1].max(q[1][1]).max(q[2][1])];
-        ([self.cell(lo, 0), self.cell(lo, 1)], [self.cell(hi, 0), self.cell(hi, 1)])
+        let xlo = q[0][0].min(q[1][0]).min(q[2][0]);
+        let xhi = q[0][0].max(q[1][0]).max(q[2][0]);
+        let (c0, c1) = (self.cell([xlo, 0.0], 0), self.cell([xhi, 0.0], 0));
+        let ylast = self.dims[1] - 1;
+        let mut out = Vec::with_capacity(c1 - c0 + 1);
+        for c in c0..=c1 {
+            // The strip of column c (the end columns reach to the triangle).
+            let sx0 = if c == c0 { xlo } else { self.lo[0] + c as f64 / self.inv[0] };
+            let sx1 = if c == c1 { xhi } else { self.lo[0] + (c + 1) as f64 / self.inv[0] };
+            let (mut ylo, mut yhi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for k in 0..3 {
+                let (a, b) = (q[k], q[(k + 1) % 3]);
+                if a[0] >= sx0 && a[0] <= sx1 {
+                    ylo = ylo.min(a[1]);
+                    yhi = yhi.max(a[1]);
+                }
+                for x in [sx0, sx1] {
+                    if (a[0] - x) * (b[0] - x) < 0.0 {
+                        let y = a[1] + (b[1] - a[1]) * ((x - a[0]) / (b[0] - a[0]));
+                        ylo = ylo.min(y);
+                        yhi = yhi.max(y);
+                    }
+                }
+            }
+            if ylo > yhi {
+                // Rounding left the strip empty: take the whole box height.
+                ylo = q[0][1].min(q[1][1]).min(q[2][1]);
+                yhi = q[0][1].max(q[1][1]).max(q[2][1]);
+            }
+            let (y0, y1) = (self.cell([0.0, ylo], 1), self.cell([0.0, yhi], 1));
+            out.push((c, y0.saturating_sub(1), (y1 + 1).min(ylast)));
+        }
+        out
     }
 
     fn local(&self, f: [u32; 3]) -> [u32; 3] {
@@ -100,9 +135,8 @@ impl SlabCheck {
         let p = t.map(|i| self.pos[i as usize]);
         let b = ([0, 1, 2].map(|d| p[0][d].min(p[1][d]).min(p[2][d])), [0, 1, 2].map(|d| p[0][d].max(p[1][d]).max(p[2][d])));
         let k = self.tris.len() as u32;
-        let (a, z) = self.range(t);
-        for x in a[0]..=z[0] {
-            for y in a[1]..=z[1] {
+        for (x, y0, y1) in self.columns(t) {
+            for y in y0..=y1 {
                 self.cells[x * self.dims[1] + y].push(k);
             }
         }
@@ -115,9 +149,8 @@ impl SlabCheck {
         let t = self.tris.pop().expect("a triangle to take back");
         self.boxes.pop();
         self.stamp.pop();
-        let (a, z) = self.range(t);
-        for x in a[0]..=z[0] {
-            for y in a[1]..=z[1] {
+        for (x, y0, y1) in self.columns(t) {
+            for y in y0..=y1 {
                 self.cells[x * self.dims[1] + y].pop();
             }
         }
@@ -144,9 +177,8 @@ impl SlabCheck {
             self.stamp.iter_mut().for_each(|s| *s = 0);
             self.epoch = 1;
         }
-        let (a, z) = self.range(t);
-        for x in a[0]..=z[0] {
-            for y in a[1]..=z[1] {
+        for (x, y0, y1) in self.columns(t) {
+            for y in y0..=y1 {
                 let c = x * self.dims[1] + y;
                 for idx in 0..self.cells[c].len() {
                     let o = self.cells[c][idx] as usize;
