@@ -280,3 +280,16 @@ fn random_blob_stacks_are_watertight_and_crossing_free() {
     }
     eprintln!("random blobs: {paired} groups paired, {apart} capped apart");
 }
+
+#[test]
+fn two_bridges_in_one_plane_from_both_sides() {
+    // One contour (capped below, so it cannot be split), two for one
+    // section, one again: the two arms are bridged from below and from
+    // above in the same plane, by bridges that must not touch.
+    let mut s = Stack::new();
+    run(&mut s, 1, &|z| vec![ellipse([0.0, 0.0], 2.2, 1.0, 0.0, z, 48)]);
+    run(&mut s, 1, &arms(&[[-1.2, 0.0], [1.2, 0.0]], 0.8, 32));
+    run(&mut s, 1, &|z| vec![ellipse([0.0, 0.0], 2.2, 1.0, 0.0, z, 44)]);
+    let st = both("bridged twice", &s);
+    assert_eq!((st.splits, st.bridged), (0, 2));
+}
