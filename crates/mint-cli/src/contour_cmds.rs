@@ -232,13 +232,16 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
             "grid {}x{}x{} cells of {:.6}, {} non-canonical cells",
             d.grid_cells[0], d.grid_cells[1], d.grid_cells[2], d.cube_size, d.non_canonical_cells
         ),
-        MethodStats::Angle(d) => format!(
-            "{} tubes, {} splits, {} caps, {} unsplit and {} complex branchings",
-            d.tubes, d.splits, d.caps, d.unsplit_groups, d.complex_groups
-        ),
+        MethodStats::Angle(d) => {
+            let f = &d.fallback_slabs;
+            format!(
+                "{} tubes ({} by the paper's march, {} from another start pair, {} by minimum area), {} splits, {} bridged groups, {} paired, {} capped apart, {} caps\n  section pairs using each fallback: restart {}, minimum area {}, split {}, bridge {}, pairs {}, apart {}",
+                d.tubes, d.tiled.march, d.tiled.restart, d.tiled.min_area, d.splits, d.bridged, d.paired, d.apart, d.caps, f.restart, f.min_area, f.split, f.bridge, f.pairs, f.apart
+            )
+        }
         _ => String::new(),
     };
-    let line = format!(
+    let mut line = format!(
         "reconstructed {} ({} sections, {} contour vertices) -> {}: {} vertices, {} faces; {extra}",
         a.input.display(),
         s.input_faces_or_sections,
@@ -247,6 +250,10 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
         s.vertices,
         s.faces
     );
+    if let Some(v) = &s.volume {
+        let diff = v.relative_difference.map_or("n/a".to_string(), |d| format!("{:+.2}%", 100.0 * d));
+        line += &format!("\n  volume: mesh {:.6e}, planimetric {:.6e} (contour areas x section spacing), difference {diff}", v.mesh, v.planimetric);
+    }
     if a.preview {
         crate::picture_cmds::write_preview(&[a.output.as_path()], &a.output, a.quiet || a.json, &crate::progress::Bars::new(a.quiet || a.json))?;
     }

@@ -11,7 +11,10 @@
 //!   lines become mint-core intercepts, reconstructed window by window with
 //!   `mint_core::reconstruct::reconstruct_slab` (watertight with caps);
 //! - [`angle`]: the angle-criterion strips between consecutive sections,
-//!   with branching by splitting contours and caps by [`triangulate`];
+//!   with branching by splitting and bridging contours and caps by
+//!   [`triangulate`]; each strip is a [`tiling`] (the paper's march, or the
+//!   minimum-area tiling as a fallback) accepted only if the exact
+//!   [`slabcheck`] finds no crossing;
 //! - [`triangulate`]: smallest-inner-angle-first ear clipping, holes joined
 //!   by bridges; also used by [`optimize`];
 //! - [`optimize`]: the normal optimizer (regions of near-coplanar faces
@@ -34,7 +37,9 @@ pub mod mc;
 pub mod optimize;
 pub mod profile;
 pub mod run;
+pub mod slabcheck;
 pub mod slice;
+pub mod tiling;
 pub mod triangulate;
 
 pub use error::{ContourError, ProfileError, ProfileErrorKind};

@@ -92,6 +92,62 @@ impl Section {
     pub fn vertex_count(&self) -> usize {
         self.contours.iter().map(|c| c.points.len()).sum()
     }
+
+    /// The area of the section's solid: each contour's area counts with its
+    /// nesting depth (even-odd: outer boundaries add, holes subtract,
+    /// islands in holes add again). Contours are disjoint, so one vertex
+    /// decides what contains what.
+    pub fn solid_area(&self) -> f64 {
+        let cs = &self.contours;
+        (0..cs.len())
+            .map(|i| {
+                let depth = (0..cs.len()).filter(|&j| j != i && crate::geom2d::inside(&cs[j].uv, cs[i].uv[0])).count();
+                let a = crate::geom2d::signed_area(&cs[i].uv).abs();
+                if depth % 2 == 0 {
+                    a
+                } else {
+                    -a
+                }
+            })
+            .sum()
+    }
+}
+
+/// The planimetric volume of a stack, section by section: the sum of each
+/// section's [`solid_area`](Section::solid_area) times its thickness, the
+/// clinical convention. A section's thickness is half the distance to the
+/// previous section plus half the distance to the next one; an end section
+/// counts its one neighbour's distance in full. For evenly spaced sections
+/// this is the sum of the areas times the spacing. A one-section stack has
+/// no thickness (volume 0).
+#[derive(Debug, Default, Clone, PartialEq)]
+pub struct Planimeter {
+    /// The previous section's offset and area, and its distance to the one
+    /// before it.
+    prev: Option<(f64, f64, Option<f64>)>,
+    sum: f64,
+}
+
+impl Planimeter {
+    /// Adds the next section (in stack order).
+    pub fn add(&mut self, s: &Section) {
+        let area = s.solid_area();
+        if let Some((po, pa, before)) = self.prev {
+            let gap = (s.offset - po).abs();
+            self.sum += pa * 0.5 * (before.unwrap_or(gap) + gap);
+            self.prev = Some((s.offset, area, Some(gap)));
+        } else {
+            self.prev = Some((s.offset, area, None));
+        }
+    }
+
+    /// The volume of the sections added.
+    pub fn volume(&self) -> f64 {
+        match self.prev {
+            Some((_, pa, Some(gap))) => self.sum + pa * gap,
+            _ => self.sum,
+        }
+    }
 }
 
 /// A right-handed orthonormal frame `(u, v, n)`; `n` is the stack axis.

@@ -19,7 +19,7 @@ use crate::angle::{AngleOptions, AngleReconstructor, AngleStats};
 use crate::error::ContourError;
 use crate::mc::{McOptions, McReconstructor, McStats, StackSummary};
 use crate::optimize::{optimize, OptimizeStats};
-use crate::profile::{ProfileOptions, ProfileReader, ProfileWriter};
+use crate::profile::{Planimeter, ProfileOptions, ProfileReader, ProfileWriter};
 use crate::slice::{SliceStats, Slicer};
 use mint_core::progress::Progress;
 use mint_core::{MeshSink, SinkError};
@@ -119,6 +119,41 @@ pub struct RunStats {
     pub input_faces_or_sections: u64,
     /// What the method counted.
     pub details: MethodStats,
+    /// `contours` only: the planimetric and the mesh volume.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub volume: Option<VolumeReport>,
+}
+
+/// The volume of a reconstruction two ways (`mint contours`).
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct VolumeReport {
+    /// The planimetric volume of the input stack
+    /// ([`Planimeter`](crate::profile::Planimeter)): contour areas, holes
+    /// subtracted, times the section spacing.
+    pub planimetric: f64,
+    /// The signed volume enclosed by the output mesh as written (f32
+    /// coordinates unless `--double`); meaningful when it is closed.
+    pub mesh: f64,
+    /// `(mesh - planimetric) / planimetric`, or `None` when the
+    /// planimetric volume is 0.
+    pub relative_difference: Option<f64>,
+}
+
+/// The signed volume of the mesh file `path` (divergence theorem, about
+/// its first vertex), streamed: faces in chunks, positions from the file.
+pub fn mesh_volume(path: &Path) -> Result<f64, ContourError> {
+    let mut reader = MeshReader::open(path, ReadOptions::default())?;
+    let mut chunk = TriangleChunk::new();
+    let mut origin: Option<[f64; 3]> = None;
+    let mut six = 0.0;
+    while reader.next_chunk(&mut chunk)? {
+        for t in &chunk.positions {
+            let o = *origin.get_or_insert(t[0]);
+            let [a, b, c] = t.map(|p| [p[0] - o[0], p[1] - o[1], p[2] - o[2]]);
+            six += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) + a[2] * (b[0] * c[1] - b[1] * c[0]);
+        }
+    }
+    Ok(six / 6.0)
 }
 
 /// A parameter value in [`RunStats::parameters`].
@@ -157,6 +192,7 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
             Ok(())
         }
     };
+    let mut planimeter = Planimeter::default();
     let (details, sections, in_vertices, parameters) = match method {
         Method::Mc(o) => {
             // Pass 1: bounding box and offsets (validates the whole file first).
@@ -166,6 +202,7 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
             while let Some(s) = r.next_section()? {
                 let sm = summary.get_or_insert_with(|| StackSummary::new(r.frame().unwrap()));
                 sm.add(&s);
+                planimeter.add(&s);
                 check()?;
             }
             progress.finish();
@@ -192,6 +229,9 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
             let mut n = 0u64;
             progress.start(crate::phases::CONTOURS, 0);
             while let Some(s) = r.next_section()? {
+                if !o.open {
+                    planimeter.add(&s);
+                }
                 a.push(&s, &mut sink)?;
                 n += 1;
                 check()?;
@@ -213,6 +253,14 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
         MethodStats::Angle(s) => (s.vertices, s.faces),
         _ => unreachable!(),
     };
+    // Open polylines bound no area: no volume to compare.
+    let volume = if open {
+        None
+    } else {
+        let (planimetric, mesh) = (planimeter.volume(), mesh_volume(output)?);
+        let relative_difference = (planimetric != 0.0).then(|| (mesh - planimetric) / planimetric);
+        Some(VolumeReport { planimetric, mesh, relative_difference })
+    };
     Ok(RunStats {
         command: "contours".into(),
         input: input.display().to_string(),
@@ -224,6 +272,7 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
         input_vertices: in_vertices,
         input_faces_or_sections: sections,
         details,
+        volume,
     })
 }
 
@@ -294,6 +343,7 @@ pub fn slice_file(input: &Path, output: &Path, sections: u32, axis: usize, progr
         input_vertices: reader.vertex_count() as u64,
         input_faces_or_sections: faces,
         details: MethodStats::Slice(st),
+        volume: None,
     })
 }
 
@@ -330,5 +380,6 @@ pub fn optimize_file(input: &Path, output: &Path, angle_deg: f64, write: WriteOp
         input_vertices: positions.len() as u64,
         input_faces_or_sections: faces.len() as u64,
         details: MethodStats::Optimize(st),
+        volume: None,
     })
 }

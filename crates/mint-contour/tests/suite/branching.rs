@@ -61,7 +61,7 @@ fn a_y_shaped_branch() {
     let mut a = TriMesh::default();
     let st = angle::reconstruct(&s, AngleOptions { caps: true, ..Default::default() }, &mut a).unwrap();
     eprintln!("y-shape angle: {st:?}");
-    assert_eq!((st.splits, st.unsplit_groups, st.complex_groups), (1, 0, 0));
+    assert_eq!((st.splits, st.bridged, st.apart), (1, 0, 0));
     assert_eq!(clashing_faces(&a), vec![], "angle method triangles cross");
     let c = check_closed_oriented(&a).unwrap();
     assert_eq!((c.components, c.genus), (1, 0));
@@ -95,7 +95,8 @@ fn two_arms_merging_into_one_and_three_way_branches() {
     let mut a = TriMesh::default();
     let st = angle::reconstruct(&s, AngleOptions { caps: true, ..Default::default() }, &mut a).unwrap();
     eprintln!("merge and 3-way split, angle: {st:?}");
-    assert_eq!((st.splits, st.unsplit_groups), (2, 0));
+    // The merge joins the two arms by a bridge; the three-way branch splits.
+    assert_eq!((st.splits, st.bridged, st.apart), (1, 1, 0));
     assert_eq!(clashing_faces(&a), vec![], "angle method triangles cross");
     let c = check_closed_oriented(&a).unwrap();
     assert_eq!((c.components, c.genus), (1, 0));

@@ -5,6 +5,7 @@
 //! files and the file drivers (`files`), and real data (`real_data`).
 pub mod util;
 mod branching;
+mod branching_cases;
 mod files;
 mod mc_grid;
 mod optimizer;
