@@ -56,9 +56,10 @@ impl<R: Record> Buckets<R> {
     pub fn new(dir: &Path, name: &str, n: usize, budget: u64) -> Buckets<R> {
         let n = n.max(1);
         let limit = (budget / std::mem::size_of::<R>().max(1) as u64).clamp(1024, usize::MAX as u64 / 2) as usize;
-        // Small enough that every bucket can hold a few pages, large enough
-        // that writes and reads are long.
-        let page = (limit / (4 * n)).clamp(64, 1 << 16);
+        // Small enough that every bucket can hold a few pages, and under
+        // malloc's mmap threshold (128 KiB), so that freed pages are reused
+        // from the heap instead of being unmapped and faulted in again.
+        let page = (limit / (4 * n)).clamp(64, (64 << 10) / std::mem::size_of::<R>().max(1));
         Buckets {
             dir: dir.to_path_buf(),
             name: name.to_string(),
