@@ -264,6 +264,49 @@ fn a_shuffled_copy_resamples_to_the_same_bytes_with_mmap_and_sort_dereferencing(
     assert!(got == want && s.deref.starts_with("mmap: the positions"), "{}", s.deref);
 }
 
+/// Tiny cases where the surface passes exactly through grid nodes or two
+/// solids touch along a line, each count with its reason.
+#[test]
+fn tiny_cases_on_nodes_and_touching_along_a_line_give_their_exact_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let run_mesh = |m: &TriMesh| {
+        let input = write_trimesh(dir.path(), "in.ply", m);
+        let out = dir.path().join("out.ply");
+        let (s, out) = run(&input, &out, opts(GridSize::CellSize(1.0)));
+        let r = mint_mesh::check(&out.positions, &out.faces);
+        assert!(r.watertight, "{r:?}");
+        (s.output_vertices, s.output_faces, r.components, s.grid_origin)
+    };
+    // [1, 2]³ on unit cells: extent 1 → 1 cell plus one of padding each
+    // side, so the grid's nodes are 0, 1, 2, 3 and every corner of the box
+    // is a node. A crossing exactly on a node is taken as just below it
+    // (the tie-break), so a node on the surface is inside at the box's low
+    // side and outside at its high side: inside nodes {n : 1 <= n < 2} =
+    // {1}³, one node, whose six edges each cross once: an octahedron,
+    // 6 vertices and 8 faces.
+    let (v, f, c, origin) = run_mesh(&box_mesh([1.0; 3], [2.0; 3]));
+    assert_eq!(origin, [0.0; 3]);
+    assert_eq!((v, f, c), (6, 8, 1));
+    // [1, 3]³ the same way: inside {1, 2}³, the 2×2×2 block of the other
+    // test: 24 vertices, 44 faces.
+    let (v, f, c, _) = run_mesh(&box_mesh([1.0; 3], [3.0; 3]));
+    assert_eq!((v, f, c), (24, 44, 1));
+    // Two boxes touching along the line x = y = 1.7: [0.3, 1.7]² × [0.3,
+    // 2.7] and [1.7, 3.1]² × [0.3, 2.7]. The grid (extent 2.8 × 2.8 × 2.4)
+    // has x and y nodes at -0.8 + i and z nodes at -1 + k, so the first
+    // box holds nodes {1.2}² × {1, 2} and the second {2.2}² × {1, 2}:
+    // two 1×1×2 columns, diagonal to each other, never joined by a grid
+    // edge. The cells between them see two diagonal inside corners, which
+    // the table separates: two components. Each column has 2·(1·1 + 1·2 +
+    // 2·1) = 10 vertices (two per line through it) and, being a sphere
+    // with 3F/2 edges, F = 2·(10 - 2) = 16 faces.
+    let mut two = box_mesh([0.3, 0.3, 0.3], [1.7, 1.7, 2.7]);
+    union(&mut two, &box_mesh([1.7, 1.7, 0.3], [3.1, 3.1, 2.7]));
+    let (v, f, c, origin) = run_mesh(&two);
+    assert!(origin.iter().zip([-0.8, -0.8, -1.0]).all(|(a, b)| (a - b).abs() < 1e-6), "{origin:?}"); // f32 input: 0.3 is 0.30000001…
+    assert_eq!((v, f, c), (20, 32, 2));
+}
+
 /// Tiny cases with exact counts, each with its reason (as OpenVDB's "a
 /// filled 6³ box gives exactly 216 quads").
 #[test]
