@@ -170,7 +170,8 @@ proptest! {
     fn random_soups_with_open_holes_stay_manifold(data in soup_strategy(), cells in 500u64..20000, max_hole in 1u32..6) {
         use mint_core::holes::open_cells;
         use mint_core::reconstruct::crossing_to_intercept;
-        use mint_core::robust::{census_plane, reconstruct_slab_solids, Expr};
+        use mint_core::expr::Expr;
+        use mint_core::robust::{census_plane, reconstruct_slab_solids};
         let tris = soup_of(&data);
         prop_assume!(!tris.is_empty());
         let (lo, hi) = bounds(&tris);

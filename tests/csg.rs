@@ -3,7 +3,7 @@
 //! and bad scenes.
 
 use crate::common::{load, write_mesh};
-use mint_core::robust::BoolOp;
+use mint_core::expr::BoolOp;
 use mint_core::{GridSize, TriMesh};
 use mint_pipeline::{boolean, csg, parse_scene, resample, NoProgress, ResampleOptions};
 use mint_testkit::topology::check_closed_oriented;

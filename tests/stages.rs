@@ -3,7 +3,7 @@
 //! process; and every way a work directory can be wrong gives one line.
 
 use crate::common::{box_mesh, write_mesh, write_trimesh};
-use mint_core::robust::BoolOp;
+use mint_core::expr::BoolOp;
 use mint_core::GridSize;
 use mint_pipeline::engine::{plan_run, run_task, TaskOptions, TaskOutcome};
 use mint_pipeline::{boolean, csg, parse_scene, resample, Job, NoProgress, Plan, ResampleOptions};

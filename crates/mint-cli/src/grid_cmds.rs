@@ -126,9 +126,9 @@ pub(crate) fn cmd_bool(a: BoolArgs) -> Result<()> {
     let opts = grid_options(&a.grid)?;
     crate::paths::check_output(&a.output, &[&a.a, &a.b])?;
     let op = match a.op {
-        BoolOpArg::Union => mint_core::robust::BoolOp::Union,
-        BoolOpArg::Intersection => mint_core::robust::BoolOp::Intersection,
-        BoolOpArg::Difference => mint_core::robust::BoolOp::Difference,
+        BoolOpArg::Union => mint_core::expr::BoolOp::Union,
+        BoolOpArg::Intersection => mint_core::expr::BoolOp::Intersection,
+        BoolOpArg::Difference => mint_core::expr::BoolOp::Difference,
     };
     let bars = Bars::new(a.grid.quiet || a.grid.json);
     let s = mint_pipeline::boolean(op, &a.a, &a.b, &a.output, &opts, &bars)?;

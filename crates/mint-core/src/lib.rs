@@ -11,10 +11,12 @@
 //! - [`primitives`]: analytic solids that intersect grid lines exactly (for CSG);
 //! - [`holes`]: which hole-capping cells stay open under `--max-hole`;
 //! - [`signs`], [`robust`]: sign rules for dirty scans and the state-first reconstruction;
+//! - [`expr`]: CSG expressions over solids and where their value changes along an edge;
 //! - [`rng`]: SplitMix64, the seeded generator shared by samplers and generators;
 //! - [`sink`]: the [`MeshSink`] trait through which meshes leave algorithms.
 
 pub mod discretize;
+pub mod expr;
 pub mod grid;
 pub mod holes;
 pub mod intercept;

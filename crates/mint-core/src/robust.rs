@@ -32,6 +32,7 @@ use crate::mc_table::{corner_offset, mc_table, EDGE_CORNERS};
 use crate::reconstruct::{active_cells, intercept_local_position, SlabResult};
 use crate::signs::{effective_rule, lines, nearest_vote, resign_parity, winding_valid, LineCensus, NodeStates, RepairStats, SignRule};
 use crate::holes::{cell_id, OpenCells};
+use crate::expr::{result_vertex, Expr};
 use crate::MARGIN;
 
 /// One plane after its states and A/B vertices are decided.
@@ -285,74 +286,6 @@ fn layer_s_vertices(s_raw: &[Intercept], lower: &NodeStates, upper: &NodeStates,
 /// `rule` (Union or Parity; resolve Auto first with [`census_plane`]).
 pub fn reconstruct_slab_robust(grid: &Grid, k0: u32, planes: Vec<Vec<Intercept>>, rule: SignRule) -> (SlabResult, RepairStats) {
     reconstruct_slab_solids(grid, k0, vec![planes], &[rule], &Expr::Operand(0), None)
-}
-
-/// A boolean operator of [`Expr`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BoolOp {
-    /// Inside any child.
-    Union,
-    /// Inside every child.
-    Intersection,
-    /// Inside the first child and no other.
-    Difference,
-}
-
-/// A CSG expression over numbered operands (n-ary, nesting).
-#[derive(Debug, Clone, PartialEq)]
-pub enum Expr {
-    Operand(usize),
-    Op(BoolOp, Vec<Expr>),
-}
-
-impl Expr {
-    /// The expression's value for the operands' inside/outside states.
-    pub fn eval(&self, inside: &[bool]) -> bool {
-        match self {
-            Expr::Operand(i) => inside[*i],
-            Expr::Op(BoolOp::Union, c) => c.iter().any(|e| e.eval(inside)),
-            Expr::Op(BoolOp::Intersection, c) => c.iter().all(|e| e.eval(inside)),
-            Expr::Op(BoolOp::Difference, c) => c.first().is_some_and(|e| e.eval(inside)) && !c[1..].iter().any(|e| e.eval(inside)),
-        }
-    }
-    /// The same, 64 nodes at a time on state bitmaps.
-    fn eval_words(&self, words: &[u64]) -> u64 {
-        match self {
-            Expr::Operand(i) => words[*i],
-            Expr::Op(BoolOp::Union, c) => c.iter().fold(0, |a, e| a | e.eval_words(words)),
-            Expr::Op(BoolOp::Intersection, c) => c.iter().fold(!0, |a, e| a & e.eval_words(words)),
-            Expr::Op(BoolOp::Difference, c) => {
-                let first = c.first().map_or(0, |e| e.eval_words(words));
-                c[1..].iter().fold(first, |a, e| a & !e.eval_words(words))
-            }
-        }
-    }
-    /// The largest operand number used, plus one.
-    pub fn operands(&self) -> usize {
-        match self {
-            Expr::Operand(i) => i + 1,
-            Expr::Op(_, c) => c.iter().map(Expr::operands).max().unwrap_or(0),
-        }
-    }
-}
-
-/// Where along an edge the result changes, given each operand's vertex on
-/// that edge (operands whose state does not change have none): walk the
-/// operands' vertices in order, flipping each operand's state, and stop at
-/// the first flip that changes the expression. With one operand this is
-/// that operand's vertex; for A ∪ A it is A's vertex again.
-fn result_vertex(expr: &Expr, lower: &mut [bool], changes: &mut [(f64, usize)]) -> Option<f64> {
-    changes.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    let mut r = expr.eval(lower);
-    for &(v, o) in changes.iter() {
-        lower[o] = !lower[o];
-        let r2 = expr.eval(lower);
-        if r2 != r {
-            return Some(v);
-        }
-        r = r2;
-    }
-    None
 }
 
 /// Robust reconstruction of a CSG expression over several solids on one

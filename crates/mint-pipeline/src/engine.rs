@@ -19,7 +19,7 @@ use crate::progress::Progress;
 use crate::scene::{Operand, Scene};
 use crate::stages::{run_stage_task, Ctx, DiscretizeResult};
 use crate::workdir::{checked_json, disk_bytes, is_done, task_dir, temp_tasks, write_atomic, TaskBuild, PLAN_FILE};
-use mint_core::robust::BoolOp;
+use mint_core::expr::BoolOp;
 use mint_core::signs::SignRule;
 use mint_io::Format;
 use serde::Serialize;

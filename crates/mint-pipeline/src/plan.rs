@@ -19,7 +19,7 @@ use crate::options::ResampleOptions;
 use crate::scene::{parse_scene, Operand, Scene};
 use crate::workdir::{read_checked_json, PLAN_FILE};
 use mint_core::grid::GridSize;
-use mint_core::robust::{BoolOp, Expr};
+use mint_core::expr::{BoolOp, Expr};
 use mint_core::signs::SignRule;
 use mint_io::{MeshReader, ReadOptions};
 use serde::{Deserialize, Serialize};

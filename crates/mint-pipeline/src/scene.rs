@@ -25,7 +25,7 @@
 //! The top level is either a node or an object with `scene` (and `defs`).
 
 use mint_core::primitives::{Primitive, Shape, Transform};
-use mint_core::robust::{BoolOp, Expr};
+use mint_core::expr::{BoolOp, Expr};
 use std::path::{Path, PathBuf};
 
 /// A parsed scene: an expression over numbered operands.
