@@ -309,3 +309,17 @@ fn a_flat_input_gives_an_empty_output_with_a_warning() {
     let j: serde_json::Value = serde_json::from_str(&ok(&["resample", p(&sphere), p(&out), "--cells", "1000", "--json"])).unwrap();
     assert_eq!(j["warnings"], serde_json::json!([]));
 }
+
+/// A binary PLY whose faces are not all triangles (here a two-corner face)
+/// has shorter face records than the fixed-size reading assumes; it must be
+/// streamed, not refused as truncated (a bug until 2026-12-01: resample
+/// and check called it "unexpected end of file").
+#[test]
+fn a_binary_ply_with_a_two_corner_face_is_read_not_called_truncated() {
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/fuzz/regressions/read_ply/binary-face-with-two-corners.ply");
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out.ply");
+    ok(&["resample", &file.display().to_string(), &out.display().to_string(), "--cells", "1000", "--quiet"]);
+    let c: serde_json::Value = serde_json::from_str(&ok(&["check", &file.display().to_string(), "--json"])).unwrap();
+    assert_eq!(c["faces"].as_u64(), Some(3), "the two-corner face makes no triangle");
+}

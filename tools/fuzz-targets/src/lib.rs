@@ -137,6 +137,37 @@ fn mesh_reader(ext: &str, data: &[u8]) {
         Err(e) => one_line_naming(&e, &path),
         Ok(info) => assert_eq!(Some(info.format), mint_io::Format::from_extension(&path)),
     }
+    check_against_in_core(&path);
+}
+
+/// `mint check` within a budget (`check_file`, spilling from the first
+/// record, two threads) against the in-core check of the same file read
+/// whole and welded: the same report wherever the in-core one succeeds;
+/// otherwise a one-line error or a report.
+fn check_against_in_core(path: &Path) {
+    let opts = mint_pipeline::CheckOptions { mem_bytes: 1, weld: true, tmp_dir: Some(scratch()), threads: 2, list_boundary: 0 };
+    let bounded = mint_pipeline::check_file(path, &opts, &mint_pipeline::NoProgress);
+    let whole = mint_io::read_mesh(path).ok().and_then(|(mut p, mut f)| {
+        let welded = mint_mesh::weld(&mut p, &mut f);
+        let mut r = mint_mesh::try_check(&p, &f).ok()?;
+        r.welded_vertices = welded;
+        Some(r)
+    });
+    match (bounded, whole) {
+        (Ok((got, _)), Some(want)) => assert!(reports_equal(&got, &want), "bounded check {got:?}\nin core {want:?}"),
+        (Err(e), Some(_)) => panic!("the bounded check failed where the in-core one did not: {e}"),
+        (Err(e), None) => one_line_naming(&e, path),
+        (Ok(_), None) => {}
+    }
+}
+
+/// Reports equal field for field, NaN sums (non-finite input) equal to NaN.
+fn reports_equal(a: &mint_mesh::CheckReport, b: &mint_mesh::CheckReport) -> bool {
+    let same = |x: f64, y: f64| x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan());
+    let (mut a2, mut b2) = (a.clone(), b.clone());
+    let sums = same(a.signed_volume, b.signed_volume) && same(a.surface_area, b.surface_area);
+    (a2.signed_volume, a2.surface_area, b2.signed_volume, b2.surface_area) = (0.0, 0.0, 0.0, 0.0);
+    sums && a2 == b2
 }
 
 /// PLY: ascii, binary (both endians), faces, tristrips, range grids.
@@ -389,6 +420,12 @@ pub fn resample(data: &[u8]) {
             assert!(!output.exists(), "an error left the output behind: {s}");
         }
         Ok(_) => {
+            // Dereferencing by sort gives the same bytes.
+            let want = std::fs::read(&output).unwrap();
+            let sorted = scratch().join("again.ply");
+            let o = mint_pipeline::ResampleOptions { deref: mint_pipeline::Deref::Sort, mem_bytes: 1, ..opts.clone() };
+            mint_pipeline::resample(&input, &sorted, &o, &mint_pipeline::NoProgress).unwrap_or_else(|e| panic!("--deref sort failed where mmap did not: {e}"));
+            assert!(std::fs::read(&sorted).unwrap() == want, "--deref sort gives other bytes than mmap");
             let (pos, faces) = mint_io::read_mesh(&output).unwrap_or_else(|e| panic!("the output does not read back: {e}"));
             let rep = mint_mesh::try_check(&pos, &faces).unwrap_or_else(|e| panic!("output fails the index check: {e}"));
             assert_eq!(rep.collapsed_faces, 0, "output faces repeat a vertex");

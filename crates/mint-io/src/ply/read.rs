@@ -913,7 +913,12 @@ impl FaceStream for PlyBody {
         let pre = size(&el.props[..list]);
         let stride = pre + cty.size() + 3 * ity.size() + size(&el.props[list + 1..]);
         let map = self.map.clone();
-        fixed_end(&self.ctx(map.bytes(), elem), start, stride, count)?;
+        // Too short for `count` triangles: polygons with fewer corners, or a
+        // truncated file. Either way the stream decides (and a truncated
+        // file is reported there, at the record where it ends).
+        if fixed_end(&self.ctx(map.bytes(), elem), start, stride, count).is_err() {
+            return Ok(None);
+        }
         Ok(Some(crate::visit::FixedFaces::Ply {
             map,
             element: el.name.clone(),
