@@ -91,26 +91,23 @@ impl Record for Corner {
     }
 }
 
-/// A position's weld key and its vertex.
+/// A position's hash (of its weld key) and its vertex.
 #[derive(Clone, Copy)]
-struct Keyed {
-    key: [u64; 3],
+struct Hashed {
+    h: u64,
     v: u32,
 }
 
-impl Record for Keyed {
-    const SIZE: usize = 28;
+impl Record for Hashed {
+    const SIZE: usize = 12;
     #[inline]
     fn put(&self, out: &mut Vec<u8>) {
-        for k in self.key {
-            out.extend_from_slice(&k.to_le_bytes());
-        }
+        out.extend_from_slice(&self.h.to_le_bytes());
         out.extend_from_slice(&self.v.to_le_bytes());
     }
     #[inline]
     fn get(b: &[u8]) -> Self {
-        let w = |i: usize| u64::from_le_bytes(b[i..i + 8].try_into().unwrap());
-        Keyed { key: [w(0), w(8), w(16)], v: u32::from_le_bytes(b[24..28].try_into().unwrap()) }
+        Hashed { h: u64::from_le_bytes(b[..8].try_into().unwrap()), v: u32::from_le_bytes(b[8..12].try_into().unwrap()) }
     }
 }
 
@@ -212,7 +209,7 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
 
     lap("bbox");
     // 1. Weld.
-    let (canonical, welded) = if opts.weld { weld(&positions, dir, budget / 2, progress, &mut stats)? } else { (None, 0) };
+    let (canonical, welded) = if opts.weld { weld(&positions, dir, budget / 2, opts.threads.max(1), progress, &mut stats)? } else { (None, 0) };
 
     lap("weld");
     // 2. Faces.
@@ -613,43 +610,91 @@ fn vertices(
 
 /// Welds by position: each vertex's smallest index at its exact position
 /// (finite positions only), or `None` when nothing welds; and how many
-/// vertices were merged away.
-fn weld(positions: &VertexPositions, dir: &Path, budget: u64, progress: &dyn Progress, stats: &mut CheckStats) -> Result<(Option<Vec<u32>>, u64), PipelineError> {
+/// vertices were merged away. Workers hash their share of the vertices into
+/// buckets of `(hash, vertex)`; then each bucket is sorted by hash, and
+/// only vertices whose hashes collide are compared by position.
+fn weld(positions: &VertexPositions, dir: &Path, budget: u64, threads: usize, progress: &dyn Progress, stats: &mut CheckStats) -> Result<(Option<Vec<u32>>, u64), PipelineError> {
     let nv = positions.len();
     // Buckets that each sort within an eighth of the budget.
-    let nb = ((nv as u64 * 28).div_ceil((budget / 8).max(1))).clamp(1, 4096) as usize;
-    let mut keyed = Buckets::<Keyed>::new(dir, "weld", nb, budget / 2);
+    let nb = ((nv as u64 * 12).div_ceil((budget / 8).max(1))).clamp(1, 4096) as usize;
     progress.start(WELD, nv as u64);
-    for v in 0..nv {
-        let p = positions.get(v);
-        if p.iter().all(|c| c.is_finite()) {
-            let key = position_key(&p);
-            keyed.push((mix(&key) % nb as u64) as usize, Keyed { key, v })?;
-        }
-        if v % (1 << 20) == 0 {
-            progress.advance(1 << 20);
-        }
-    }
+    let per = nv.div_ceil(threads as u32).max(1);
+    let sets: Vec<Result<mint_store::BucketReader<Hashed>, StoreError>> = std::thread::scope(|s| {
+        let workers: Vec<_> = (0..threads as u32)
+            .map(|t| {
+                s.spawn(move || {
+                    let mut keyed = Buckets::<Hashed>::new(dir, &format!("weld-{t}"), nb, budget / 2 / threads as u64);
+                    for v in (t * per).min(nv)..((t + 1) * per).min(nv) {
+                        let p = positions.get(v);
+                        if p.iter().all(|c| c.is_finite()) {
+                            let h = mix(&position_key(&p));
+                            keyed.push((h % nb as u64) as usize, Hashed { h, v })?;
+                        }
+                    }
+                    Ok(keyed.finish())
+                })
+            })
+            .collect();
+        workers.into_iter().map(|w| w.join().expect("weld worker panicked")).collect()
+    });
+    let mut sets: Vec<Mutex<mint_store::BucketReader<Hashed>>> = sets.into_iter().map(|r| r.map(Mutex::new)).collect::<Result<_, _>>()?;
     progress.finish();
-    let mut keyed = keyed.finish();
-    stats.bytes_spilled += keyed.bytes_spilled();
+    stats.bytes_spilled += sets.iter_mut().map(|m| m.get_mut().unwrap().bytes_spilled()).sum::<u64>();
+    let next = AtomicUsize::new(0);
+    let merges: Vec<Result<Vec<(u32, u32)>, StoreError>> = std::thread::scope(|s| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                let (sets, next) = (&sets, &next);
+                s.spawn(move || {
+                    let mut merges = Vec::new();
+                    let mut recs: Vec<Hashed> = Vec::new();
+                    let mut run: Vec<([u64; 3], u32)> = Vec::new();
+                    loop {
+                        let b = next.fetch_add(1, Ordering::Relaxed);
+                        if b >= nb {
+                            return Ok(merges);
+                        }
+                        recs.clear();
+                        for set in sets {
+                            let bucket = set.lock().unwrap().take(b);
+                            bucket.read(|batch| recs.extend_from_slice(batch))?;
+                        }
+                        recs.sort_unstable_by_key(|r| (r.h, r.v));
+                        let mut g = 0;
+                        while g < recs.len() {
+                            let mut h = g + 1;
+                            while h < recs.len() && recs[h].h == recs[g].h {
+                                h += 1;
+                            }
+                            if h - g > 1 {
+                                // Equal hashes: compare the positions themselves.
+                                run.clear();
+                                run.extend(recs[g..h].iter().map(|r| (position_key(&positions.get(r.v)), r.v)));
+                                run.sort_unstable();
+                                let mut i = 0;
+                                while i < run.len() {
+                                    let mut j = i + 1;
+                                    while j < run.len() && run[j].0 == run[i].0 {
+                                        merges.push((run[j].1, run[i].1));
+                                        j += 1;
+                                    }
+                                    i = j;
+                                }
+                            }
+                            g = h;
+                        }
+                    }
+                })
+            })
+            .collect();
+        workers.into_iter().map(|w| w.join().expect("weld worker panicked")).collect()
+    });
     let mut canonical: Option<Vec<u32>> = None;
     let mut merged = 0u64;
-    let mut recs: Vec<Keyed> = Vec::new();
-    for b in 0..nb {
-        recs.clear();
-        keyed.read(b, |batch| recs.extend_from_slice(batch))?;
-        recs.sort_unstable_by_key(|r| (r.key, r.v));
-        let mut g = 0;
-        while g < recs.len() {
-            let mut h = g + 1;
-            while h < recs.len() && recs[h].key == recs[g].key {
-                let c = canonical.get_or_insert_with(|| (0..nv).collect());
-                c[recs[h].v as usize] = recs[g].v;
-                merged += 1;
-                h += 1;
-            }
-            g = h;
+    for m in merges {
+        for (v, c) in m? {
+            canonical.get_or_insert_with(|| (0..nv).collect())[v as usize] = c;
+            merged += 1;
         }
     }
     Ok((canonical, merged))
