@@ -168,32 +168,16 @@ proptest! {
     /// non-manifold edge or vertex, nor an inconsistently oriented edge.
     #[test]
     fn random_soups_with_open_holes_stay_manifold(data in soup_strategy(), cells in 500u64..20000, max_hole in 1u32..6) {
-        use mint_core::holes::open_cells;
-        use mint_core::reconstruct::crossing_to_intercept;
-        use mint_core::expr::Expr;
-        use mint_core::robust::{census_plane, reconstruct_slab_solids};
+        use mint_core::robust::resample_in_core_holes;
+        use mint_core::signs::SignRule;
         let tris = soup_of(&data);
         prop_assume!(!tris.is_empty());
         let (lo, hi) = bounds(&tris);
         let g = Grid::around(lo, hi, GridSize::Cells(cells), [0.0; 3], None).unwrap();
-        let [na, nb, ns] = g.local_dims();
-        let mut planes: Vec<Vec<mint_core::Intercept>> = vec![Vec::new(); ns as usize + 1];
-        for t in &tris {
-            let local = t.map(|p| g.to_local(p));
-            mint_core::discretize_triangle(&local, |c| {
-                let r = crossing_to_intercept(&c, nb);
-                planes[r.plane as usize].push(r);
-            });
-        }
-        let mut census = mint_core::signs::LineCensus::default();
-        for p in &planes {
-            census += census_plane(&mut p.clone());
-        }
-        let rule = census.resolve();
-        let (first, _) = reconstruct_slab_solids(&g, 0, vec![planes.clone()], &[rule], &Expr::Operand(0), None);
-        let mut holes = first.hole_cells.clone();
-        let (open, _) = open_cells(&mut holes, [na, nb, ns], max_hole);
-        let (res, _) = reconstruct_slab_solids(&g, 0, vec![planes], &[rule], &Expr::Operand(0), Some(&open));
+        // The protocol itself (reconstruct, group the hole cells, reopen),
+        // as mint-core runs it; the engine runs the same steps as stages.
+        let mut out = TriMesh::default();
+        let (res, _, _, _) = resample_in_core_holes(&g, tris.iter().copied(), SignRule::Auto, Some(max_hole), &mut out).unwrap();
         let r = mint_mesh::check(&res.vertices, &res.faces);
         prop_assert_eq!((r.non_manifold_edges, r.non_manifold_vertices, r.inconsistently_oriented_edges), (0, 0, 0), "{:?}", r);
         prop_assert_eq!(r.unreferenced_vertices, 0);

@@ -264,6 +264,51 @@ fn a_shuffled_copy_resamples_to_the_same_bytes_with_mmap_and_sort_dereferencing(
     assert!(got == want && s.deref.starts_with("mmap: the positions"), "{}", s.deref);
 }
 
+/// The staged engine's hole protocol (reconstruct stage, then reopen) and
+/// mint-core's in-core one (`resample_in_core_holes`) give the same mesh on
+/// a scan with holes, some closed and some left open by `--max-hole`, with
+/// the grid cut into slabs: the property tests of the protocol test the
+/// code that runs.
+#[test]
+fn the_engine_and_the_in_core_hole_protocol_give_the_same_mesh() {
+    use mint_core::robust::resample_in_core_holes;
+    let dir = tempfile::tempdir().unwrap();
+    let scan = write_mesh(dir.path(), "scan.ply", |s| {
+        mint_gen::scan_like(60_000, 3, &Default::default(), s).unwrap();
+    });
+    let (positions, faces) = mint_io::read_mesh(&scan).unwrap();
+    let tris: Vec<[[f64; 3]; 3]> = faces.iter().map(|f| f.map(|i| positions[i as usize])).collect();
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in &positions {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let (mut closed, mut open) = (0, 0);
+    for max_hole in [1, 4, 8] {
+        let out = dir.path().join(format!("out-{max_hole}.ply"));
+        let o = ResampleOptions {
+            max_hole: Some(max_hole),
+            slabs: 3,
+            work_dir: Some(dir.path().join(format!("w-{max_hole}"))),
+            write: mint_io::WriteOptions { double: true, ..Default::default() },
+            ..opts(GridSize::Cells(40_000))
+        };
+        let (s, engine) = run(&scan, &out, o);
+        (closed, open) = (closed + s.holes_closed, open + s.holes_left_open);
+        let g = mint_core::Grid::around(lo, hi, GridSize::Cells(40_000), [0.0; 3], None).unwrap();
+        assert_eq!((g.origin, g.cell, g.dims), (s.grid_origin, s.cell_size, s.grid_cells));
+        let mut core = TriMesh::default();
+        let (_, _, _, holes) = resample_in_core_holes(&g, tris.iter().copied(), mint_core::signs::SignRule::Auto, Some(max_hole), &mut core).unwrap();
+        assert_eq!((holes.closed, holes.left_open), (s.holes_closed, s.holes_left_open));
+        assert!(core.faces == engine.faces, "max_hole {max_hole}: other faces");
+        assert!(core.positions == engine.positions, "max_hole {max_hole}: other vertices");
+    }
+    assert!(closed > 0 && open > 0, "the scan was meant to have holes both closed and left open: {closed} closed, {open} open");
+}
+
 /// Tiny cases where the surface passes exactly through grid nodes or two
 /// solids touch along a line, each count with its reason.
 #[test]

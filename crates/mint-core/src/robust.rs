@@ -514,7 +514,7 @@ fn combine_s(prepared: &[Vec<Prepared>], s_finals: &[Vec<Vec<Intercept>>], p: us
 
 /// [`crate::reconstruct::resample_in_core`] under a sign rule: `Orient` is the strict path;
 /// `Union`, `Parity` and `Auto` (resolved by a census of all planes) use the
-/// robust state-first reconstruction of this module.
+/// robust state-first reconstruction of this module, which closes every hole.
 pub fn resample_in_core_with<I>(
     grid: &Grid,
     triangles: I,
@@ -524,10 +524,30 @@ pub fn resample_in_core_with<I>(
 where
     I: IntoIterator<Item = [[f64; 3]; 3]>,
 {
+    resample_in_core_holes(grid, triangles, rule, None, sink).map(|(r, s, rule, _)| (r, s, rule))
+}
+
+/// The whole hole protocol in core, as the staged engine runs it across
+/// slabs (its `reconstruct` and `reopen` stages): reconstruct once, closing
+/// every hole and collecting the hole-capping cells; group them and, with
+/// `max_hole`, choose the cells to leave open ([`crate::holes::open_cells`]);
+/// if any, reconstruct again with those cells open. Returns what
+/// [`resample_in_core_with`] returns and the hole statistics. `Orient` has
+/// no holes to close (its non-canonical cells stay empty).
+pub fn resample_in_core_holes<I>(
+    grid: &Grid,
+    triangles: I,
+    rule: crate::signs::SignRule,
+    max_hole: Option<u32>,
+    sink: &mut dyn crate::MeshSink,
+) -> Result<(SlabResult, crate::signs::RepairStats, crate::signs::SignRule, crate::holes::HoleStats), crate::SinkError>
+where
+    I: IntoIterator<Item = [[f64; 3]; 3]>,
+{
     use crate::signs::SignRule;
     if rule == SignRule::Orient {
         let r = crate::reconstruct::resample_in_core(grid, triangles, sink)?;
-        return Ok((r, Default::default(), SignRule::Orient));
+        return Ok((r, Default::default(), SignRule::Orient, Default::default()));
     }
     let mut planes = crate::reconstruct::discretize_in_core(grid, triangles);
     let rule = if rule == SignRule::Auto {
@@ -539,14 +559,34 @@ where
     } else {
         rule
     };
-    let (result, repair) = reconstruct_slab_robust(grid, 0, planes, rule);
+    let Some(k) = max_hole else {
+        let (result, repair) = reconstruct_slab_robust(grid, 0, planes, rule);
+        return emit(result, repair, rule, Default::default(), sink);
+    };
+    let (mut result, mut repair) = reconstruct_slab_robust(grid, 0, planes.clone(), rule);
+    let mut cells = result.hole_cells.clone();
+    let (open, holes) = crate::holes::open_cells(&mut cells, grid.local_dims(), k);
+    if !open.is_empty() {
+        (result, repair) = reconstruct_slab_solids(grid, 0, vec![planes], &[rule], &Expr::Operand(0), Some(&open));
+    }
+    emit(result, repair, rule, holes, sink)
+}
+
+/// Sends a result to `sink` and passes it on.
+fn emit(
+    result: SlabResult,
+    repair: crate::signs::RepairStats,
+    rule: crate::signs::SignRule,
+    holes: crate::holes::HoleStats,
+    sink: &mut dyn crate::MeshSink,
+) -> Result<(SlabResult, crate::signs::RepairStats, crate::signs::SignRule, crate::holes::HoleStats), crate::SinkError> {
     for v in &result.vertices {
         sink.vertex(*v)?;
     }
     for f in &result.faces {
         sink.face(*f)?;
     }
-    Ok((result, repair, rule))
+    Ok((result, repair, rule, holes))
 }
 
 #[cfg(test)]
