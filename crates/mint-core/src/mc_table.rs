@@ -34,6 +34,7 @@
 //! make an edge shared by four triangles). Tests check every code, every
 //! pair of face-adjacent cells and every ring of four cells around an edge.
 
+use glam::DVec3;
 use std::sync::OnceLock;
 
 /// The two corners of each edge, lower corner first.
@@ -83,15 +84,6 @@ fn midpoint(e: u8) -> [f64; 3] {
     [0, 1, 2].map(|d| 0.5 * (pa[d] + pb[d]) as f64)
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 
 /// The generated table: for each of the 256 codes, triangles as edge triples.
 pub struct McTable {
@@ -124,9 +116,9 @@ pub fn face_segments(code: u8) -> Vec<(u8, u8)> {
         let face_edge = |i: usize| edge_between(cyc[i], cyc[(i + 1) % 4]);
         let crossed: Vec<usize> = (0..4).filter(|&i| inside(cyc[i]) != inside(cyc[(i + 1) % 4])).collect();
         let oriented = |e1: u8, e2: u8, c_in: u8| -> (u8, u8) {
-            let (p, q) = (midpoint(e1), midpoint(e2));
-            let c = corner_offset(c_in).map(|x| x as f64);
-            if dot(cross(sub(q, p), sub(c, p)), normal) < 0.0 {
+            let (p, q) = (DVec3::from(midpoint(e1)), DVec3::from(midpoint(e2)));
+            let c = DVec3::from(corner_offset(c_in).map(|x| x as f64));
+            if (q - p).cross(c - p).dot(DVec3::from(normal)) < 0.0 {
                 (e1, e2)
             } else {
                 (e2, e1)
@@ -175,8 +167,7 @@ fn triangulate(poly: &[u8]) -> Vec<[u8; 3]> {
             return 0.0;
         }
         let (a, b) = (poly[i], poly[j]);
-        let d = sub(midpoint(a), midpoint(b));
-        dot(d, d) + if share_face(a, b) { 1e6 } else { 0.0 }
+        DVec3::from(midpoint(a)).distance_squared(DVec3::from(midpoint(b))) + if share_face(a, b) { 1e6 } else { 0.0 }
     };
     let mut cost = vec![vec![0.0f64; n]; n];
     let mut split = vec![vec![0usize; n]; n];
@@ -451,7 +442,7 @@ mod tests {
                 p[v.3 as usize] += 0.5;
                 p
             };
-            let vol: f64 = tris.iter().map(|t| dot(pos(t[0]), cross(pos(t[1]), pos(t[2]))) / 6.0).sum();
+            let vol: f64 = tris.iter().map(|t| DVec3::from(pos(t[0])).dot(DVec3::from(pos(t[1])).cross(DVec3::from(pos(t[2])))) / 6.0).sum();
             let any = (0..(dims[0] + 1)).any(|x| (0..(dims[1] + 1)).any(|y| (0..(dims[2] + 1)).any(|z| state([x, y, z]))));
             assert_eq!(vol > 1e-9, any, "trial {trial}: volume {vol}");
         }

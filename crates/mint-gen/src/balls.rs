@@ -49,7 +49,7 @@ pub fn components(
 mod tests {
     use super::*;
     use crate::rng::SplitMix64;
-    use crate::surface::{norm, sub};
+    use crate::surface::distance;
 
     #[test]
     fn lattice_side_is_the_ceiling_cube_root() {
@@ -72,7 +72,7 @@ mod tests {
         for _ in 0..2000 {
             let p: [f64; 3] = std::array::from_fn(|_| r.next_f64() * 6.0 - 1.5);
             let brute = (0..l.count)
-                .map(|i| norm(sub(p, l.center(i))) - l.radius(i))
+                .map(|i| distance(p, l.center(i)) - l.radius(i))
                 .fold(f64::INFINITY, f64::min);
             assert_eq!(l.signed_distance(p), brute, "{p:?}");
         }

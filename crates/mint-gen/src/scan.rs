@@ -41,10 +41,11 @@
 //! skipped), sliver faces, patch faces. Memory is `O(rings + segments +
 //! defects)`.
 
+use glam::DVec3;
 use crate::error::GenError;
 use crate::rng::SplitMix64;
 use crate::sphere::{SphereGrid, TrigTables};
-use crate::surface::{norm, sub, ScanSurface, Wave};
+use crate::surface::{ScanSurface, Wave};
 use crate::{check_vertex_count, finite3, positive};
 use mint_core::MeshSink;
 use serde::{Deserialize, Serialize};
@@ -563,8 +564,8 @@ fn emit(
         let a = geo.at(geo.dir(i, j), 0.0);
         let d = geo.at(geo.dir(i + 1, j + 1), 0.0);
         let mid: [f64; 3] = std::array::from_fn(|k| 0.5 * (a[k] + d[k]));
-        let out = sub(mid, o.center);
-        let len = norm(out);
+        let out = (DVec3::from(mid) - DVec3::from(o.center)).to_array();
+        let len = DVec3::from(out).length();
         let h = o.sliver_height * o.radius / len;
         sink.vertex(std::array::from_fn(|k| mid[k] + h * out[k]))?;
         next_vertex += 1;

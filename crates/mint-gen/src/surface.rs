@@ -7,6 +7,7 @@
 //! every shape except [`ScanSurface`], whose radial offset is only an upper
 //! bound of the distance's magnitude.
 
+use glam::DVec3;
 use crate::rng::SplitMix64;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -59,14 +60,10 @@ impl ExactSurface {
     }
 }
 
+/// `|a - b|`.
 #[inline]
-pub(crate) fn norm(v: [f64; 3]) -> f64 {
-    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
-}
-
-#[inline]
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+pub(crate) fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    DVec3::from(a).distance(DVec3::from(b))
 }
 
 /// The sphere `|p - center| = radius`.
@@ -79,7 +76,7 @@ pub struct SphereSurface {
 impl SphereSurface {
     /// `|p - center| - radius`.
     pub fn signed_distance(&self, p: [f64; 3]) -> f64 {
-        norm(sub(p, self.center)) - self.radius
+        distance(p, self.center) - self.radius
     }
     /// `4/3 π r³`.
     pub fn volume(&self) -> f64 {
@@ -104,7 +101,7 @@ pub struct TorusSurface {
 impl TorusSurface {
     /// `|(ρ - major, z)| - minor` with `ρ` the distance to the axis.
     pub fn signed_distance(&self, p: [f64; 3]) -> f64 {
-        let q = sub(p, self.center);
+        let q = (DVec3::from(p) - DVec3::from(self.center)).to_array();
         let rho = (q[0] * q[0] + q[1] * q[1]).sqrt();
         ((rho - self.major).powi(2) + q[2] * q[2]).sqrt() - self.minor
     }
@@ -260,8 +257,8 @@ impl ScanSurface {
     /// inside; its magnitude bounds the true distance from above (and is
     /// close to it while the amplitude is small).
     pub fn radial_offset(&self, p: [f64; 3]) -> f64 {
-        let q = sub(p, self.center);
-        let r = norm(q);
+        let q = (DVec3::from(p) - DVec3::from(self.center)).to_array();
+        let r = DVec3::from(q).length();
         if r == 0.0 {
             return -self.radius_at([0.0, 0.0, 1.0]);
         }
@@ -359,7 +356,7 @@ impl BallLattice {
                         if i >= self.count {
                             continue;
                         }
-                        let d = norm(sub(p, self.center(i))) - self.radius(i);
+                        let d = distance(p, self.center(i)) - self.radius(i);
                         best = best.min(d);
                     }
                 }

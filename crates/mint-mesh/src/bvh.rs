@@ -31,7 +31,7 @@
 //! visit the nearer child first. Contract: finite coordinates; a NaN query
 //! point gives an arbitrary triangle and a NaN distance.
 
-use crate::check::{cross, dot, sub};
+use glam::DVec3;
 use crate::error::MeshError;
 use rayon::prelude::*;
 
@@ -307,8 +307,7 @@ impl TriangleBvh {
     fn tri_dist2(&self, p: [f64; 3], t: usize) -> (f64, [f64; 3]) {
         let [a, b, c] = self.tris[t].map(|i| self.positions[i as usize]);
         let q = closest_point_on_triangle(p, a, b, c);
-        let d = sub(p, q);
-        (dot(d, d), q)
+        (DVec3::from(p).distance_squared(DVec3::from(q)), q)
     }
 }
 
@@ -468,82 +467,74 @@ fn box_dist2(min: [f32; 3], max: [f32; 3], p: [f64; 3]) -> f64 {
 /// with zero area (collinear or coincident corners) is treated as its three
 /// edges.
 pub fn closest_point_on_triangle(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
-    let ab = sub(b, a);
-    let ac = sub(c, a);
-    let n = cross(ab, ac);
-    if dot(n, n) == 0.0 {
-        return closest_on_edges(p, a, b, c);
+    let (p, a, b, c) = (DVec3::from(p), DVec3::from(a), DVec3::from(b), DVec3::from(c));
+    let ab = b - a;
+    let ac = c - a;
+    let n = ab.cross(ac);
+    if n.dot(n) == 0.0 {
+        return closest_on_edges(p, a, b, c).to_array();
     }
-    let ap = sub(p, a);
-    let d1 = dot(ab, ap);
-    let d2 = dot(ac, ap);
+    let ap = p - a;
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
     if d1 <= 0.0 && d2 <= 0.0 {
-        return a; // vertex region A
+        return a.to_array(); // vertex region A
     }
-    let bp = sub(p, b);
-    let d3 = dot(ab, bp);
-    let d4 = dot(ac, bp);
+    let bp = p - b;
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
     if d3 >= 0.0 && d4 <= d3 {
-        return b; // vertex region B
+        return b.to_array(); // vertex region B
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
         let v = d1 / (d1 - d3);
-        return axpy(a, v, ab); // edge region AB
+        return (a + ab * v).to_array(); // edge region AB
     }
-    let cp = sub(p, c);
-    let d5 = dot(ab, cp);
-    let d6 = dot(ac, cp);
+    let cp = p - c;
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
     if d6 >= 0.0 && d5 <= d6 {
-        return c; // vertex region C
+        return c.to_array(); // vertex region C
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
         let w = d2 / (d2 - d6);
-        return axpy(a, w, ac); // edge region AC
+        return (a + ac * w).to_array(); // edge region AC
     }
     let va = d3 * d6 - d5 * d4;
     if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
         let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        return axpy(b, w, sub(c, b)); // edge region BC
+        return (b + (c - b) * w).to_array(); // edge region BC
     }
     // Face region: barycentric (u, v, w) = (va, vb, vc) / (va + vb + vc).
     let denom = 1.0 / (va + vb + vc);
     let v = vb * denom;
     let w = vc * denom;
-    let q = [
-        a[0] + ab[0] * v + ac[0] * w,
-        a[1] + ab[1] * v + ac[1] * w,
-        a[2] + ab[2] * v + ac[2] * w,
-    ];
-    if q.iter().all(|x| x.is_finite()) {
-        q
+    let q = a + ab * v + ac * w;
+    if q.is_finite() {
+        q.to_array()
     } else {
         // Nearly degenerate triangles can overflow the division.
-        closest_on_edges(p, a, b, c)
+        closest_on_edges(p, a, b, c).to_array()
     }
 }
 
-#[inline]
-fn axpy(a: [f64; 3], t: f64, d: [f64; 3]) -> [f64; 3] {
-    [a[0] + t * d[0], a[1] + t * d[1], a[2] + t * d[2]]
-}
-
-fn closest_on_segment(p: [f64; 3], a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    let ab = sub(b, a);
-    let l2 = dot(ab, ab);
+fn closest_on_segment(p: DVec3, a: DVec3, b: DVec3) -> DVec3 {
+    let ab = b - a;
+    let l2 = ab.dot(ab);
     if l2 == 0.0 {
         return a;
     }
-    let t = (dot(sub(p, a), ab) / l2).clamp(0.0, 1.0);
-    axpy(a, t, ab)
+    let t = ((p - a).dot(ab) / l2).clamp(0.0, 1.0);
+    a + ab * t
 }
 
-fn closest_on_edges(p: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
+fn closest_on_edges(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
     let mut best = closest_on_segment(p, a, b);
-    let mut bd = dot(sub(p, best), sub(p, best));
+    let mut bd = p.distance_squared(best);
     for q in [closest_on_segment(p, b, c), closest_on_segment(p, c, a)] {
-        let d = dot(sub(p, q), sub(p, q));
+        let d = p.distance_squared(q);
         if d < bd {
             bd = d;
             best = q;
@@ -558,7 +549,7 @@ mod tests {
     use crate::rng::SplitMix64;
 
     fn dist(p: [f64; 3], q: [f64; 3]) -> f64 {
-        dot(sub(p, q), sub(p, q)).sqrt()
+        DVec3::from(p).distance(DVec3::from(q))
     }
 
     #[test]

@@ -78,6 +78,7 @@
 //! Non-goals: no geometric self-intersection test, no repair.
 
 use crate::error::MeshError;
+use glam::DVec3;
 use mint_core::TriMesh;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -372,9 +373,9 @@ impl FaceGeom {
             self.degenerate += 1;
             return;
         }
-        let n = cross(sub(b, a), sub(c, a));
-        self.area2 += dot(n, n).sqrt();
-        self.volume6 += dot(a, cross(b, c));
+        let (pa, pb, pc) = (DVec3::from(a), DVec3::from(b), DVec3::from(c));
+        self.area2 += (pb - pa).cross(pc - pa).length();
+        self.volume6 += pa.dot(pb.cross(pc));
         if !surely_not_collinear(a, b, c) && collinear_exact(a, b, c) {
             self.degenerate += 1;
         }
@@ -410,7 +411,7 @@ fn face_geometry(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> FaceGeom {
 /// the rest (near-degenerate faces) pay for the exact test.
 #[inline]
 fn surely_not_collinear(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> bool {
-    let (u, v) = (sub(b, a), sub(c, a));
+    let (u, v) = ((DVec3::from(b) - DVec3::from(a)).to_array(), (DVec3::from(c) - DVec3::from(a)).to_array());
     let orient = |i: usize, j: usize| {
         let (l, r) = (u[i] * v[j], u[j] * v[i]);
         // Far from underflow, where the relative bound holds.
@@ -792,21 +793,4 @@ pub fn walk_boundary_loops(simple: &[(u32, u32)]) -> (u64, u64) {
         }
     }
     (loops, loop_edges)
-}
-
-#[inline]
-pub(crate) fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-#[inline]
-pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-#[inline]
-pub(crate) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
 }

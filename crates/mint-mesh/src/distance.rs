@@ -25,7 +25,8 @@
 //! contents.
 
 use crate::bvh::TriangleBvh;
-use crate::check::{cross, dot, is_collapsed, sub};
+use crate::check::is_collapsed;
+use glam::DVec3;
 use crate::error::MeshError;
 use crate::rng::SplitMix64;
 use rayon::prelude::*;
@@ -170,8 +171,7 @@ pub fn distance_to_bvh(
         }
     }
     let n = samples as f64;
-    let e = sub(hi, lo);
-    let diag = dot(e, e).sqrt();
+    let diag = DVec3::from(hi).distance(DVec3::from(lo));
     let rel = |x: f64| if diag > 0.0 { x / diag } else { 0.0 };
     let (mean, rms) = (total.sum / n, (total.sum2 / n).sqrt());
     Ok(DistanceReport {
@@ -263,8 +263,8 @@ impl<'a> AreaSampler<'a> {
                     return 0.0;
                 }
                 let [a, b, c] = f.map(|i| positions[i as usize]);
-                let n = cross(sub(b, a), sub(c, a));
-                0.5 * dot(n, n).sqrt()
+                let (a, b, c) = (DVec3::from(a), DVec3::from(b), DVec3::from(c));
+                0.5 * (b - a).cross(c - a).length()
             })
             .collect();
         let mut cum = Vec::with_capacity(areas.len());
