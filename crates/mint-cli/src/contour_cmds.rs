@@ -223,7 +223,7 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
             if a.open && a.caps {
                 bail!("--caps needs closed contours; it cannot be used with --open");
             }
-            Method::Angle(AngleOptions { threshold, open: a.open, caps: a.caps })
+            Method::Angle(AngleOptions { threshold, open: a.open, caps: a.caps, extend_ends: false })
         }
     };
     let s = run::reconstruct_file(&a.input, &a.output, method, write_options(a.ascii, a.double), &crate::progress::Bars::new(a.quiet || a.json))?;

@@ -36,13 +36,14 @@ pub mod geom2d;
 pub mod mc;
 pub mod optimize;
 pub mod profile;
+pub mod rtstruct;
 pub mod run;
 pub mod slabcheck;
 pub mod slice;
 pub mod tiling;
 pub mod triangulate;
 
-pub use error::{ContourError, ProfileError, ProfileErrorKind};
+pub use error::{ContourError, DicomError, DicomErrorKind, ProfileError, ProfileErrorKind};
 
 /// The phases this crate reports through `mint_core::progress::Progress`.
 pub mod phases {

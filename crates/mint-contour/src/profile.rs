@@ -93,6 +93,18 @@ impl Section {
         self.contours.iter().map(|c| c.points.len()).sum()
     }
 
+    /// The same contours in the parallel plane at `offset` along
+    /// `frame.n` (the frame the section was read in): same `(u, v)`, points
+    /// moved along the normal (exactly for axis-aligned frames).
+    pub fn moved(&self, frame: &StackFrame, offset: f64) -> Section {
+        let contours = self
+            .contours
+            .iter()
+            .map(|c| Contour { points: c.uv.iter().map(|&q| frame.unproject(q, offset)).collect(), uv: c.uv.clone(), line: c.line })
+            .collect();
+        Section { index: self.index, line: self.line, offset, contours }
+    }
+
     /// The area of the section's solid: each contour's area counts with its
     /// nesting depth (even-odd: outer boundaries add, holes subtract,
     /// islands in holes add again). Contours are disjoint, so one vertex

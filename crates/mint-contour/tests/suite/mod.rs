@@ -10,5 +10,6 @@ mod files;
 mod mc_grid;
 mod optimizer;
 mod real_data;
+mod rtstruct;
 mod stacks;
 mod triangulation;
