@@ -70,7 +70,9 @@ pub struct Contour {
     pub points: Vec<[f64; 3]>,
     /// The same points in the stack frame's `(u, v)` coordinates.
     pub uv: Vec<P2>,
-    /// Line of the `section` or `contour` keyword that starts it.
+    /// Line of the `section` or `contour` keyword that starts it (from a
+    /// DICOM RT structure set: its item number in the ROI's Contour
+    /// Sequence, 1-based).
     pub line: u64,
 }
 
@@ -79,7 +81,8 @@ pub struct Contour {
 pub struct Section {
     /// 0-based position in the stack.
     pub index: usize,
-    /// Line of the `section` keyword.
+    /// Line of the `section` keyword (from DICOM: its first contour's
+    /// item number).
     pub line: u64,
     /// Position of the section's plane along [`StackFrame::n`].
     pub offset: f64,
