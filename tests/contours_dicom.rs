@@ -50,7 +50,11 @@ fn contour(kind: &str, points: &[[f64; 3]]) -> Vec<u8> {
 /// the file meta group (explicit VR); without, a bare data set.
 fn rtstruct(modality: &str, preamble: bool) -> Vec<u8> {
     let rect = |z: f64| [[0.0, 0.0, z], [10.0, 0.0, z], [10.0, 6.0, z], [0.0, 6.0, z]];
-    let rois = sequence(0x3006, 0x0020, &[[text(0x3006, 0x0022, "1"), text(0x3006, 0x0026, "Box")].concat(), [text(0x3006, 0x0022, "2"), text(0x3006, 0x0026, "Iso")].concat()]);
+    let rois = sequence(
+        0x3006,
+        0x0020,
+        &[[text(0x3006, 0x0022, "1"), text(0x3006, 0x0026, "Box")].concat(), [text(0x3006, 0x0022, "2"), text(0x3006, 0x0026, "Iso")].concat()],
+    );
     let boxes: Vec<Vec<u8>> = [4.0, 0.0, 6.0, 2.0].iter().map(|&z| contour("CLOSED_PLANAR", &rect(z))).collect();
     let roi_contours = sequence(
         0x3006,
@@ -164,12 +168,15 @@ fn bad_dicom_inputs_get_one_line_and_a_failure() {
     assert!(e.contains("ct.dcm: not an RT structure set: its Modality is 'CT', not RTSTRUCT"), "{e}");
     // Cut short, and a length field corrupted.
     let good = rtstruct("RTSTRUCT", true);
-    for (name, bytes) in [("cut.dcm", good[..good.len() - 40].to_vec()), ("len.dcm", {
-        let mut b = good.clone();
-        let at = b.windows(4).position(|w| w == [0x06, 0x30, 0x50, 0x00]).unwrap();
-        b[at + 4..at + 8].copy_from_slice(&0xF000_0000u32.to_le_bytes());
-        b
-    })] {
+    for (name, bytes) in [
+        ("cut.dcm", good[..good.len() - 40].to_vec()),
+        ("len.dcm", {
+            let mut b = good.clone();
+            let at = b.windows(4).position(|w| w == [0x06, 0x30, 0x50, 0x00]).unwrap();
+            b[at + 4..at + 8].copy_from_slice(&0xF000_0000u32.to_le_bytes());
+            b
+        }),
+    ] {
         let f = dir.path().join(name);
         std::fs::write(&f, bytes).unwrap();
         let e = fails(&["contours", p(&f), p(&out), "--roi", "Box", "--method", "angle", "--caps"]);

@@ -210,8 +210,13 @@ impl StructureSet {
     /// structure set.
     pub fn read(path: &Path) -> Result<StructureSet, ContourError> {
         use dicom_transfer_syntax_registry::entries::{EXPLICIT_VR_LITTLE_ENDIAN, IMPLICIT_VR_LITTLE_ENDIAN};
-        let bytes = std::fs::read(path).map_err(|e| ContourError::io(path, "cannot open for reading", e))?;
-        let Some(lay) = layout(&bytes) else {
+        // Look before reading it all: a large file that is not DICOM.
+        let lay = sniff(path)?;
+        let bytes = match lay {
+            Some(_) => std::fs::read(path).map_err(|e| ContourError::io(path, "cannot read", e))?,
+            None => Vec::new(),
+        };
+        let Some(lay) = lay.and_then(|_| layout(&bytes)) else {
             return Err(DicomError::new(
                 K::NotDicom,
                 path,
@@ -224,7 +229,8 @@ impl StructureSet {
         if let Err(m) = check_lengths(&bytes, lay) {
             return Err(DicomError::new(K::Corrupt, path, format!("cannot read the DICOM data (truncated or corrupted file?): {m}")).into());
         }
-        let corrupt = |e: &dyn std::error::Error| DicomError::new(K::Corrupt, path, format!("cannot read the DICOM data (truncated or corrupted file?): {}", chain(e)));
+        let corrupt =
+            |e: &dyn std::error::Error| DicomError::new(K::Corrupt, path, format!("cannot read the DICOM data (truncated or corrupted file?): {}", chain(e)));
         let meta = |b: &[u8]| OpenFileOptions::new().read_preamble(ReadPreamble::Never).from_reader(b).map(|f| f.into_inner());
         let obj = match lay {
             Layout::Preamble => meta(&bytes[128..]).map_err(|e| corrupt(&e))?,
@@ -264,7 +270,9 @@ impl StructureSet {
         let mut rois: Vec<Roi> = Vec::new();
         for (k, it) in rcs.iter().enumerate() {
             let Some(number) = it.get(tags::REFERENCED_ROI_NUMBER).and_then(|e| e.to_int::<i64>().ok()) else {
-                return Err(DicomError::new(K::Corrupt, path, format!("item {} of the ROI Contour Sequence has no Referenced ROI Number (3006,0084)", k + 1)).into());
+                return Err(
+                    DicomError::new(K::Corrupt, path, format!("item {} of the ROI Contour Sequence has no Referenced ROI Number (3006,0084)", k + 1)).into()
+                );
             };
             let idx = match rois.iter().position(|r| r.number == number) {
                 Some(i) => i,
@@ -301,7 +309,12 @@ impl StructureSet {
             0 => {}
             _ => {
                 let nums: Vec<String> = hits.iter().map(|r| r.number.to_string()).collect();
-                return Err(DicomError::new(K::NoSuchRoi, &self.path, format!("several ROIs are named '{name}' (numbers {}): give the number instead", nums.join(", "))).into());
+                return Err(DicomError::new(
+                    K::NoSuchRoi,
+                    &self.path,
+                    format!("several ROIs are named '{name}' (numbers {}): give the number instead", nums.join(", ")),
+                )
+                .into());
             }
         }
         if let Ok(n) = name.trim().parse::<i64>() {
@@ -562,13 +575,8 @@ impl Roi {
 
     /// Counts for `--list-rois`.
     pub fn summary(&self, opts: StackOptions) -> RoiSummary {
-        let closed: Vec<Vec<[f64; 3]>> = self
-            .contours
-            .iter()
-            .filter(|c| c.kind == CLOSED_PLANAR && c.defect.is_none())
-            .map(|c| distinct(&c.points))
-            .filter(|c| c.len() >= 3)
-            .collect();
+        let closed: Vec<Vec<[f64; 3]>> =
+            self.contours.iter().filter(|c| c.kind == CLOSED_PLANAR && c.defect.is_none()).map(|c| distinct(&c.points)).filter(|c| c.len() >= 3).collect();
         let slices = match stack_frame(&closed) {
             Some(f) => {
                 let mids: Vec<f64> = closed
@@ -667,7 +675,11 @@ impl Roi {
                 let m = if c1 == c2 {
                     format!("contour {a} ({at}) crosses or touches itself (its edges from points {} and {}): contours must be simple", e1 + 1, e2 + 1)
                 } else {
-                    format!("contours {a} and {b} ({at}) cross or touch (edges from their points {} and {}): contours of a plane must be disjoint", e1 + 1, e2 + 1)
+                    format!(
+                        "contours {a} and {b} ({at}) cross or touch (edges from their points {} and {}): contours of a plane must be disjoint",
+                        e1 + 1,
+                        e2 + 1
+                    )
                 };
                 return Err(err(K::SelfIntersecting, m));
             }
@@ -709,11 +721,7 @@ mod tests {
     }
 
     fn roi(contours: Vec<(&str, Vec<[f64; 3]>)>) -> Roi {
-        let contours = contours
-            .into_iter()
-            .enumerate()
-            .map(|(i, (k, p))| RoiContour { item: i + 1, kind: k.to_string(), points: p, defect: None })
-            .collect();
+        let contours = contours.into_iter().enumerate().map(|(i, (k, p))| RoiContour { item: i + 1, kind: k.to_string(), points: p, defect: None }).collect();
         Roi { number: 7, name: "Test ROI".into(), contours }
     }
 
@@ -763,6 +771,17 @@ mod tests {
         assert_eq!(s.iter().map(|s| s.index).collect::<Vec<_>>(), vec![0, 1, 2]);
     }
 
+    /// A sagittal stack (planes x = c) keeps exact coordinates too.
+    #[test]
+    fn sagittal_stacks_use_the_x_axis_frame() {
+        let sq = |x: f64| vec![[x, 0.0, 0.0], [x, 2.0, 0.0], [x, 2.0, 2.0], [x, 0.0, 2.0]];
+        let r = roi(vec![(CLOSED_PLANAR, sq(1.5)), (CLOSED_PLANAR, sq(-1.5))]);
+        let (f, s) = stack(&r).unwrap();
+        assert_eq!(f.n, [1.0, 0.0, 0.0]);
+        assert_eq!(s.iter().map(|s| s.offset).collect::<Vec<_>>(), vec![-1.5, 1.5]);
+        assert_eq!(s[0].contours[0].uv[2], [2.0, 2.0]);
+    }
+
     /// Planes x + z = c: an oblique stack gets a frame around its normal.
     #[test]
     fn oblique_stacks_use_the_normal_of_the_points() {
@@ -797,7 +816,10 @@ mod tests {
         let r = roi(vec![(CLOSED_PLANAR, square([0.0, 0.0], 1.0, 0.0)), (CLOSED_PLANAR, square([0.0, 0.0], 1.0, 3.0)), (CLOSED_PLANAR, tilted)]);
         let e = err(&r);
         assert_eq!(e.kind, K::NotParallel);
-        assert_eq!(e.message, "ROI 7 'Test ROI': contour 3 is planar but tilted by 45.000 degrees from the stack's planes: contours must lie in parallel planes");
+        assert_eq!(
+            e.message,
+            "ROI 7 'Test ROI': contour 3 is planar but tilted by 45.000 degrees from the stack's planes: contours must lie in parallel planes"
+        );
         // Bent.
         let mut bent = square([0.0, 0.0], 1.0, 3.0);
         bent.insert(2, [1.5, 0.0, 3.5]);

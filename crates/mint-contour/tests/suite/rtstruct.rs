@@ -193,7 +193,13 @@ fn every_roi_of_both_files_reconstructs_closed_without_crossings() {
                 );
                 let bound = KNOWN_SHORTFALL.iter().find(|k| k.0 == roi.name && k.1 == mname).map_or(0.03, |k| k.2);
                 if !r.watertight || r.pairs != 0 || diff.abs() > bound {
-                    failures.push(format!("{} {mname}: watertight {}, {} crossing pairs, volume difference {:+.2}%", roi.label(), r.watertight, r.pairs, 100.0 * diff));
+                    failures.push(format!(
+                        "{} {mname}: watertight {}, {} crossing pairs, volume difference {:+.2}%",
+                        roi.label(),
+                        r.watertight,
+                        r.pairs,
+                        100.0 * diff
+                    ));
                 }
             }
         }
@@ -218,7 +224,10 @@ fn bad_files_get_one_line_naming_the_file() {
     assert_eq!(rtstruct::sniff(&p).unwrap(), None);
     let e = dicom_err(StructureSet::read(&p));
     assert_eq!(e.kind, DicomErrorKind::NotDicom);
-    assert_eq!(e.to_string(), format!("{}: not a DICOM file: no 'DICM' marker after a 128-byte preamble or at the start, and no data set at the start", p.display()));
+    assert_eq!(
+        e.to_string(),
+        format!("{}: not a DICOM file: no 'DICM' marker after a 128-byte preamble or at the start, and no data set at the start", p.display())
+    );
     // Empty.
     std::fs::write(&p, "").unwrap();
     assert_eq!(dicom_err(StructureSet::read(&p)).kind, DicomErrorKind::NotDicom);
@@ -259,10 +268,61 @@ fn a_non_rt_dicom_file_is_refused() {
     assert_eq!(e.to_string(), format!("{}: not an RT structure set: its Modality is 'CT', not RTSTRUCT", p.display()));
     // No Modality and no ROI Contour Sequence.
     let obj = InMemDicomObject::from_element_iter([DataElement::new(Tag(0x0010, 0x0010), VR::PN, PrimitiveValue::from("Test^Patient"))]);
-    let file = obj.with_meta(FileMetaTableBuilder::new().media_storage_sop_class_uid("1.2.3").media_storage_sop_instance_uid("1.2.3.4").transfer_syntax("1.2.840.10008.1.2")).unwrap();
+    let file = obj
+        .with_meta(
+            FileMetaTableBuilder::new().media_storage_sop_class_uid("1.2.3").media_storage_sop_instance_uid("1.2.3.4").transfer_syntax("1.2.840.10008.1.2"),
+        )
+        .unwrap();
     file.write_to_file(&p).unwrap();
     let e = dicom_err(StructureSet::read(&p));
     assert_eq!(e.to_string(), format!("{}: not an RT structure set: it has no ROI Contour Sequence (3006,0039)", p.display()));
+}
+
+/// An RT structure set written by dicom-rs in explicit VR little endian
+/// (the real files are implicit VR), nested sequences and all, reads back:
+/// the length check walks explicit VR and `SQ` elements too.
+#[test]
+fn an_explicit_vr_structure_set_written_by_dicom_rs_reads_back() {
+    use dicom_core::value::DataSetSequence;
+    use dicom_core::{DataElement, PrimitiveValue, Tag, VR};
+    use dicom_object::{FileMetaTableBuilder, InMemDicomObject};
+    let el = |g: u16, e: u16, vr: VR, v: &str| DataElement::new(Tag(g, e), vr, PrimitiveValue::from(v));
+    let seq = |g: u16, e: u16, items: Vec<InMemDicomObject>| DataElement::new(Tag(g, e), VR::SQ, DataSetSequence::from(items));
+    let contour = |z: f64| {
+        let pts = [[0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [0.0, 3.0]].map(|q| format!("{}\\{}\\{z}", q[0], q[1])).join("\\");
+        InMemDicomObject::from_element_iter([el(0x3006, 0x0042, VR::CS, "CLOSED_PLANAR"), el(0x3006, 0x0046, VR::IS, "4"), el(0x3006, 0x0050, VR::DS, &pts)])
+    };
+    let obj = InMemDicomObject::from_element_iter([
+        el(0x0008, 0x0016, VR::UI, "1.2.840.10008.5.1.4.1.1.481.3"),
+        el(0x0008, 0x0018, VR::UI, "1.2.3.4.5"),
+        el(0x0008, 0x0060, VR::CS, "RTSTRUCT"),
+        seq(0x3006, 0x0020, vec![InMemDicomObject::from_element_iter([el(0x3006, 0x0022, VR::IS, "3"), el(0x3006, 0x0026, VR::LO, "Block")])]),
+        seq(
+            0x3006,
+            0x0039,
+            vec![InMemDicomObject::from_element_iter([seq(0x3006, 0x0040, vec![contour(2.5), contour(0.0), contour(5.0)]), el(0x3006, 0x0084, VR::IS, "3")])],
+        ),
+    ]);
+    let file = obj
+        .with_meta(
+            FileMetaTableBuilder::new()
+                .media_storage_sop_class_uid("1.2.840.10008.5.1.4.1.1.481.3")
+                .media_storage_sop_instance_uid("1.2.3.4.5")
+                .transfer_syntax("1.2.840.10008.1.2.1"),
+        )
+        .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("block.dcm");
+    file.write_to_file(&p).unwrap();
+    let set = StructureSet::read(&p).unwrap();
+    assert_eq!(set.rois.len(), 1);
+    let (frame, s) = set.find("Block").unwrap().stack(&p, StackOptions::default()).unwrap();
+    assert_eq!(s.iter().map(|s| s.offset).collect::<Vec<_>>(), vec![0.0, 2.5, 5.0]);
+    assert_eq!(s[1].contours[0].points[2], [4.0, 3.0, 2.5]);
+    let out = dir.path().join("block.ply");
+    let r = rebuild(&p, frame, &s, &out, Method::Angle(AngleOptions { caps: true, extend_ends: true, ..Default::default() }));
+    assert!(r.watertight && r.pairs == 0);
+    assert!((r.planimetric - 12.0 * 7.5).abs() < 1e-9 && (r.mesh - r.planimetric).abs() < 1e-3, "{} {}", r.mesh, r.planimetric);
 }
 
 #[test]
