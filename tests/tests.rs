@@ -3,6 +3,7 @@
 
 mod common;
 pub mod cli;
+mod contours_dicom;
 mod check_bounded;
 mod core_props;
 mod fuzz_replay;

@@ -139,11 +139,22 @@ pub struct AngleOptions {
     pub open: bool,
     /// Close contour ends with triangulated caps. Default false.
     pub caps: bool,
+    /// With `caps`: the end sections stand for half a section spacing
+    /// beyond them, as each section does for the planimetric volume and
+    /// in marching cubes (the clinical convention: a contour is a slab one
+    /// slice thick). A copy of the first section is put half the first
+    /// spacing before it, one of the last section half the last spacing
+    /// after it, and the caps close the copies. Done by the drivers of
+    /// [`crate::run`], which know the stack frame; [`AngleReconstructor`]
+    /// reconstructs the sections it is given. Contours that appear or
+    /// vanish inside the stack are still capped in their own plane.
+    /// Default false (`mint contours` sets it for RT structure sets).
+    pub extend_ends: bool,
 }
 
 impl Default for AngleOptions {
     fn default() -> Self {
-        AngleOptions { threshold: 0.5, open: false, caps: false }
+        AngleOptions { threshold: 0.5, open: false, caps: false, extend_ends: false }
     }
 }
 

@@ -7,6 +7,14 @@
 //! ```text
 //! stack.pro: contour is self-intersecting: its edges from lines 14 and 20 touch (line 12)
 //! ```
+//!
+//! DICOM RT structure sets have no lines: their errors ([`DicomError`],
+//! with a [`DicomErrorKind`]) name the file, and the ROI and contour where
+//! there is one:
+//!
+//! ```text
+//! rtstruct.dcm: ROI 2 'Isocenter 1': contour 1 is POINT: only CLOSED_PLANAR contours bound a solid
+//! ```
 
 use std::path::{Path, PathBuf};
 
@@ -53,12 +61,69 @@ impl ProfileError {
     }
 }
 
+/// What is wrong with a DICOM input (`mint contours rtss.dcm`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DicomErrorKind {
+    /// Not DICOM: no `DICM` marker after a 128-byte preamble, none at the
+    /// start, and no data set at the start either. Give a DICOM file.
+    NotDicom,
+    /// DICOM, but the parser stopped: the file is truncated or corrupted,
+    /// or uses a transfer syntax mint does not read (deflate, big endian
+    /// retired). Export the structure set again.
+    Corrupt,
+    /// A readable DICOM file that is not an RT structure set: its Modality
+    /// is not RTSTRUCT, or it has no ROI Contour Sequence. Give the RTSTRUCT
+    /// file of the series, not an image.
+    NotRtStruct,
+    /// No ROI of that name (or several share it); `--list-rois` lists them.
+    NoSuchRoi,
+    /// The ROI has no contours: nothing to reconstruct.
+    Empty,
+    /// A contour of the ROI is POINT, OPEN_PLANAR or OPEN_NONPLANAR: it
+    /// bounds no area. Only CLOSED_PLANAR contours make a solid.
+    NotClosed,
+    /// A contour's data is malformed: its point count is not Number of
+    /// Contour Points, a coordinate is not a finite number, or it has fewer
+    /// than 3 distinct points.
+    BadContour,
+    /// A contour is not planar, or the contours do not lie in parallel
+    /// planes: a stack is cut by parallel planes.
+    NotParallel,
+    /// A contour crosses or touches itself, or two contours of one plane
+    /// cross or touch. Contours of a plane must be simple and disjoint
+    /// (nesting is fine).
+    SelfIntersecting,
+}
+
+/// A bad DICOM input: kind, file and a one-line message (which names the
+/// ROI and the contour where there is one).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}: {message}", path.display())]
+pub struct DicomError {
+    /// What kind of problem this is.
+    pub kind: DicomErrorKind,
+    /// The DICOM file.
+    pub path: PathBuf,
+    /// What is wrong, in one line.
+    pub message: String,
+}
+
+impl DicomError {
+    pub(crate) fn new(kind: DicomErrorKind, path: &Path, message: impl Into<String>) -> DicomError {
+        DicomError { kind, path: path.to_path_buf(), message: message.into().replace(['\n', '\r'], " ") }
+    }
+}
+
 /// Any failure of a contour command.
 #[derive(Debug, thiserror::Error)]
 pub enum ContourError {
     /// The profile is malformed or breaks the contract (see [`ProfileErrorKind`]).
     #[error(transparent)]
     Profile(#[from] ProfileError),
+    /// The DICOM RT structure set is unreadable or unusable (see
+    /// [`DicomErrorKind`]).
+    #[error(transparent)]
+    Dicom(#[from] DicomError),
     /// Reading or writing a mesh failed (mint-io names the file and position).
     #[error(transparent)]
     Mesh(#[from] mint_io::Error),

@@ -19,10 +19,13 @@
 //!   by bridges; also used by [`optimize`];
 //! - [`optimize`]: the normal optimizer (regions of near-coplanar faces
 //!   re-triangulated from their boundaries);
+//! - [`rtstruct`]: DICOM RT structure sets (dicom-rs): an ROI's contours
+//!   become the same validated [`Section`](profile::Section)s, grouped and
+//!   ordered along the normal of their planes;
 //! - [`slice`](mod@slice): a mesh cut by parallel planes into contours (test data);
 //! - [`run`]: the file-to-file drivers of `mint slice`, `mint contours` and
-//!   `mint optimize`, with their status counters ([`run::RunStats`]); the
-//!   only module that touches files.
+//!   `mint optimize`, with their status counters ([`run::RunStats`]); with
+//!   [`rtstruct`], the only modules that touch files.
 //!
 //! Meshes leave the algorithms through [`mint_core::MeshSink`]; the
 //! reconstructions send faces as soon as their vertices are out, so file
@@ -36,13 +39,14 @@ pub mod geom2d;
 pub mod mc;
 pub mod optimize;
 pub mod profile;
+pub mod rtstruct;
 pub mod run;
 pub mod slabcheck;
 pub mod slice;
 pub mod tiling;
 pub mod triangulate;
 
-pub use error::{ContourError, ProfileError, ProfileErrorKind};
+pub use error::{ContourError, DicomError, DicomErrorKind, ProfileError, ProfileErrorKind};
 
 /// The phases this crate reports through `mint_core::progress::Progress`.
 pub mod phases {

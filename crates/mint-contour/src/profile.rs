@@ -70,7 +70,9 @@ pub struct Contour {
     pub points: Vec<[f64; 3]>,
     /// The same points in the stack frame's `(u, v)` coordinates.
     pub uv: Vec<P2>,
-    /// Line of the `section` or `contour` keyword that starts it.
+    /// Line of the `section` or `contour` keyword that starts it (from a
+    /// DICOM RT structure set: its item number in the ROI's Contour
+    /// Sequence, 1-based).
     pub line: u64,
 }
 
@@ -79,7 +81,8 @@ pub struct Contour {
 pub struct Section {
     /// 0-based position in the stack.
     pub index: usize,
-    /// Line of the `section` keyword.
+    /// Line of the `section` keyword (from DICOM: its first contour's
+    /// item number).
     pub line: u64,
     /// Position of the section's plane along [`StackFrame::n`].
     pub offset: f64,
@@ -91,6 +94,18 @@ impl Section {
     /// Total number of vertices.
     pub fn vertex_count(&self) -> usize {
         self.contours.iter().map(|c| c.points.len()).sum()
+    }
+
+    /// The same contours in the parallel plane at `offset` along
+    /// `frame.n` (the frame the section was read in): same `(u, v)`, points
+    /// moved along the normal (exactly for axis-aligned frames).
+    pub fn moved(&self, frame: &StackFrame, offset: f64) -> Section {
+        let contours = self
+            .contours
+            .iter()
+            .map(|c| Contour { points: c.uv.iter().map(|&q| frame.unproject(q, offset)).collect(), uv: c.uv.clone(), line: c.line })
+            .collect();
+        Section { index: self.index, line: self.line, offset, contours }
     }
 
     /// The area of the section's solid: each contour's area counts with its

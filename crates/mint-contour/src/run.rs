@@ -1,5 +1,7 @@
 //! File-to-file drivers of the contour commands, the only part of this crate
-//! that touches files: [`reconstruct_file`] (`mint contours`),
+//! that touches files besides the DICOM reader ([`crate::rtstruct`]):
+//! [`reconstruct_file`] (`mint contours` on a profile) and
+//! [`reconstruct_sections`] (on an ROI of an RT structure set),
 //! [`slice_file`] (`mint slice`) and [`optimize_file`] (`mint optimize`).
 //! Each returns a [`RunStats`] (time, counts, the parameters used and the
 //! method's own counters), which the CLI writes as the `--stats` JSON file.
@@ -19,7 +21,7 @@ use crate::angle::{AngleOptions, AngleReconstructor, AngleStats};
 use crate::error::ContourError;
 use crate::mc::{McOptions, McReconstructor, McStats, StackSummary};
 use crate::optimize::{optimize, OptimizeStats};
-use crate::profile::{Planimeter, ProfileOptions, ProfileReader, ProfileWriter};
+use crate::profile::{Planimeter, ProfileOptions, ProfileReader, ProfileWriter, Section, StackFrame};
 use crate::slice::{SliceStats, Slicer};
 use mint_core::progress::Progress;
 use mint_core::{MeshSink, SinkError};
@@ -175,15 +177,85 @@ fn open_profile(path: &Path, opts: ProfileOptions) -> Result<ProfileReader<BufRe
     Ok(ProfileReader::new(BufReader::with_capacity(1 << 20, f), path, opts))
 }
 
+/// Validated sections in stack order, opened once per pass of a
+/// reconstruction: a profile streamed from its file, or sections already
+/// in memory (an ROI of an RT structure set).
+trait SectionSource {
+    fn next_section(&mut self) -> Result<Option<Section>, ContourError>;
+    /// The stack frame, once the first section is out.
+    fn frame(&self) -> Option<StackFrame>;
+    /// Contour vertices returned so far.
+    fn vertices(&self) -> u64;
+}
+
+impl<R: std::io::BufRead> SectionSource for ProfileReader<R> {
+    fn next_section(&mut self) -> Result<Option<Section>, ContourError> {
+        ProfileReader::next_section(self)
+    }
+    fn frame(&self) -> Option<StackFrame> {
+        ProfileReader::frame(self)
+    }
+    fn vertices(&self) -> u64 {
+        self.stats().vertices
+    }
+}
+
+struct InMemory<'a> {
+    frame: StackFrame,
+    rest: std::slice::Iter<'a, Section>,
+    vertices: u64,
+}
+
+impl SectionSource for InMemory<'_> {
+    fn next_section(&mut self) -> Result<Option<Section>, ContourError> {
+        let s = self.rest.next().cloned();
+        self.vertices += s.as_ref().map_or(0, |s| s.vertex_count() as u64);
+        Ok(s)
+    }
+    fn frame(&self) -> Option<StackFrame> {
+        Some(self.frame)
+    }
+    fn vertices(&self) -> u64 {
+        self.vertices
+    }
+}
+
+type Opener<'a> = dyn Fn() -> Result<Box<dyn SectionSource + 'a>, ContourError> + 'a;
+
 /// `mint contours`: reconstructs the profile `input` into the mesh `output`.
 /// Progress is reported per section (phases [`crate::phases::SECTIONS`] and
 /// [`crate::phases::CONTOURS`]) and cancellation polled as often.
 pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: WriteOptions, progress: &dyn Progress) -> Result<RunStats, ContourError> {
+    let open = matches!(method, Method::Angle(AngleOptions { open: true, .. }));
+    let popts = ProfileOptions { check_intersections: !open, ..ProfileOptions::default() };
+    let opener = || -> Result<Box<dyn SectionSource>, ContourError> { Ok(Box::new(open_profile(input, popts)?)) };
+    reconstruct(input, &opener, output, method, write, progress)
+}
+
+/// `mint contours` on sections already read and validated (an ROI of an
+/// RT structure set, [`crate::rtstruct::Roi::stack`]); `input` names them
+/// in the stats. Otherwise as [`reconstruct_file`].
+pub fn reconstruct_sections(
+    input: &Path,
+    frame: StackFrame,
+    sections: &[Section],
+    output: &Path,
+    method: Method,
+    write: WriteOptions,
+    progress: &dyn Progress,
+) -> Result<RunStats, ContourError> {
+    if sections.is_empty() {
+        return Err(ContourError::input(input, "no sections to reconstruct"));
+    }
+    let opener = || -> Result<Box<dyn SectionSource + '_>, ContourError> { Ok(Box::new(InMemory { frame, rest: sections.iter(), vertices: 0 })) };
+    reconstruct(input, &opener, output, method, write, progress)
+}
+
+fn reconstruct(input: &Path, sources: &Opener<'_>, output: &Path, method: Method, write: WriteOptions, progress: &dyn Progress) -> Result<RunStats, ContourError> {
     let t = Instant::now();
     // Refuse an unknown output format before reading anything.
     Format::from_extension(output).ok_or_else(|| ContourError::input(output, "unknown output format: use .ply, .obj, .stl, .off, .mesh, .raw, .wrl or .3ds"))?;
     let open = matches!(method, Method::Angle(AngleOptions { open: true, .. }));
-    let popts = ProfileOptions { check_intersections: !open, ..ProfileOptions::default() };
     let check = || {
         progress.advance(1);
         if progress.cancelled() {
@@ -196,7 +268,7 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
     let (details, sections, in_vertices, parameters) = match method {
         Method::Mc(o) => {
             // Pass 1: bounding box and offsets (validates the whole file first).
-            let mut r = open_profile(input, popts)?;
+            let mut r = sources()?;
             let mut summary = None;
             progress.start(crate::phases::SECTIONS, 0);
             while let Some(s) = r.next_section()? {
@@ -210,7 +282,7 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
             // Pass 2: reconstruct while streaming.
             let mut sink = SpillSink::create(output, write)?;
             let mut mc = McReconstructor::new(&summary, o, input)?;
-            let mut r = open_profile(input, popts)?;
+            let mut r = sources()?;
             progress.start(crate::phases::CONTOURS, summary.offsets.len() as u64);
             while let Some(s) = r.next_section()? {
                 mc.push(&s, &mut sink)?;
@@ -225,16 +297,44 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
         Method::Angle(o) => {
             let mut sink = SpillSink::create(output, write)?;
             let mut a = AngleReconstructor::new(o);
-            let mut r = open_profile(input, popts)?;
+            let mut r = sources()?;
             let mut n = 0u64;
+            // extend_ends: the first section waits for the second (the
+            // first spacing); the last one is known at the end.
+            let extend = o.extend_ends && o.caps && !o.open;
+            let mut first: Option<Section> = None;
+            let (mut last, mut prev_offset, mut last_gap) = (None::<Section>, 0.0, 0.0);
             progress.start(crate::phases::CONTOURS, 0);
             while let Some(s) = r.next_section()? {
                 if !o.open {
                     planimeter.add(&s);
                 }
-                a.push(&s, &mut sink)?;
                 n += 1;
+                if !extend {
+                    a.push(&s, &mut sink)?;
+                } else if n == 1 {
+                    prev_offset = s.offset;
+                    first = Some(s);
+                } else {
+                    if let Some(f) = first.take() {
+                        let frame = r.frame().expect("a frame after the first section");
+                        a.push(&f.moved(&frame, f.offset - 0.5 * (s.offset - f.offset)), &mut sink)?;
+                        a.push(&f, &mut sink)?;
+                    }
+                    a.push(&s, &mut sink)?;
+                    last_gap = s.offset - prev_offset;
+                    prev_offset = s.offset;
+                    last = Some(s);
+                }
                 check()?;
+            }
+            if let Some(f) = first.take() {
+                // A one-section stack: no spacing to extend by.
+                a.push(&f, &mut sink)?;
+            }
+            if let Some(l) = &last {
+                let frame = r.frame().expect("a frame after the first section");
+                a.push(&l.moved(&frame, l.offset + 0.5 * last_gap), &mut sink)?;
             }
             let st = a.finish(&mut sink)?;
             progress.finish();
@@ -244,8 +344,9 @@ pub fn reconstruct_file(input: &Path, output: &Path, method: Method, write: Writ
                 ("threshold", Value::Float(o.threshold)),
                 ("open", Value::Bool(o.open)),
                 ("caps", Value::Bool(o.caps)),
+                ("extend_ends", Value::Bool(o.extend_ends)),
             ]);
-            (MethodStats::Angle(st), n, r.stats().vertices, p)
+            (MethodStats::Angle(st), n, r.vertices(), p)
         }
     };
     let (vertices, faces) = match &details {

@@ -12,7 +12,8 @@
 //!   line definitions into polygonal element mosaics", SIGGRAPH 1978: the
 //!   greedy shorter-diagonal march, which Dangl's angle rule refines.
 //! - M. Dangl 1998, §2.2: the start pair ([`start_pair`]) and the
-//!   next-vertex rule ([`march`]).
+//!   next-vertex rule ([`march`], applied to the rings moved to a common
+//!   centroid, as Christiansen and Sederberg normalise theirs).
 //!
 //! A [`Tiling`] is a start pair and `n + m` steps; step `k` advances on P
 //! (triangle `(P_i, P_i+1, Q_j)`) or on Q (triangle `(P_i, Q_j+1, Q_j)`).
@@ -85,11 +86,29 @@ pub fn decide(p0: P2, p1: P2, pm: Option<P2>, q0: P2, q1: P2, qm: Option<P2>, t:
     }
 }
 
-/// Dangl's march from the start pair `(i0, j0)` with threshold `t`.
+/// Dangl's march from the start pair `(i0, j0)` with threshold `t`, on
+/// the rings moved so that their centroids coincide: the shorter-diagonal
+/// test then compares shapes, not where they lie. Christiansen and
+/// Sederberg (1978) normalise both contours into a unit square before
+/// their shorter-diagonal rule for the same reason; here only the
+/// translation is removed (the direction test does not depend on it). On
+/// a thin RT structure moving more than its width per slice (the Scar of
+/// the breast RT structure set) the uncentred march twisted the strip and
+/// lost 12.6% of the planimetric volume; centred, 2.6%. Elsewhere the
+/// change is neutral (bunny, horse, Igea: volume within 0.1% of before,
+/// the same fallback counts give or take two).
 pub fn march(p: &[P2], q: &[P2], i0: usize, j0: usize, t: f64) -> Tiling {
     let (n, m) = (p.len(), q.len());
-    let pp = |k: usize| p[(i0 + k) % n];
-    let qq = |k: usize| q[(j0 + k) % m];
+    // Distances are measured with both rings moved to a common centroid.
+    let (cp, cq) = (centroid(p), centroid(q));
+    let pp = |k: usize| {
+        let x = p[(i0 + k) % n];
+        [x[0] - cp[0], x[1] - cp[1]]
+    };
+    let qq = |k: usize| {
+        let x = q[(j0 + k) % m];
+        [x[0] - cq[0], x[1] - cq[1]]
+    };
     let (mut i, mut j) = (0usize, 0usize);
     let mut steps = Vec::with_capacity(n + m);
     while i < n || j < m {

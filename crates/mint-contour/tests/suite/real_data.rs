@@ -1,11 +1,10 @@
 //! Real data from `../shared/data` (skipped with a message when absent, a
 //! failure under `MINT_REQUIRE_DATA=1`): the Stanford bunny sliced into 100
 //! sections and rebuilt by both methods, measured against the original (the
-//! `mint distance` figures are printed); the contour stacks of a real RT
-//! structure set (DICOM RTSTRUCT, converted to profiles here), including a
-//! lung with branching; and no intersecting faces from either method on the
-//! bunny in 50, 100 and 200 sections and the horse and Igea in 100 sections
-//! along each axis.
+//! `mint distance` figures are printed); and no intersecting faces from
+//! either method on the bunny in 50, 100 and 200 sections and the horse and
+//! Igea in 100 sections along each axis. The real RT structure sets, read
+//! from DICOM, are in `rtstruct`.
 use super::util::data_dir;
 use mint_contour::angle::AngleOptions;
 use mint_contour::mc::McOptions;
@@ -57,67 +56,6 @@ fn bunny_sliced_into_100_sections_and_rebuilt() {
             check_closed_oriented(&m).unwrap();
             assert!(ab.mean_rel <= 0.01, "angle mean distance {} of the diagonal", ab.mean_rel);
         }
-    }
-}
-
-/// The contours of one ROI of `rtss_contours.txt` as a profile.
-fn rtstruct_profile(txt: &str, roi: &str) -> String {
-    let mut out = String::from("pro\n");
-    let mut in_roi = false;
-    let mut first_in_slice = false;
-    for line in txt.lines() {
-        let w: Vec<&str> = line.split_whitespace().collect();
-        match w.first() {
-            Some(&"ROI") => in_roi = w.get(2) == Some(&roi),
-            Some(&"SLICE") if in_roi => first_in_slice = true,
-            Some(&"CONTOUR") if in_roi => {
-                out.push_str(if first_in_slice { "section\n" } else { "contour\n" });
-                first_in_slice = false;
-            }
-            Some(x) if in_roi && (x.starts_with('-') || x.as_bytes()[0].is_ascii_digit()) => {
-                out.push_str(line);
-                out.push('\n');
-            }
-            _ => {}
-        }
-    }
-    out
-}
-
-#[test]
-fn rtstruct_body_and_lung_stacks() {
-    let Some(data) = data_dir() else { return };
-    let txt = std::fs::read_to_string(data.join("rtstruct_dicompyler_breast/rtss_contours.txt")).unwrap();
-    let dir = tempfile::tempdir().unwrap();
-    for roi in ["BODY", "Lt_Lung", "Heart"] {
-        let pro = dir.path().join(format!("{roi}.pro"));
-        std::fs::write(&pro, rtstruct_profile(&txt, roi)).unwrap();
-        let out = dir.path().join(format!("{roi}-mc.ply"));
-        let r = run::reconstruct_file(&pro, &out, Method::Mc(McOptions { cubes: 128, caps: true, ..Default::default() }), WriteOptions::default(), NEVER);
-        let st = match r {
-            Ok(st) => st,
-            Err(e) => {
-                // Real clinical contours may break the contract; the error
-                // must then name the file and the line.
-                let msg = e.to_string();
-                eprintln!("rtstruct {roi}: refused: {msg}");
-                assert!(msg.starts_with(&pro.display().to_string()) && msg.contains("(line "), "{msg}");
-                continue;
-            }
-        };
-        let MethodStats::Mc(d) = &st.details else { panic!() };
-        eprintln!("rtstruct {roi} mc: {} sections, {} contour vertices -> {} faces in {:.3}s", st.input_faces_or_sections, st.input_vertices, st.faces, st.seconds);
-        assert_eq!(d.non_canonical_cells, 0, "{roi}");
-        check_closed_oriented(&load(&out)).unwrap_or_else(|e| panic!("{roi}: {e}"));
-        let out = dir.path().join(format!("{roi}-angle.ply"));
-        let st = run::reconstruct_file(&pro, &out, Method::Angle(AngleOptions { caps: true, ..Default::default() }), WriteOptions::default(), NEVER).unwrap();
-        let (mut positions, mut faces) = run::load_mesh(&out).unwrap();
-        mint_mesh::weld(&mut positions, &mut faces);
-        let r = mint_mesh::check(&positions, &faces);
-        let x = mint_mesh::selfx::self_intersections(&positions, &faces, 4);
-        eprintln!("rtstruct {roi} angle: {} faces, {} intersecting pairs, watertight {}, {:?}, {:?}", st.faces, x.pairs, r.watertight, st.volume, st.details);
-        assert_eq!(x.pairs, 0, "{roi} angle: intersecting faces, e.g. {:?}", x.examples);
-        assert!(r.watertight, "{roi} angle: not watertight: {r:?}");
     }
 }
 
