@@ -110,21 +110,26 @@ leave open chains, which are closed to the nearest chain start. Contours that ar
 another are dropped (and counted), so the output is always a valid profile.\n\n\
 Example:\n  mint slice bunny.ply bunny.pro --sections 100 --axis y")]
     Slice(crate::contour_cmds::SliceArgs),
-    /// Rebuild a surface from a stack of planar contours (.pro) by the angle
-    /// criterion or by marching cubes.
-    #[command(long_about = "Rebuild a surface from a profile (.pro): sections of planar contours, holes by nesting.\n\n\
+    /// Rebuild a surface from a stack of planar contours (.pro, or a DICOM
+    /// RT structure set) by the angle criterion or by marching cubes.
+    #[command(long_about = "Rebuild a surface from a profile (.pro) or a DICOM RT structure set (.dcm, found by \
+content; choose a structure with --roi, see them with --list-rois, or write them all with --all-rois DIR): \
+sections of planar contours, holes and islands by nesting. Each run reports the mesh's volume next to the \
+planimetric volume (contour areas times the section spacing).\n\n\
 --method angle (Dangl 1998, 2.2) joins the contour vertices of consecutive sections by strips of \
 triangles: from a start pair (the vertex farthest from its centroid and its best match above), it \
 advances on the side with the shorter new diagonal unless the edge directions disagree beyond \
---threshold (a cosine, default 0.5). Exact contours and few triangles; one contour facing several is \
-split along chords (branching); --open for open polylines.\n\n\
+--threshold (a cosine, default 0.5). Every tiling is checked exactly for crossing triangles and falls \
+back to another start pair, a minimum-area tiling, a split or a bridge; every branching is handled; \
+--open for open polylines.\n\n\
 --method mc puts the stack on a grid of --cubes cubes (default 64) across its larger side, one layer \
 per section spacing, and runs mint's exact marching machinery: in-plane vertices where the contours \
 really cross the grid lines, between-section vertices interpolated from the distances to the contours. \
 Any holes and branching; watertight with --caps.\n\n\
 --caps closes the ends: triangulated end sections (angle), caps half a spacing beyond them (mc).\n\n\
 Examples:\n  mint contours organ.pro organ.ply --method mc --cubes 256 --caps --stats run.json\n  \
-mint contours vase.pro vase.wrl --method angle --threshold 0.7 --caps")]
+mint contours vase.pro vase.wrl --method angle --threshold 0.7 --caps\n  \
+mint contours rtss.dcm heart.ply --roi Heart --method angle --caps")]
     Contours(crate::contour_cmds::ContoursArgs),
     /// Reduce an over-tessellated mesh by merging near-coplanar triangles
     /// (normals within --angle degrees) and re-triangulating each region.
