@@ -8,8 +8,8 @@ use clap::{Args, ValueEnum};
 use mint_range::icp::{align_with, AlignOptions, Metric, Status, Strategy};
 use mint_range::synth::{perturb, synthesize, SynthOptions};
 use mint_range::depth_grid::{write_depth_grid, GridEncoding};
-use mint_range::grid_merge::{grid_merge_with, GridMergeOptions};
-use mint_range::zipper::{zipper_with, ZipperOptions};
+use mint_range::grid_merge::GridMergeOptions;
+use mint_range::zipper::ZipperOptions;
 use mint_range::{load_set, MeshOptions, ScanEntry, ScanMesh, ScanSet, SetFormat};
 use std::path::PathBuf;
 
@@ -293,7 +293,6 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
 }
 
 pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
-    let t = std::time::Instant::now();
     let set = ScanSet::read(&a.set)?;
     let mut inputs: Vec<&std::path::Path> = vec![&a.set];
     inputs.extend(set.entries.iter().map(|e| e.path.as_path()));
@@ -302,53 +301,34 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
         crate::paths::check_output(&crate::jobs::preview_path(&a.output), &inputs)?;
     }
     let bars = crate::progress::Bars::new(a.json);
-    let scans = mint_range::ScanFiles::open_with(&set, &a.set, &MeshOptions::default(), a.mem as usize, &bars)?;
-    let poses: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
-    let (pos, faces, report) = match a.method {
-        MergeMethod::Zipper => {
-            let opts = ZipperOptions { distance_factor: a.distance_factor, consensus: !a.no_consensus, ..Default::default() };
-            let (p, f, r) = zipper_with(&scans, &poses, &opts, &bars)?;
-            (p, f, MergeReport::Zipper(r))
-        }
+    let method = match a.method {
+        MergeMethod::Zipper => mint_range::MergeMethod::Zipper(ZipperOptions { distance_factor: a.distance_factor, consensus: !a.no_consensus, ..Default::default() }),
         MergeMethod::Grid => {
             let size = match a.cell_size {
                 Some(h) => mint_core::GridSize::CellSize(h),
                 None => mint_core::GridSize::Cells(a.cells),
             };
-            let opts = GridMergeOptions { size, band: a.band, ..Default::default() };
-            let (p, f, r) = grid_merge_with(&scans, &poses, &opts, &bars)?;
-            (p, f, MergeReport::Grid(r))
+            mint_range::MergeMethod::Grid(GridMergeOptions { size, band: a.band, ..Default::default() })
         }
     };
-    let format = mint_io::Format::from_path(&a.output)?;
-    let mut w = mint_io::MeshWriter::create(&a.output, format, Default::default())?;
-    for p in &pos {
-        w.write_vertex(*p)?;
-    }
-    for f in &faces {
-        w.write_face(*f)?;
-    }
-    w.finish()?;
-    let secs = t.elapsed().as_secs_f64();
-    let check = mint_mesh::check(&pos, &faces);
+    let opts = mint_range::MergeFileOptions { method, scan_mem: a.mem as usize, write: Default::default() };
+    let s = mint_range::merge_file(&a.set, &a.output, &opts, &bars)?;
+    let (report, check, secs) = (&s.report, &s.check, s.seconds);
     if a.preview {
         crate::picture_cmds::write_preview(&[a.output.as_path()], &a.output, a.json, &bars)?;
     }
     if a.json {
-        let key = match report {
-            MergeReport::Zipper(_) => "zipper",
-            MergeReport::Grid(_) => "grid",
-        };
-        let v = serde_json::json!({ "set": a.set.display().to_string(), "output": a.output.display().to_string(), "seconds": secs, key: report, "check": check, "scan_reads": scans.loads().0, "peak_scan_bytes": scans.loads().1, "peak_heap_bytes": crate::alloc::peak_heap() });
+        let key = report.method();
+        let v = serde_json::json!({ "set": a.set.display().to_string(), "output": a.output.display().to_string(), "seconds": secs, key: report, "check": check, "scan_reads": s.scan_reads, "peak_scan_bytes": s.peak_scan_bytes, "peak_heap_bytes": crate::alloc::peak_heap() });
         println!("{}", serde_json::to_string_pretty(&v)?);
         return Ok(());
     }
-    match &report {
-        MergeReport::Zipper(rep) => {
+    match report {
+        mint_range::MergeReport::Zipper(rep) => {
             eprintln!("zippered {} scans of {} in {secs:.2}s -> {}: {} vertices, {} faces", rep.scans, a.set.display(), a.output.display(), rep.vertices, rep.faces);
             eprintln!("  redundant {} , trimmed {}, stitched {}, holes filled {}, small-triangle vertices {}", rep.redundant, rep.trimmed, rep.stitched, rep.holes_filled, rep.small_triangle_vertices);
         }
-        MergeReport::Grid(rep) => {
+        mint_range::MergeReport::Grid(rep) => {
             eprintln!("merged {} scans of {} on a {}x{}x{} grid (cell {:.4e}) in {secs:.2}s -> {}: {} vertices, {} faces", rep.scans, a.set.display(), rep.dims[0], rep.dims[1], rep.dims[2], rep.cell, a.output.display(), rep.vertices, rep.faces);
             eprintln!(
                 "  {} crossings; nodes voted {}, filled {}; vertices from crossings {} ({} merged across scans), interpolated {}, midpoints {}",
@@ -364,20 +344,12 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
         check.boundary_loops,
         check.components
     );
-    if let MergeReport::Zipper(rep) = &report {
+    if let mint_range::MergeReport::Zipper(rep) = report {
         if let Some(c) = &rep.consensus {
             eprintln!("  consensus: {} vertices moved, mean {:.3e}, max {:.3e}, {:.2} scans each", c.moved, c.mean_move, c.max_move, c.mean_scans);
         }
     }
-    let (reads, peak) = scans.loads();
-    eprintln!("  scans read {reads} times for {} scans (at most {:.1} MiB of scans held at once, budget --mem {:.0} MiB)", set.entries.len(), peak as f64 / 1048576.0, a.mem as f64 / 1048576.0);
+    eprintln!("  scans read {} times for {} scans (at most {:.1} MiB of scans held at once, budget --mem {:.0} MiB)", s.scan_reads, s.scans, s.peak_scan_bytes as f64 / 1048576.0, a.mem as f64 / 1048576.0);
     Ok(())
 }
 
-/// The report of either merge method.
-#[derive(serde::Serialize)]
-#[serde(untagged)]
-enum MergeReport {
-    Zipper(mint_range::zipper::ZipperReport),
-    Grid(mint_range::grid_merge::GridMergeReport),
-}

@@ -35,6 +35,7 @@ pub mod geom;
 pub mod grid_merge;
 pub mod icp;
 pub mod mesh_ops;
+pub mod merge_file;
 pub mod range_image;
 pub mod raycast;
 pub mod scan_mesh;
@@ -44,6 +45,7 @@ pub mod synth;
 pub mod zipper;
 
 pub use error::RangeError;
+pub use merge_file::{merge_file, MergeFileOptions, MergeMethod, MergeReport, MergeSummary};
 
 /// A merged mesh: world positions, faces, and the method's report.
 pub type Merged<R> = (Vec<geom::V3>, Vec<[u32; 3]>, R);
