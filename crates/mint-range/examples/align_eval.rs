@@ -23,6 +23,30 @@ fn main() {
                 opts.start_distance = Some(args[k + 1].parse().unwrap());
                 k += 2;
             }
+            "--metric" => {
+                opts.metric = match args[k + 1].as_str() {
+                    "plane" => mint_range::icp::Metric::PointToPlane,
+                    "point" => mint_range::icp::Metric::PointToPoint,
+                    _ => mint_range::icp::Metric::PlaneThenPoint,
+                };
+                k += 2;
+            }
+            "--one-way" => {
+                opts.symmetric = false;
+                k += 1;
+            }
+            "--reject" => {
+                opts.reject = args[k + 1].parse().unwrap();
+                k += 2;
+            }
+            "--max-samples" => {
+                opts.max_samples = args[k + 1].parse().unwrap();
+                k += 2;
+            }
+            "--global" => {
+                opts.global = args[k + 1] != "off";
+                k += 2;
+            }
             other => panic!("unknown option {other}"),
         }
     }
@@ -55,7 +79,126 @@ fn main() {
             worst.1 = worst.1.max(s);
             if std::env::var_os("VERBOSE").is_some() {
                 let rep = &r.reports[i];
-                eprintln!("  {:<24} {:?} rms {:.3e} it {} -> {d:.3}° {:.3} mm", rep.name, rep.status, rep.rms, rep.iterations, s * 1e3);
+                let dd = truth[i].inverse().after(&r.poses[i]);
+                let q = dd.quat();
+                let ax = truth[i].rotate(mint_range::geom::normalize([q[0], q[1], q[2]]));
+                eprintln!("  axis (world) [{:.2} {:.2} {:.2}]", ax[0], ax[1], ax[2]);
+                eprintln!("  {:<24} {:?} rms/s {:.3} it {} conv {} partners {} -> {d:.3}° {:.3} mm", rep.name, rep.status, rep.rms_rel, rep.iterations, rep.converged, rep.partners.len(), s * 1e3);
+            }
+        }
+        if std::env::var_os("VERBOSE").is_some() {
+            eprintln!("  rounds {}", r.rounds);
+            for p in &r.pairs {
+                eprintln!("    {:<24} {:<24} ov {:.2}->{:.2} rms/s {:.3} it {:>3} conv {} att {} resid {:.3e} {:?}", p.a, p.b, p.overlap_before, p.overlap, p.rms_rel, p.iterations, p.converged, p.attempts, p.residual, p.status);
+            }
+        }
+        if std::env::var_os("ENERGY").is_some() {
+            let d = r.distance;
+            let energy = |poses: &[Rigid]| {
+                let (mut e, mut c) = (0.0, 0usize);
+                for p in &r.pairs {
+                    let a = scans.iter().position(|s| s.name == p.a).unwrap();
+                    let b = scans.iter().position(|s| s.name == p.b).unwrap();
+                    for (x, y) in [(a, b), (b, a)] {
+                        let (m, n) = mint_range::icp::objective(&scans, poses, x, &[y], d, 3.0).unwrap();
+                        e += m * n as f64;
+                        c += n;
+                    }
+                }
+                (e / c as f64).sqrt()
+            };
+            eprintln!("  energy: truth {:.5e}  result {:.5e}", energy(&truth), energy(&r.poses));
+            // Median distance of each scan's interior vertices (every 4th) to
+            // the union of the other scans, within 5 mm (no weights, no trim).
+            let bvhs: Vec<mint_mesh::TriangleBvh> = scans.iter().map(|s| mint_mesh::TriangleBvh::new(&s.positions, &s.faces).unwrap()).collect();
+            let medians = |poses: &[Rigid]| -> Vec<f64> {
+                (0..scans.len())
+                    .map(|i| {
+                        let mut ds: Vec<f64> = Vec::new();
+                        for (v, p) in scans[i].positions.iter().enumerate().step_by(4) {
+                            if scans[i].boundary[v] || scans[i].confidence[v] <= 0.0 {
+                                continue;
+                            }
+                            let w = poses[i].apply(*p);
+                            let mut best = f64::INFINITY;
+                            for j in (0..scans.len()).filter(|&j| j != i) {
+                                if let Some((dd, _, _)) = bvhs[j].nearest_within(poses[j].inverse().apply(w), 5e-3) {
+                                    best = best.min(dd);
+                                }
+                            }
+                            if best.is_finite() {
+                                ds.push(best);
+                            }
+                        }
+                        ds.sort_by(f64::total_cmp);
+                        ds[ds.len() / 2]
+                    })
+                    .collect()
+            };
+            let mt = medians(&truth);
+            let mr = medians(&r.poses);
+            eprintln!("  median to union (mm): truth {:?}", mt.iter().map(|v| (v * 1e6).round() / 1000.0).collect::<Vec<_>>());
+            eprintln!("  median to union (mm): result {:?}", mr.iter().map(|v| (v * 1e6).round() / 1000.0).collect::<Vec<_>>());
+            // The smooth part of the difference: each component of the
+            // rotation vector and centre shift fitted by a + b cos θ + c sin θ
+            // over the ring (θ = 24° k), applied to the result.
+            let n = truth.len();
+            let logs: Vec<[f64; 6]> = truth
+                .iter()
+                .zip(&r.poses)
+                .map(|(a, b)| {
+                    let dlt = a.after(&b.inverse()); // result -> truth
+                    let q = dlt.quat();
+                    let s = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+                    let ang = 2.0 * s.atan2(q[3]);
+                    let w = if s > 0.0 { scale([q[0], q[1], q[2]], ang / s) } else { [0.0; 3] };
+                    let rot = Rigid::from_rotation_vector(w, [0.0; 3]);
+                    let t = sub(dlt.apply(center), center);
+                    let _ = rot;
+                    [w[0], w[1], w[2], t[0], t[1], t[2]]
+                })
+                .collect();
+            let mut smooth = vec![[0.0; 6]; n];
+            for comp in 0..6 {
+                let (mut a0, mut a1, mut a2) = (0.0, 0.0, 0.0);
+                for k in 0..n {
+                    let th = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+                    a0 += logs[k][comp] / n as f64;
+                    a1 += 2.0 * logs[k][comp] * th.cos() / n as f64;
+                    a2 += 2.0 * logs[k][comp] * th.sin() / n as f64;
+                }
+                for k in 0..n {
+                    let th = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+                    smooth[k][comp] = a0 + a1 * th.cos() + a2 * th.sin();
+                }
+            }
+            for alpha in [0.25, 0.5, 1.0] {
+                let moved: Vec<Rigid> = r.poses.iter().enumerate().map(|(k, p)| {
+                    let v = smooth[k];
+                    let rot = Rigid::from_rotation_vector([alpha * v[0], alpha * v[1], alpha * v[2]], [0.0; 3]);
+                    Rigid { r: rot.r, t: add(sub(center, rot.rotate(center)), [alpha * v[3], alpha * v[4], alpha * v[5]]) }.after(p)
+                }).collect();
+                let worst = (0..n).map(|k| truth[k].inverse().after(&moved[k]).angle().to_degrees()).fold(0.0, f64::max);
+                eprintln!("  smooth mode x{alpha}: energy {:.5e}, worst vs truth {worst:.3}°", energy(&moved));
+            }
+            for lam in [0.25, 0.5, 0.75, 1.25] {
+                let interp: Vec<Rigid> = truth
+                    .iter()
+                    .zip(&r.poses)
+                    .map(|(a, b)| {
+                        let dlt = b.after(&a.inverse());
+                        let q = dlt.quat();
+                        let s = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
+                        let ang = 2.0 * s.atan2(q[3]);
+                        let w = if s > 0.0 { scale([q[0], q[1], q[2]], lam * ang / s) } else { [0.0; 3] };
+                        let rot = Rigid::from_rotation_vector(w, [0.0; 3]);
+                        // translation part: interpolate the motion of the centre
+                        let c2 = dlt.apply(center);
+                        let t = add(sub(center, rot.rotate(center)), scale(sub(c2, center), lam));
+                        Rigid { r: rot.r, t }.after(a)
+                    })
+                    .collect();
+                eprintln!("  energy at {lam}: {:.5e}", energy(&interp));
             }
         }
         worst_all.0 = worst_all.0.max(worst.0);

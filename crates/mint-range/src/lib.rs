@@ -35,6 +35,7 @@ pub mod geom;
 pub mod grid_merge;
 pub mod icp;
 pub mod mesh_ops;
+pub mod multiview;
 pub mod range_image;
 pub mod raycast;
 pub mod scan_mesh;
@@ -59,6 +60,8 @@ pub mod phases {
     pub const LOAD_SCANS: mint_core::progress::Phase = mint_core::progress::Phase::named("load scans");
     /// Registering scans by ICP (units: scans).
     pub const REGISTER: mint_core::progress::Phase = mint_core::progress::Phase::named("register");
+    /// Multiview refinement: pairwise alignments of one round (units: pairs).
+    pub const REFINE: mint_core::progress::Phase = mint_core::progress::Phase::named("refine");
     /// Zippering scans into the model (units: scans).
     pub const ZIPPER: mint_core::progress::Phase = mint_core::progress::Phase::named("zipper");
     /// Consensus geometry, two passes over the scans (units: scan passes).
