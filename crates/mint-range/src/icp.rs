@@ -143,8 +143,8 @@ pub struct AlignOptions {
     /// the scans' sampling distance) fails. Default 2.5.
     pub rms_factor: f64,
     /// Multiview: rounds of (pairwise alignments, global solve) at most;
-    /// the rounds stop earlier when no scan moves by more than
-    /// `tolerance` × its sampling distance. Default 4.
+    /// the rounds stop earlier when no scan moves by more than a quarter of
+    /// its sampling distance. Default 4.
     pub global_rounds: usize,
     /// Default [`Kernel::Trim`].
     pub kernel: Kernel,
