@@ -16,6 +16,7 @@ fn main() {
     let mm: f64 = args[2].parse().unwrap();
     let seeds: u64 = args[3].parse().unwrap();
     let mut opts = AlignOptions::default();
+    let mut plant: Option<(usize, f64)> = None;
     let mut k = 4;
     while k < args.len() {
         match args[k].as_str() {
@@ -43,6 +44,10 @@ fn main() {
                 opts.max_samples = args[k + 1].parse().unwrap();
                 k += 2;
             }
+            "--plant" => {
+                plant = Some((args[k + 1].parse().unwrap(), args[k + 2].parse().unwrap()));
+                k += 3;
+            }
             "--global" => {
                 opts.global = args[k + 1] != "off";
                 k += 2;
@@ -66,11 +71,19 @@ fn main() {
         } else {
             truth.iter().enumerate().map(|(i, p)| if i == 0 { *p } else { exact_perturb(p, center, deg, mm * 1e-3, &mut rng) }).collect()
         };
+        let mut initial = initial;
+        if let Some((kp, deg)) = plant {
+            initial[kp] = exact_perturb(&truth[kp], center, deg, 0.0, &mut rng);
+        }
         let t = std::time::Instant::now();
         let r = align(&scans, &initial, &opts).unwrap();
+        if let Some((kp, _)) = plant {
+            let (dd, sh) = mint_range::geom::pose_error(&initial[kp], &r.poses[kp], &scans[kp].bbox_corners());
+            println!("  planted {}: {:?}, moved {dd:.3}° {:.3} mm", scans[kp].name, r.reports[kp].status, sh * 1e3);
+        }
         let secs = t.elapsed().as_secs_f64();
         let mut worst = (0.0f64, 0.0f64, String::new());
-        for i in 0..scans.len() {
+        for i in (0..scans.len()).filter(|&i| plant.is_none_or(|p| p.0 != i)) {
             let (d, s) = errors(&truth[0], &truth[i], &r.poses[0], &r.poses[i], center);
             if d > worst.0 {
                 worst.2 = scans[i].name.clone();

@@ -110,15 +110,21 @@ struct Fit {
 }
 
 /// One accepted pair's virtual mates: `x` in scan `b`'s frame and `y` in
-/// scan `a`'s, the same world point at the pair's optimum.
+/// scan `a`'s, the same world point at the pair's optimum, and `n` the
+/// surface normal there in scan `a`'s frame.
 #[derive(Debug, Clone)]
 struct Mates {
     a: usize,
     b: usize,
     x: Vec<V3>,
     y: Vec<V3>,
+    n: Vec<V3>,
     w: Vec<f64>,
 }
+
+/// Weight of the mates' distance along the surface against their distance
+/// across it in the global solve (see [`solve`]).
+const TANGENTIAL: f64 = 0.1;
 
 /// Multiview registration; see the module docs. Returns the poses (failed
 /// scans keep their initial pose), a report per scan, the last round's
@@ -297,8 +303,8 @@ pub(crate) fn register(t: &Targets, initial: &[Rigid], dists: &[f64], opts: &Ali
         let mut solved;
         loop {
             solved = poses.clone();
-            solve(&mut solved, &mates, &index, anchor, &placed, center, 1e-4 * d);
-            let res: Vec<f64> = index.iter().map(|&e| residual(&solved, &mates[e])).collect();
+            solve(&mut solved, &mates, &index, anchor, &placed, center, 1e-4 * d, TANGENTIAL);
+            let res: Vec<f64> = index.iter().map(|&e| residual(&solved, &mates[e], TANGENTIAL)).collect();
             let m = median(&res).unwrap_or(0.0);
             let worst = index
                 .iter()
@@ -317,7 +323,7 @@ pub(crate) fn register(t: &Targets, initial: &[Rigid], dists: &[f64], opts: &Ali
         }
         for (e, m) in mates.iter().enumerate() {
             let r = &mut reps[of_edge[e]];
-            r.residual = residual(&solved, m);
+            r.residual = residual(&solved, m, TANGENTIAL);
             if !index.contains(&e) && placed[m.a] && placed[m.b] {
                 r.status = PairStatus::Inconsistent;
             }
@@ -468,23 +474,26 @@ fn virtual_mates(t: &Targets, a: usize, b: usize, poses: &[Rigid], d: f64, opts:
     let p = weighed(pairs(t, b, t.scans[b].levels.len() - 1, &[a], poses, d), opts.reject, opts.kernel);
     let step = p.len().div_ceil(MATES).max(1);
     let (ia, ib) = (poses[a].inverse(), poses[b].inverse());
-    let mut m = Mates { a, b, x: Vec::new(), y: Vec::new(), w: Vec::new() };
+    let mut m = Mates { a, b, x: Vec::new(), y: Vec::new(), n: Vec::new(), w: Vec::new() };
     for q in p.iter().step_by(step) {
         // The midpoint of the pair: the same world point in both frames.
         let w = crate::geom::scale(add(q.src, q.dst), 0.5);
         m.x.push(ib.apply(w));
         m.y.push(ia.apply(w));
+        m.n.push(ia.rotate(q.normal));
         m.w.push(q.w * step as f64);
     }
     m
 }
 
-/// RMS distance of a pair's mates at `poses`.
-fn residual(poses: &[Rigid], m: &Mates) -> f64 {
+/// RMS of a pair's mates at `poses` in [`solve`]'s metric (mostly the
+/// distance across the surface, and `tangential` of the distance along it).
+fn residual(poses: &[Rigid], m: &Mates, tangential: f64) -> f64 {
     let (mut s, mut w) = (0.0, 0.0);
     for k in 0..m.x.len() {
         let r = sub(poses[m.a].apply(m.y[k]), poses[m.b].apply(m.x[k]));
-        s += m.w[k] * dot(r, r);
+        let across = dot(r, poses[m.a].rotate(m.n[k]));
+        s += m.w[k] * ((1.0 - tangential) * across * across + tangential * dot(r, r));
         w += m.w[k];
     }
     (s / w.max(f64::MIN_POSITIVE)).sqrt()
@@ -515,11 +524,18 @@ fn model_center(scans: &[crate::ScanMesh], poses: &[Rigid], placed: &[bool]) -> 
     crate::geom::scale(add(lo, hi), 0.5)
 }
 
-/// The global solve: Gauss–Newton on Σ w·|P_a·y − P_b·x|² over the mates
-/// of the pairs `index`, every placed scan but `anchor` free. Each pose is
-/// updated as `p ↦ R(ω)(p − c) + c + t` on the left.
+/// The global solve: Gauss–Newton on
+/// Σ w·((1 − τ)·(n·(P_a·y − P_b·x))² + τ·|P_a·y − P_b·x|²) over the mates
+/// of the pairs `index` (τ = [`TANGENTIAL`]), every placed scan but
+/// `anchor` free. Mostly the distance across the surface, as in
+/// point-to-plane ICP: a pair of scans that could slide along each other
+/// (a narrow overlap, a smooth patch) holds the solve little in that
+/// direction, and the other pairs decide it; with point-to-point mates a
+/// pair pins its own optimum in every direction, however poorly its
+/// overlap determines it. Each pose is updated as
+/// `p ↦ R(ω)(p − c) + c + t` on the left.
 /// Stops when no mate moves by more than `tol` in an iteration.
-fn solve(poses: &mut [Rigid], mates: &[Mates], index: &[usize], anchor: usize, placed: &[bool], c: V3, tol: f64) {
+fn solve(poses: &mut [Rigid], mates: &[Mates], index: &[usize], anchor: usize, placed: &[bool], c: V3, tol: f64, tangential: f64) {
     let n = poses.len();
     let mut var = vec![usize::MAX; n];
     let mut nv = 0;
@@ -551,7 +567,11 @@ fn solve(poses: &mut [Rigid], mates: &[Mates], index: &[usize], anchor: usize, p
                 let pa = sub(poses[mt.a].apply(mt.y[k]), c);
                 let pb = sub(poses[mt.b].apply(mt.x[k]), c);
                 let r = sub(pa, pb);
-                // d r / d(ω_a, t_a, ω_b, t_b), one row per coordinate.
+                let n = poses[mt.a].rotate(mt.n[k]);
+                // d r / d(ω_a, t_a, ω_b, t_b), one row per coordinate, and
+                // the row of the distance across the surface, n · r (n
+                // held fixed within the iteration).
+                let mut jn = nalgebra::SVector::<f64, 12>::zeros();
                 for (row, e_axis) in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].iter().enumerate() {
                     // ∂(ω × p)_row / ∂ω = p × e_row.
                     let ja = cross(pa, *e_axis);
@@ -563,9 +583,13 @@ fn solve(poses: &mut [Rigid], mates: &[Mates], index: &[usize], anchor: usize, p
                     }
                     j[3 + row] = 1.0;
                     j[9 + row] = -1.0;
-                    hb += mt.w[k] * j * j.transpose();
-                    gb += mt.w[k] * r[row] * j;
+                    hb += (tangential * mt.w[k]) * j * j.transpose();
+                    gb += (tangential * mt.w[k] * r[row]) * j;
+                    jn += n[row] * j;
                 }
+                let w = (1.0 - tangential) * mt.w[k];
+                hb += w * jn * jn.transpose();
+                gb += (w * dot(n, r)) * jn;
             }
             for (bi, vi) in [(0, va), (6, vb)] {
                 if vi == usize::MAX {
