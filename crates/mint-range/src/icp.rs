@@ -44,7 +44,12 @@
 //! [`AlignOptions::distance`]. The targets stay at full resolution: the
 //! closest point is on their surface anyway.
 //!
-//! Which targets: with [`Strategy::Growing`] (the default) the anchor scan
+//! Which targets: by default ([`AlignOptions::global`]) the registration
+//! is multiview ([`crate::multiview`]): judged pairwise alignments along
+//! the overlap graph, then one solve of all poses; this module provides
+//! the pairwise ICP it runs. With `global: false`, the strategies below
+//! (mint's registration before issue 17). With
+//! [`Strategy::Growing`] (the default) the anchor scan
 //! is fixed and the others join one at a time, each time the one with the
 //! most pairs against the scans already registered, and registers against
 //! all of them; then [`AlignOptions::refine_passes`] passes re-register

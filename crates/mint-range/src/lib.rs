@@ -16,6 +16,9 @@
 //! - [`icp`]: `mint align` — constrained ICP (closest points on surfaces
 //!   within d, no boundary pairs, weighted Horn quaternion, hierarchy with d
 //!   halving, anchor or growing model);
+//! - [`multiview`]: `mint align`'s default — every pairwise alignment
+//!   judged, scans joined along the largest overlaps, all overlapping
+//!   pairs aligned and every pose solved at once (Pulli 1999);
 //! - [`zipper`]: `mint zipper` — redundancy removal, trimming, stitching
 //!   along the seams, small-triangle removal ([`mesh_ops`]), then
 //!   [`consensus`] geometry;
