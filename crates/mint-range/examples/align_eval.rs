@@ -73,13 +73,19 @@ fn main() {
         };
         let mut initial = initial;
         if let Some((kp, deg)) = plant {
-            initial[kp] = exact_perturb(&truth[kp], center, deg, 0.0, &mut rng);
+            initial[kp] = if std::env::var_os("PLANT_Y").is_some() {
+                let rot = Rigid::from_axis_angle([0.0, 1.0, 0.0], deg.to_radians());
+                Rigid { r: rot.r, t: sub(center, rot.rotate(center)) }.after(&truth[kp])
+            } else {
+                exact_perturb(&truth[kp], center, deg, 0.0, &mut rng)
+            };
         }
         let t = std::time::Instant::now();
         let r = align(&scans, &initial, &opts).unwrap();
         if let Some((kp, _)) = plant {
             let (dd, sh) = mint_range::geom::pose_error(&initial[kp], &r.poses[kp], &scans[kp].bbox_corners());
-            println!("  planted {}: {:?}, moved {dd:.3}° {:.3} mm", scans[kp].name, r.reports[kp].status, sh * 1e3);
+            let (e, es) = errors(&truth[0], &truth[kp], &r.poses[0], &r.poses[kp], center);
+            println!("  planted {}: {:?}, moved {dd:.3}° {:.3} mm, ends {e:.3}° {:.3} mm from the truth", scans[kp].name, r.reports[kp].status, sh * 1e3, es * 1e3);
         }
         let secs = t.elapsed().as_secs_f64();
         let mut worst = (0.0f64, 0.0f64, String::new());

@@ -481,6 +481,8 @@ pub(crate) fn register_one(t: &Targets, i: usize, targets_idx: &[usize], poses: 
         // the energy) and the energy of the pose it was taken from.
         let mut fallback: Option<(Rigid, f64)> = None;
         let mut settled = false;
+        // The energies of the level's iterations, for the plateau test.
+        let mut energies: Vec<f64> = Vec::new();
         for _ in 0..opts.max_iterations {
             let p = weighed(pairs(t, i, level, targets_idx, poses, d), opts.reject, opts.kernel);
             let need = required(scan, level, opts.min_pairs, opts.max_samples);
@@ -491,6 +493,7 @@ pub(crate) fn register_one(t: &Targets, i: usize, targets_idx: &[usize], poses: 
                 return false;
             }
             let energy = weighted_mean_square(&p);
+            energies.push(energy);
             if let Some((plain, e_prev)) = fallback {
                 if anderson.accelerated && energy > e_prev {
                     // The extrapolation overshot: take the plain step
@@ -520,8 +523,15 @@ pub(crate) fn register_one(t: &Targets, i: usize, targets_idx: &[usize], poses: 
             poses[i] = if opts.accelerate { from_vec(anderson.next(to_vec(&poses[i]), to_vec(&plain))).orthonormalized() } else { plain };
             fallback = Some((plain, energy));
         }
-        // A level that used up its iterations did not converge.
-        converged &= settled;
+        // The last level decides convergence (the coarser ones only bring
+        // the scan into its basin, and may hand over unfinished). If it
+        // used up its iterations it did not converge, unless its energy had
+        // stopped falling: then the scan was only creeping along a
+        // direction the overlap does not determine (a surface of
+        // revolution, a plane), at no gain.
+        if j + 1 == k {
+            converged = settled || plateau(&energies);
+        }
     }
     report.converged = converged;
     // Final statistics at the finest level and distance.
@@ -538,6 +548,25 @@ pub(crate) fn register_one(t: &Targets, i: usize, targets_idx: &[usize], poses: 
     report.rms_rel = report.rms / scan.sampling;
     report.iterations = iterations;
     true
+}
+
+/// Iterations over which [`plateau`] looks.
+const PLATEAU: usize = 10;
+
+/// Whether the energy of a level has stopped falling: the median of its
+/// last [`PLATEAU`] iterations is not 5% below the median of the
+/// [`PLATEAU`] before (medians, because the pairs change between
+/// iterations and the energy of noise-free scans jumps by tens of percent
+/// at its floor). The objective has then converged, whatever the pose
+/// still does.
+fn plateau(energies: &[f64]) -> bool {
+    if energies.len() < 2 * PLATEAU {
+        return false;
+    }
+    let n = energies.len();
+    let last = crate::range_image::median(&mut energies[n - PLATEAU..].to_vec());
+    let before = crate::range_image::median(&mut energies[n - 2 * PLATEAU..n - PLATEAU].to_vec());
+    last >= 0.95 * before
 }
 
 /// Weighted mean squared pair distance and pair count of scan `i` (finest

@@ -142,11 +142,6 @@ pub(crate) fn register(t: &Targets, initial: &[Rigid], dists: &[f64], opts: &Ali
     // 1. Overlap graph at the initial poses.
     let overlap0 = overlaps(t, initial, 0, d0, &(0..n).collect::<Vec<_>>());
 
-    let clock = std::time::Instant::now();
-    let dbg = std::env::var_os("MINT_ALIGN_DEBUG").is_some();
-    if dbg {
-        eprintln!("[mv] overlaps {:.2}s", clock.elapsed().as_secs_f64());
-    }
     // 2. The tree, in Prim's order by overlap.
     progress.start(crate::phases::REGISTER, (n - 1) as u64);
     let mut placed = vec![false; n];
@@ -201,18 +196,17 @@ pub(crate) fn register(t: &Targets, initial: &[Rigid], dists: &[f64], opts: &Ali
     }
     progress.finish();
     for k in (0..n).filter(|&k| !done[k]) {
-        let (o, p) = (0..n).filter(|&p| p != k).map(|p| (overlap0[k][p], p)).fold((0.0, k), |a, b| if b.0 > a.0 { b } else { a });
+        let (o, p) = (0..n).filter(|&p| placed[p]).map(|p| (overlap0[k][p], p)).fold((0.0, k), |a, b| if b.0 > a.0 { b } else { a });
+        let through: Vec<String> = (0..n).filter(|&q| q != k && !placed[q] && overlap0[k][q] >= opts.min_overlap).map(|q| format!("{} ({:.0}%)", scans[q].name, 100.0 * overlap0[k][q])).collect();
         reports[k].status = Status::Failed(format!(
-            "no overlap: at most {:.1}% of it within {d0:.4e} of a registered scan{} at the initial poses (need {:.1}%)",
+            "no overlap: at most {:.1}% of it within {d0:.4e} of a registered scan{} at the initial poses (need {:.1}%){}",
             100.0 * o,
             if p != k { format!(" ({})", scans[p].name) } else { String::new() },
-            100.0 * opts.min_overlap
+            100.0 * opts.min_overlap,
+            if through.is_empty() { String::new() } else { format!("; it overlaps only scans not registered: {}", through.join(", ")) }
         ));
     }
 
-    if dbg {
-        eprintln!("[mv] tree {:.2}s", clock.elapsed().as_secs_f64());
-    }
     // 3. Rounds of pairwise alignments between all partners and the
     //    global solve.
     let center = model_center(scans, &poses, &placed);
@@ -342,15 +336,6 @@ pub(crate) fn register(t: &Targets, initial: &[Rigid], dists: &[f64], opts: &Ali
             reports[b].iterations += f.report.iterations;
         }
         pair_reports = reps;
-        if dbg {
-            eprintln!(
-                "[mv] round {round}: {} pairs ({} retried, {} iterations), moved {moved:.3} s, {:.2}s",
-                edges.len(),
-                fits.iter().filter(|f| f.attempts > 1).count(),
-                fits.iter().map(|f| f.report.iterations).sum::<usize>(),
-                clock.elapsed().as_secs_f64()
-            );
-        }
         if moved < STILL {
             break;
         }
