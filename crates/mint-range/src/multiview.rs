@@ -620,3 +620,58 @@ fn solve(poses: &mut [Rigid], mates: &[Mates], index: &[usize], anchor: usize, p
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Mates of a pair whose scans sit at `pa` and `pb`: points on a
+    /// curved patch (so that no direction slides), with normals.
+    fn mates(a: usize, b: usize, pa: &Rigid, pb: &Rigid, seed: f64) -> Mates {
+        let mut m = Mates { a, b, x: Vec::new(), y: Vec::new(), n: Vec::new(), w: Vec::new() };
+        for i in 0..200 {
+            let u = (i as f64 * 0.37 + seed).sin();
+            let v = (i as f64 * 0.73 + seed).cos();
+            let w = [u, v, 0.3 * (u * u - v * v) + 0.5 * u * v];
+            let normal = crate::geom::normalize([-0.6 * u - 0.5 * v, 0.6 * v - 0.5 * u, 1.0]);
+            m.x.push(pb.inverse().apply(w));
+            m.y.push(pa.inverse().apply(w));
+            m.n.push(pa.inverse().rotate(normal));
+            m.w.push(1.0);
+        }
+        m
+    }
+
+    /// Three scans in a loop with exact mates: from poses a few degrees
+    /// off, the solve returns every pose exactly, with the anchor fixed.
+    #[test]
+    fn the_global_solve_closes_a_loop_of_exact_mates() {
+        let truth = [Rigid::IDENTITY, Rigid::from_quat([0.1, 0.2, -0.1, 0.97], [0.3, -0.2, 0.1]), Rigid::from_quat([-0.2, 0.05, 0.1, 0.97], [-0.1, 0.4, 0.2])];
+        let all = vec![mates(0, 1, &truth[0], &truth[1], 0.0), mates(1, 2, &truth[1], &truth[2], 1.0), mates(0, 2, &truth[0], &truth[2], 2.0)];
+        let mut poses = truth;
+        poses[1] = Rigid::from_axis_angle([1.0, 1.0, 0.0], 0.05).after(&poses[1]);
+        poses[2] = Rigid { t: add(poses[2].t, [0.02, -0.01, 0.03]), ..Rigid::from_axis_angle([0.0, 1.0, 1.0], -0.04).after(&poses[2]) };
+        solve(&mut poses, &all, &[0, 1, 2], 0, &[true; 3], [0.0; 3], 1e-12, TANGENTIAL);
+        assert_eq!(poses[0], Rigid::IDENTITY);
+        for k in 1..3 {
+            let (deg, shift) = crate::geom::pose_error(&truth[k], &poses[k], &[[1.0, 1.0, 1.0], [-1.0, 0.0, 0.5]]);
+            assert!(deg < 1e-9 && shift < 1e-9, "scan {k}: {deg}° {shift}");
+        }
+        assert!(all.iter().all(|m| residual(&poses, m, TANGENTIAL) < 1e-9));
+    }
+
+    #[test]
+    fn reachable_follows_only_the_pairs_given() {
+        let id = Rigid::IDENTITY;
+        let m = vec![mates(0, 1, &id, &id, 0.0), mates(1, 2, &id, &id, 0.0), mates(3, 4, &id, &id, 0.0)];
+        assert_eq!(reachable(5, 0, &m, &[0, 1, 2]), vec![true, true, true, false, false]);
+        assert_eq!(reachable(5, 0, &m, &[1, 2]), vec![true, false, false, false, false]);
+        assert_eq!(reachable(5, 4, &m, &[2]), vec![false, false, false, true, true]);
+    }
+
+    #[test]
+    fn the_median_needs_three_peers() {
+        assert_eq!(median(&[1.0, 2.0]), None);
+        assert_eq!(median(&[3.0, 1.0, 2.0]), Some(2.0));
+    }
+}

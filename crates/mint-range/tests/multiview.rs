@@ -20,6 +20,7 @@
 //! bounds below are what mint reaches, not the 0.5° (and 0.2°
 //! from the `.conf`), which would take fitting the scans less well.
 
+#[allow(dead_code)] // the scene's truth mesh and noise are for the other tests
 mod common;
 
 use mint_range::geom::{add, dist, scale, sub, Rigid, V3};
