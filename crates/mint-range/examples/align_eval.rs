@@ -5,6 +5,13 @@
 //! displacement against the `.conf`, and the time.
 //!
 //! cargo run --release -p mint-range --example align_eval -- SET.conf DEG MM SEEDS [--global off] [--start-distance D]
+//! [--metric plane|point] [--one-way] [--reject R] [--max-samples N] [--plant K DEG]
+//!
+//! Environment: VERBOSE=1 prints every scan and pair; ENERGY=1 compares the
+//! fit of the result and of the `.conf` (pair RMS, median distance of each
+//! scan to the others, and along the smooth part of their difference);
+//! PLANT_Y=1 turns the planted scan about the world's y axis.
+#![allow(clippy::needless_range_loop)]
 
 use mint_range::geom::{add, dist, scale, sub, Rigid, V3};
 use mint_range::icp::{align, AlignOptions};

@@ -341,9 +341,9 @@ pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, pr
         .collect();
     let targets = Targets { scans, symmetric: opts.symmetric, max_samples: opts.max_samples, bvhs: &bvhs, face_normals: &face_normals };
     if opts.global {
-        let (poses, mut reports, pairs, rounds) = crate::multiview::register(&targets, initial, &dists, opts, progress)?;
-        moved(scans, initial, &poses, &mut reports);
-        return Ok(AlignResult { poses, reports, distance: d, start_distance: d0, pairs, rounds });
+        let mut r = crate::multiview::register(&targets, initial, &dists, opts, progress)?;
+        moved(scans, initial, &r.poses, &mut r.reports);
+        return Ok(AlignResult { poses: r.poses, reports: r.reports, distance: d, start_distance: d0, pairs: r.pairs, rounds: r.rounds });
     }
     let mut poses = initial.to_vec();
     let mut reports: Vec<ScanReport> = scans.iter().map(|s| ScanReport::new(&s.name)).collect();

@@ -126,10 +126,18 @@ struct Mates {
 /// across it in the global solve (see [`solve`]).
 const TANGENTIAL: f64 = 0.1;
 
-/// Multiview registration; see the module docs. Returns the poses (failed
-/// scans keep their initial pose), a report per scan, the last round's
-/// pair reports and the number of rounds.
-pub(crate) fn register(t: &Targets, initial: &[Rigid], dists: &[f64], opts: &AlignOptions, progress: &dyn Progress) -> Result<(Vec<Rigid>, Vec<ScanReport>, Vec<PairReport>, usize), RangeError> {
+/// What [`register`] gives: the poses (failed scans keep their initial
+/// pose), a report per scan, the last round's pair reports and the number
+/// of rounds.
+pub(crate) struct Registration {
+    pub(crate) poses: Vec<Rigid>,
+    pub(crate) reports: Vec<ScanReport>,
+    pub(crate) pairs: Vec<PairReport>,
+    pub(crate) rounds: usize,
+}
+
+/// Multiview registration; see the module docs.
+pub(crate) fn register(t: &Targets, initial: &[Rigid], dists: &[f64], opts: &AlignOptions, progress: &dyn Progress) -> Result<Registration, RangeError> {
     let scans = t.scans;
     let n = scans.len();
     let anchor = opts.anchor;
@@ -364,7 +372,7 @@ pub(crate) fn register(t: &Targets, initial: &[Rigid], dists: &[f64], opts: &Ali
             poses[k] = initial[k];
         }
     }
-    Ok((poses, reports, pair_reports, rounds))
+    Ok(Registration { poses, reports, pairs: pair_reports, rounds })
 }
 
 /// Registers scan `k` against `against` from `start` (the others at
@@ -439,18 +447,11 @@ fn overlaps(t: &Targets, poses: &[Rigid], level: usize, r: f64, among: &[usize])
     let n = t.scans.len();
     let pairs: Vec<(usize, usize)> = among.iter().flat_map(|&a| among.iter().filter(move |&&b| b != a).map(move |&b| (a, b))).collect();
     let cov: Vec<f64> = pairs.par_iter().map(|&(a, b)| coverage(t, a, level.min(t.scans[a].levels.len() - 1), &[b], poses, r)).collect();
-    let mut m = vec![vec![0.0; n]; n];
+    let mut one_way = vec![vec![0.0; n]; n];
     for (&(a, b), &c) in pairs.iter().zip(&cov) {
-        m[a][b] = c;
+        one_way[a][b] = c;
     }
-    for a in 0..n {
-        for b in 0..a {
-            let o = m[a][b].min(m[b][a]);
-            m[a][b] = o;
-            m[b][a] = o;
-        }
-    }
-    m
+    (0..n).map(|a| (0..n).map(|b| one_way[a][b].min(one_way[b][a])).collect()).collect()
 }
 
 /// Scan `b`'s pairs with scan `a` at `poses` (the pair's optimum) as
@@ -520,6 +521,7 @@ fn model_center(scans: &[crate::ScanMesh], poses: &[Rigid], placed: &[bool]) -> 
 /// overlap determines it. Each pose is updated as
 /// `p ↦ R(ω)(p − c) + c + t` on the left.
 /// Stops when no mate moves by more than `tol` in an iteration.
+#[allow(clippy::too_many_arguments)]
 fn solve(poses: &mut [Rigid], mates: &[Mates], index: &[usize], anchor: usize, placed: &[bool], c: V3, tol: f64, tangential: f64) {
     let n = poses.len();
     let mut var = vec![usize::MAX; n];
