@@ -93,8 +93,8 @@ pub struct AlignArgs {
     /// Index (0-based, in set order) of the scan that stays fixed.
     #[arg(long, default_value_t = 0)]
     pub anchor: usize,
-    /// Register every scan to the anchor alone instead of to the growing
-    /// model of all registered scans.
+    /// With --global off: register every scan to the anchor alone instead
+    /// of to the growing model of all registered scans.
     #[arg(long)]
     pub anchor_only: bool,
     /// Pair one way only (source samples to target surfaces), as Turk and
@@ -111,13 +111,40 @@ pub struct AlignArgs {
     /// thinning of the scan's samples).
     #[arg(long, default_value_t = AlignOptions::default().max_samples)]
     pub max_samples: usize,
-    /// Passes re-registering every scan against all others at the final
-    /// distance, after the growing model is complete.
+    /// With --global off: passes re-registering every scan against all
+    /// others at the final distance, after the growing model is complete.
     #[arg(long, default_value_t = AlignOptions::default().refine_passes)]
     pub refine_passes: usize,
+    /// Multiview registration: every pairwise alignment judged (converged,
+    /// overlap, RMS against its peers'; failures retried, then reported),
+    /// scans joined along the largest overlaps, then all overlapping pairs
+    /// aligned and every pose solved at once, which closes rings of scans.
+    /// `off`: the growing model in one pass plus --refine-passes (mint's
+    /// registration before; --anchor-only applies only here).
+    #[arg(long, value_enum, default_value_t = OnOff::On)]
+    pub global: OnOff,
+    /// Multiview: two scans are partners when each has at least this
+    /// fraction of its samples within the pairing distance of the other.
+    #[arg(long, default_value_t = AlignOptions::default().min_overlap)]
+    pub min_overlap: f64,
+    /// Multiview: a pairwise alignment fails when its RMS (relative to the
+    /// sampling distance) is more than this many times the median of its
+    /// peers'.
+    #[arg(long, default_value_t = AlignOptions::default().rms_factor)]
+    pub rms_factor: f64,
+    /// Multiview: rounds of (all pairwise alignments, global solve) at most;
+    /// they stop earlier once the poses stop moving.
+    #[arg(long, default_value_t = AlignOptions::default().global_rounds)]
+    pub global_rounds: usize,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OnOff {
+    On,
+    Off,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -259,6 +286,10 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
         tolerance: a.tolerance,
         max_samples: a.max_samples,
         refine_passes: a.refine_passes,
+        global: a.global == OnOff::On,
+        min_overlap: a.min_overlap,
+        rms_factor: a.rms_factor,
+        global_rounds: a.global_rounds,
         ..Default::default()
     };
     let initial: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
@@ -278,15 +309,43 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
     out.write(&a.out_set, SetFormat::from_path(&a.set))?;
     let secs = t.elapsed().as_secs_f64();
     if a.json {
-        let v = serde_json::json!({ "set": a.set.display().to_string(), "out_set": a.out_set.display().to_string(), "distance": r.distance, "start_distance": r.start_distance, "seconds": secs, "register_seconds": register_secs, "peak_heap_bytes": crate::alloc::peak_heap(), "scans": r.reports });
+        let v = serde_json::json!({ "set": a.set.display().to_string(), "out_set": a.out_set.display().to_string(), "global": opts.global, "distance": r.distance, "start_distance": r.start_distance, "seconds": secs, "register_seconds": register_secs, "peak_heap_bytes": crate::alloc::peak_heap(), "rounds": r.rounds, "scans": r.reports, "pairs": r.pairs });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
-        eprintln!("aligned {} scans of {} (d = {:.4e}, start {:.4e}) in {secs:.2}s -> {}", scans.len(), a.set.display(), r.distance, r.start_distance, a.out_set.display());
+        let how = if opts.global { format!("multiview, {} rounds", r.rounds) } else { "growing model".to_string() };
+        eprintln!("aligned {} scans of {} ({how}; d = {:.4e}, start {:.4e}) in {secs:.2}s -> {}", scans.len(), a.set.display(), r.distance, r.start_distance, a.out_set.display());
+        eprintln!("  {:<24} {:<10} {:>10} {:>6} {:>8} {:>6} {:>9}  partners", "scan", "status", "rms", "rms/s", "pairs", "iters", "moved deg");
         for s in &r.reports {
             match &s.status {
-                Status::Failed(why) => eprintln!("  {:<24} FAILED, left out: {why}", s.name),
-                st => eprintln!("  {:<24} {:<10} rms {:.4e}  pairs {:>7}  iterations {:>4}  moved {:.3} deg, {:.4e}", s.name, format!("{st:?}"), s.rms, s.pairs, s.iterations, s.moved_deg, s.moved),
+                Status::Failed(why) => eprintln!("  {:<24} FAILED, kept its initial pose and left out: {why}", s.name),
+                st => eprintln!(
+                    "  {:<24} {:<10} {:>10.4e} {:>6.3} {:>8} {:>6} {:>9.3}  {}{}",
+                    s.name,
+                    format!("{st:?}"),
+                    s.rms,
+                    s.rms_rel,
+                    s.pairs,
+                    s.iterations,
+                    s.moved_deg,
+                    s.partners.join(" "),
+                    if s.converged { "" } else { " (hit the iteration cap)" }
+                ),
             }
+        }
+        let rejected: Vec<String> = r
+            .pairs
+            .iter()
+            .filter_map(|p| match &p.status {
+                mint_range::multiview::PairStatus::Accepted => None,
+                mint_range::multiview::PairStatus::Failed(why) => Some(format!("  pair {} / {}: failed: {why}", p.a, p.b)),
+                mint_range::multiview::PairStatus::Inconsistent => Some(format!("  pair {} / {}: left out, inconsistent with the others (mates {:.3e} apart after the global solve)", p.a, p.b, p.residual)),
+            })
+            .collect();
+        if !r.pairs.is_empty() {
+            eprintln!("  {} pairwise alignments, {} accepted", r.pairs.len(), r.pairs.len() - rejected.len());
+        }
+        for l in rejected {
+            eprintln!("{l}");
         }
     }
     Ok(())

@@ -16,6 +16,9 @@
 //! - [`icp`]: `mint align` — constrained ICP (closest points on surfaces
 //!   within d, no boundary pairs, weighted Horn quaternion, hierarchy with d
 //!   halving, anchor or growing model);
+//! - [`multiview`]: `mint align`'s default — every pairwise alignment
+//!   judged, scans joined along the largest overlaps, all overlapping
+//!   pairs aligned and every pose solved at once (Pulli 1999);
 //! - [`zipper`]: `mint zipper` — redundancy removal, trimming, stitching
 //!   along the seams, small-triangle removal ([`mesh_ops`]), then
 //!   [`consensus`] geometry;
@@ -36,6 +39,7 @@ pub mod grid_merge;
 pub mod icp;
 pub mod mesh_ops;
 pub mod merge_file;
+pub mod multiview;
 pub mod range_image;
 pub mod raycast;
 pub mod scan_mesh;
@@ -61,6 +65,8 @@ pub mod phases {
     pub const LOAD_SCANS: mint_core::progress::Phase = mint_core::progress::Phase::named("load scans");
     /// Registering scans by ICP (units: scans).
     pub const REGISTER: mint_core::progress::Phase = mint_core::progress::Phase::named("register");
+    /// Multiview refinement: pairwise alignments of one round (units: pairs).
+    pub const REFINE: mint_core::progress::Phase = mint_core::progress::Phase::named("refine");
     /// Zippering scans into the model (units: scans).
     pub const ZIPPER: mint_core::progress::Phase = mint_core::progress::Phase::named("zipper");
     /// Consensus geometry, two passes over the scans (units: scan passes).

@@ -135,8 +135,10 @@ fn the_bunny_conf_loads_and_bad_sets_say_what_is_wrong() {
 /// bun_zipper.ply within 0.2% of the diagonal on average. (The grid merge's
 /// mean distance the other way is larger, about 0.3%, and only printed:
 /// bun_zipper.ply is open at the base, which no scan saw, and the merge
-/// closes it. It runs at 2M cells, 1.1 mm: at 1M cells, 1.45 mm, a thin
-/// part at the back of the head comes out as a second component.)
+/// closes it. It runs at 3M cells, 0.99 mm: at 1M cells, 1.45 mm, a thin
+/// part at the back of the head comes out as a second component, and at
+/// 2M or 2.5M cells it does or not depending on poses that differ by a
+/// tenth of a degree — at 2.5M even from `bun.conf` itself.)
 #[test]
 fn bunny_perturbed_scans_register_then_zipper_and_grid_merge() {
     use mint_range::grid_merge::{grid_merge, GridMergeOptions};
@@ -153,9 +155,12 @@ fn bunny_perturbed_scans_register_then_zipper_and_grid_merge() {
         let (deg, sh) = pose_errors(&truth[i], &r.poses[i], center);
         eprintln!("{:<12} {:?} rms {:.3e} pairs {} | start {deg0:.3}° {:.3} mm -> {deg:.3}° {:.3} mm", e.file, r.reports[i].status, r.reports[i].rms, r.reports[i].pairs, sh0 * 1e3, sh * 1e3);
     }
+    // The growing model (`global: false`) ends this start's worst scan
+    // 0.215° / 0.13 mm off; multiview registration 0.226° / 0.15 mm
+    // (bun180.ply; over five other starts 0.240° before, 0.225° after).
     for (i, e) in set.entries.iter().enumerate() {
         let (deg, sh) = pose_errors(&truth[i], &r.poses[i], center);
-        assert!(deg < 0.5 && sh < 0.5e-3, "{}: {deg}° {sh} m", e.file);
+        assert!(deg < 0.3 && sh < 0.3e-3, "{}: {deg}° {sh} m", e.file);
     }
     let poses = r.poses;
     let (rp, rf) = read_bun_zipper(&d);
@@ -170,7 +175,7 @@ fn bunny_perturbed_scans_register_then_zipper_and_grid_merge() {
     eprintln!("zipper to bun_zipper: mean {:.4e} ({:.4}% of diag), rms {:.4e}, max {:.4e}", dist.mean, 100.0 * dist.mean_rel, dist.rms, dist.max);
     assert!(dist.mean_rel < 0.002, "{}", dist.mean_rel);
 
-    let (pos, faces, rep) = grid_merge(&scans, &poses, &GridMergeOptions { size: mint_core::GridSize::Cells(2_000_000), ..Default::default() }).unwrap();
+    let (pos, faces, rep) = grid_merge(&scans, &poses, &GridMergeOptions { size: mint_core::GridSize::Cells(3_000_000), ..Default::default() }).unwrap();
     eprintln!("{rep:?}");
     let c = mint_mesh::check(&pos, &faces);
     assert!(c.watertight && c.components == 1 && c.genera == vec![0] && c.signed_volume > 0.0 && c.inconsistently_oriented_edges == 0, "{c:?}");
