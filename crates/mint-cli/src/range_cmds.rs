@@ -5,7 +5,8 @@
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use mint_range::icp::{align_with, AlignOptions, Metric, Status, Strategy};
+use mint_range::align::align_with;
+use mint_range::icp::{AlignOptions, Metric, Status, Strategy};
 use mint_range::synth::{perturb, synthesize, SynthOptions};
 use mint_range::depth_grid::{write_depth_grid, GridEncoding};
 use mint_range::grid_merge::GridMergeOptions;

@@ -14,7 +14,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use mint_range::geom::{add, dist, scale, sub, Rigid, V3};
-use mint_range::icp::{align, AlignOptions};
+use mint_range::align::align;
+use mint_range::icp::AlignOptions;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();

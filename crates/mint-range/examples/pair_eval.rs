@@ -2,7 +2,8 @@
 //! the second moved by an exact perturbation; prints the relative error.
 //! cargo run --release -p mint-range --example pair_eval -- SET.conf DEG MM SEEDS K [start_distance]
 use mint_range::geom::{add, dist, scale, sub, Rigid, V3};
-use mint_range::icp::{align, AlignOptions, Strategy};
+use mint_range::align::align;
+use mint_range::icp::{AlignOptions, Strategy};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();

@@ -60,10 +60,10 @@
 //! failed and left out; the run continues.
 
 use crate::error::RangeError;
-use crate::geom::{add, cross, dist, dot, normalize, scale, sub, tri_normal, Rigid, V3};
+use crate::geom::{add, cross, dist, dot, scale, sub, Rigid, V3};
 
 use crate::scan_mesh::ScanMesh;
-use mint_core::progress::{NoProgress, Progress};
+use mint_core::progress::Progress;
 use mint_mesh::TriangleBvh;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -250,21 +250,6 @@ impl ScanReport {
     }
 }
 
-/// The result of [`align`]: a pose per scan (failed scans keep their
-/// initial pose) and a report per scan.
-#[derive(Debug, Clone)]
-pub struct AlignResult {
-    pub poses: Vec<Rigid>,
-    pub reports: Vec<ScanReport>,
-    /// The final and starting pairing distances used.
-    pub distance: f64,
-    pub start_distance: f64,
-    /// Multiview only: every pairwise alignment tried in the last round,
-    /// and the rounds run.
-    pub pairs: Vec<crate::multiview::PairReport>,
-    pub rounds: usize,
-}
-
 /// One correspondence, in world coordinates.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Pair {
@@ -289,62 +274,25 @@ pub(crate) struct Targets<'a> {
     face_normals: &'a [Vec<V3>],
 }
 
-impl Targets<'_> {
+impl<'a> Targets<'a> {
+    /// Scans with their BVHs and face normals (built by the caller).
+    pub(crate) fn new(scans: &'a [ScanMesh], symmetric: bool, max_samples: usize, bvhs: &'a [TriangleBvh], face_normals: &'a [Vec<V3>]) -> Targets<'a> {
+        Targets { scans, symmetric, max_samples, bvhs, face_normals }
+    }
+
     /// The same scans, pairing at most `max_samples` per direction.
     pub(crate) fn with_max_samples(&self, max_samples: usize) -> Targets<'_> {
         Targets { scans: self.scans, symmetric: self.symmetric, max_samples, bvhs: self.bvhs, face_normals: self.face_normals }
     }
 }
 
-/// Registers `scans` from the `initial` poses; see the module docs.
-/// Errors: mismatched lengths, an anchor out of range, bad distances.
-pub fn align(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions) -> Result<AlignResult, RangeError> {
-    align_with(scans, initial, opts, &NoProgress)
-}
-
-/// [`align`], reporting each registration of a scan (phase
-/// [`crate::phases::REGISTER`]; the refine passes count too) and stopping with
-/// [`RangeError::Cancelled`] between them when asked.
-pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, progress: &dyn Progress) -> Result<AlignResult, RangeError> {
-    if scans.len() != initial.len() {
-        return Err(RangeError::option("initial", format!("{} poses for {} scans", initial.len(), scans.len())));
-    }
-    if opts.anchor >= scans.len() {
-        return Err(RangeError::option("anchor", format!("scan {} does not exist ({} scans)", opts.anchor, scans.len())));
-    }
-    let s_max = scans.iter().map(|s| s.sampling).fold(0.0, f64::max);
-    let d = opts.distance.unwrap_or(2.0 * s_max);
-    let d0 = opts.start_distance.unwrap_or(8.0 * d);
-    if !(d.is_finite() && d > 0.0 && d0.is_finite() && d0 >= d) {
-        return Err(RangeError::option("distance", format!("need 0 < distance ({d}) <= start distance ({d0})")));
-    }
-    let dists = distance_levels(d0, d);
-    let bvhs: Vec<TriangleBvh> = scans
-        .iter()
-        .map(|s| TriangleBvh::new(&s.positions, &s.faces).map_err(|e| RangeError::Mesh { what: s.name.clone(), source: e }))
-        .collect::<Result<_, _>>()?;
-    let face_normals: Vec<Vec<V3>> = scans
-        .iter()
-        .map(|s| {
-            if opts.global {
-                // The surface normal for point-to-plane steps: the mean of
-                // the corners' vertex normals. A face's own normal carries
-                // the depth noise of its three corners; on the synthetic
-                // scene (noise 4% of the sample spacing) it biased the
-                // point-to-plane minimum of a pair by 0.1–0.3°, and the
-                // point-to-point finish, flat there, does not undo it.
-                s.faces.iter().map(|f| normalize(add(add(s.normals[f[0] as usize], s.normals[f[1] as usize]), s.normals[f[2] as usize]))).collect()
-            } else {
-                s.faces.iter().map(|f| normalize(tri_normal(s.positions[f[0] as usize], s.positions[f[1] as usize], s.positions[f[2] as usize]))).collect()
-            }
-        })
-        .collect();
-    let targets = Targets { scans, symmetric: opts.symmetric, max_samples: opts.max_samples, bvhs: &bvhs, face_normals: &face_normals };
-    if opts.global {
-        let mut r = crate::multiview::register(&targets, initial, &dists, opts, progress)?;
-        moved(scans, initial, &r.poses, &mut r.reports);
-        return Ok(AlignResult { poses: r.poses, reports: r.reports, distance: d, start_distance: d0, pairs: r.pairs, rounds: r.rounds });
-    }
+/// The registration of mint before multiview (`--global off`): the
+/// strategies of the module docs, on `targets` from the `initial` poses with
+/// pairing distances `dists`. Returns the poses (failed scans keep their
+/// initial one) and a report per scan.
+pub(crate) fn register_sequential(targets: &Targets, initial: &[Rigid], dists: &[f64], opts: &AlignOptions, progress: &dyn Progress) -> Result<(Vec<Rigid>, Vec<ScanReport>), RangeError> {
+    let scans = targets.scans;
+    let dists = dists.to_vec();
     let mut poses = initial.to_vec();
     let mut reports: Vec<ScanReport> = scans.iter().map(|s| ScanReport::new(&s.name)).collect();
     reports[opts.anchor].status = Status::Anchor;
@@ -359,7 +307,7 @@ pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, pr
     match opts.strategy {
         Strategy::Anchor => {
             for &i in &pending {
-                if !register_one(&targets, i, &[opts.anchor], &mut poses, &dists, opts, &mut reports[i]) {
+                if !register_one(targets, i, &[opts.anchor], &mut poses, &dists, opts, &mut reports[i]) {
                     poses[i] = initial[i];
                 }
                 step()?;
@@ -368,7 +316,7 @@ pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, pr
         Strategy::Growing => {
             while !pending.is_empty() {
                 // The pending scan that overlaps the model most joins next.
-                let counts: Vec<usize> = pending.iter().map(|&i| pairs_with(&targets, i, 0, &registered, &poses, dists[0], false).len()).collect();
+                let counts: Vec<usize> = pending.iter().map(|&i| pairs_with(targets, i, 0, &registered, &poses, dists[0], false).len()).collect();
                 let (k, &best) = counts.iter().enumerate().max_by_key(|&(k, &c)| (c, usize::MAX - k)).expect("pending is not empty");
                 if best < required(&scans[pending[k]], 0, opts.min_pairs, opts.max_samples) {
                     for &i in &pending {
@@ -382,7 +330,7 @@ pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, pr
                     break;
                 }
                 let i = pending.remove(k);
-                if register_one(&targets, i, &registered, &mut poses, &dists, opts, &mut reports[i]) {
+                if register_one(targets, i, &registered, &mut poses, &dists, opts, &mut reports[i]) {
                     registered.push(i);
                 } else {
                     poses[i] = initial[i];
@@ -399,7 +347,7 @@ pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, pr
                     let others: Vec<usize> = all.iter().copied().filter(|&j| j != i).collect();
                     let keep = poses[i];
                     let mut r = reports[i].clone();
-                    let ok = register_one(&targets, i, &others, &mut poses, fine, opts, &mut r);
+                    let ok = register_one(targets, i, &others, &mut poses, fine, opts, &mut r);
                     step()?;
                     if !ok {
                         poses[i] = keep;
@@ -413,17 +361,7 @@ pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, pr
         }
     }
     progress.finish();
-    moved(scans, initial, &poses, &mut reports);
-    Ok(AlignResult { poses, reports, distance: d, start_distance: d0, pairs: Vec::new(), rounds: 0 })
-}
-
-/// Fills in how far each scan moved from its initial pose.
-fn moved(scans: &[ScanMesh], initial: &[Rigid], poses: &[Rigid], reports: &mut [ScanReport]) {
-    for (i, r) in reports.iter_mut().enumerate() {
-        let (deg, shift) = crate::geom::pose_error(&initial[i], &poses[i], &scans[i].bbox_corners());
-        r.moved_deg = deg;
-        r.moved = shift;
-    }
+    Ok((poses, reports))
 }
 
 /// Pairs needed at a hierarchy level: `min_pairs` scaled by the level's

@@ -31,6 +31,7 @@
 //! [`scanset`], [`range_image`], [`depth_grid`] and [`scan_mesh::load_scan`] touch files,
 //! through mint-io's atomic writers.
 
+pub mod align;
 pub mod consensus;
 pub mod depth_grid;
 pub mod error;

@@ -24,7 +24,8 @@
 mod common;
 
 use mint_range::geom::{add, dist, scale, sub, Rigid, V3};
-use mint_range::icp::{align, AlignOptions, Status};
+use mint_range::align::align;
+use mint_range::icp::{AlignOptions, Status};
 use mint_range::multiview::PairStatus;
 use mint_range::ScanMesh;
 

@@ -5,7 +5,8 @@
 mod common;
 
 use common::*;
-use mint_range::icp::{align, AlignOptions, Status};
+use mint_range::align::align;
+use mint_range::icp::{AlignOptions, Status};
 
 /// The acceptance test of registration: eight noisy views, every one but
 /// the anchor moved by up to 5° and 5% of the diagonal, three different
