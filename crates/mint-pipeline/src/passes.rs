@@ -254,15 +254,23 @@ pub(crate) fn discretize_direct(
                 let mut recs = Vec::with_capacity(1024);
                 let mut volume = 0.0;
                 let visited = match (grid.slab_axis, xf) {
-                    (0, None) => visit_chunk::<0>(records, a, b, local, None, nb, &mut recs, &mut volume),
-                    (1, None) => visit_chunk::<1>(records, a, b, local, None, nb, &mut recs, &mut volume),
-                    (_, None) => visit_chunk::<2>(records, a, b, local, None, nb, &mut recs, &mut volume),
-                    (_, Some(t)) => visit_chunk::<3>(records, a, b, local, Some(t), nb, &mut recs, &mut volume),
+                    (0, None) => visit_chunk::<0>(records, a, b, local, None, nb, &mut recs, &mut volume, progress),
+                    (1, None) => visit_chunk::<1>(records, a, b, local, None, nb, &mut recs, &mut volume, progress),
+                    (_, None) => visit_chunk::<2>(records, a, b, local, None, nb, &mut recs, &mut volume, progress),
+                    (_, Some(t)) => visit_chunk::<3>(records, a, b, local, Some(t), nb, &mut recs, &mut volume, progress),
                 };
-                if let Err(e) = visited {
-                    failed.lock().unwrap().get_or_insert(e.into());
-                    stop.store(true, Ordering::Relaxed);
-                    return;
+                match visited {
+                    Ok(true) => {}
+                    Ok(false) => {
+                        failed.lock().unwrap().get_or_insert(PipelineError::Cancelled);
+                        stop.store(true, Ordering::Relaxed);
+                        return;
+                    }
+                    Err(e) => {
+                        failed.lock().unwrap().get_or_insert(e.into());
+                        stop.store(true, Ordering::Relaxed);
+                        return;
+                    }
                 }
                 progress.advance(b - a);
                 if rec_tx.send((c as usize, recs, volume)).is_err() {
@@ -308,11 +316,24 @@ fn visit_chunk<const S: usize>(
     nb: u32,
     recs: &mut Vec<Intercept>,
     volume: &mut f64,
-) -> Result<(), mint_io::Error> {
+    progress: &dyn Progress,
+) -> Result<bool, mint_io::Error> {
+    // One visitor for the whole chunk (one running volume sum, so the same
+    // bits), walked in steps so that a cancellation is seen within a step
+    // even when every corner is a page fault.
+    const STEP: u64 = 4096;
     let mut visitor = Chunk::<S> { local, xf, nb, recs, volume: 0.0 };
-    records.visit(a, b, &mut visitor)?;
+    let mut at = a;
+    while at < b {
+        if at > a && progress.cancelled() {
+            return Ok(false);
+        }
+        let to = (at + STEP).min(b);
+        records.visit(at, to, &mut visitor)?;
+        at = to;
+    }
     *volume = visitor.volume;
-    Ok(())
+    Ok(true)
 }
 
 /// What [`visit_chunk`] does with each triangle.
