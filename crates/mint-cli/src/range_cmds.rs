@@ -7,11 +7,11 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use mint_range::align::align_with;
 use mint_range::icp::{AlignOptions, Metric, Status, Strategy};
-use mint_range::synth::{perturb, synthesize, SynthOptions};
-use mint_range::depth_grid::{write_depth_grid, GridEncoding};
+use mint_range::synth::SynthOptions;
+use mint_range::depth_grid::GridEncoding;
 use mint_range::grid_merge::GridMergeOptions;
 use mint_range::zipper::ZipperOptions;
-use mint_range::{load_set, MeshOptions, ScanEntry, ScanMesh, ScanSet, SetFormat};
+use mint_range::{load_set, MeshOptions, ScanEntry, ScanSet, SetFormat};
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -201,67 +201,27 @@ pub struct ZipperArgs {
 
 pub fn cmd_scan(a: ScanArgs) -> Result<()> {
     let (positions, faces) = crate::jobs::load_mesh(&a.mesh)?;
-    let opts = SynthOptions { views: a.views, resolution: a.resolution, noise: a.noise, seed: a.seed, max_angle_deg: a.max_angle };
-    let scans = synthesize(&positions, &faces, &opts).with_context(|| format!("scanning {}", a.mesh.display()))?;
-    // Nothing written yet: refuse a run that would overwrite its input.
-    if a.out_dir.exists() && !a.out_dir.is_dir() {
-        bail!("{}: is not a directory; give a directory for the scans", a.out_dir.display());
-    }
-    let ext = if a.image_format == ImageFormat::Ply { "ply" } else { "rgrid" };
-    for name in ["scans.conf".to_string(), "scans-perturbed.conf".to_string()].into_iter().chain(scans.iter().flat_map(|sc| [format!("{}.{ext}", sc.name), format!("{}.mesh.ply", sc.name)])) {
-        crate::paths::check_not_input(&a.out_dir.join(name), &[&a.mesh])?;
-    }
-    std::fs::create_dir_all(&a.out_dir).with_context(|| format!("{}: creating the output directory", a.out_dir.display()))?;
-    let mut set = ScanSet::new(&a.out_dir);
-    let comments = [format!("mint scan of {}", a.mesh.display())];
-    let mut samples = 0;
-    for sc in &scans {
-        let file = match a.image_format {
-            ImageFormat::Ply => {
-                let file = format!("{}.ply", sc.name);
-                sc.image.write_ply(&a.out_dir.join(&file), &comments)?;
-                file
-            }
-            ImageFormat::Rgrid | ImageFormat::RgridAscii => {
-                let file = format!("{}.rgrid", sc.name);
-                let enc = if a.image_format == ImageFormat::Rgrid { GridEncoding::BinaryLittleEndian } else { GridEncoding::Ascii };
-                write_depth_grid(&a.out_dir.join(&file), &sc.image, enc, &comments)?;
-                file
-            }
-        };
-        samples += sc.image.points.len();
-        if let Ok(m) = ScanMesh::from_range_image(&sc.name, &sc.image, &MeshOptions::default()) {
-            let mpath = a.out_dir.join(format!("{}.mesh.ply", sc.name));
-            let mut w = mint_io::MeshWriter::create(&mpath, mint_io::Format::Ply, Default::default())?;
-            for p in &m.positions {
-                w.write_vertex(*p)?;
-            }
-            for f in &m.faces {
-                w.write_face(*f)?;
-            }
-            w.finish()?;
-        }
-        set.entries.push(ScanEntry { file, path: PathBuf::new(), pose: sc.pose, line: 0 });
-    }
-    set.write(&a.out_dir.join("scans.conf"), SetFormat::Conf)?;
-    if a.perturb_deg > 0.0 || a.perturb_frac > 0.0 {
-        let (lo, hi) = mint_range::scan_mesh::bbox(faces.iter().flatten().map(|&i| positions[i as usize]));
-        let c = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
-        let diag = mint_range::geom::dist(lo, hi);
-        let mut rng = mint_mesh::SplitMix64::new(a.seed ^ 0x5eed);
-        let mut p = set.clone();
-        for e in p.entries.iter_mut().skip(1) {
-            e.pose = perturb(&e.pose, c, a.perturb_deg, a.perturb_frac * diag, &mut rng);
-        }
-        p.write(&a.out_dir.join("scans-perturbed.conf"), SetFormat::Conf)?;
-    }
+    let format = match a.image_format {
+        ImageFormat::Ply => mint_range::scan_file::ImageFormat::Ply,
+        ImageFormat::Rgrid => mint_range::scan_file::ImageFormat::Grid(GridEncoding::BinaryLittleEndian),
+        ImageFormat::RgridAscii => mint_range::scan_file::ImageFormat::Grid(GridEncoding::Ascii),
+    };
+    let opts = mint_range::scan_file::ScanFileOptions {
+        synth: SynthOptions { views: a.views, resolution: a.resolution, noise: a.noise, seed: a.seed, max_angle_deg: a.max_angle },
+        format,
+        perturb_deg: a.perturb_deg,
+        perturb_frac: a.perturb_frac,
+    };
+    // Nothing is written where it would overwrite the input.
+    let not_input = |p: &std::path::Path| crate::paths::check_not_input(p, &[&a.mesh]).map_err(|e| e.to_string().trim_start_matches(&format!("{}: ", p.display())).to_string());
+    let s = mint_range::scan_file::scan_file(&a.mesh, &positions, &faces, &a.out_dir, &opts, &not_input).with_context(|| format!("scanning {}", a.mesh.display()))?;
     eprintln!(
         "scanned {} from {} views: {} samples -> {} (scans.conf{})",
         a.mesh.display(),
-        scans.len(),
-        samples,
+        s.views,
+        s.samples,
         a.out_dir.display(),
-        if a.perturb_deg > 0.0 || a.perturb_frac > 0.0 { ", scans-perturbed.conf" } else { "" }
+        if s.perturbed { ", scans-perturbed.conf" } else { "" }
     );
     Ok(())
 }

@@ -43,6 +43,10 @@ pub enum RangeError {
     /// A mesh handed to the library is inconsistent (bad indices...).
     #[error("{what}: {source}")]
     Mesh { what: String, source: mint_mesh::MeshError },
+    /// An output path that cannot be used: not a directory where one is
+    /// needed, or refused by the caller (it is an input).
+    #[error("{}: {message}", .path.display())]
+    Output { path: PathBuf, message: String },
     /// The user asked to stop (Ctrl-C); nothing was written.
     #[error("interrupted")]
     Cancelled,

@@ -43,6 +43,7 @@ pub mod merge_file;
 pub mod multiview;
 pub mod range_image;
 pub mod raycast;
+pub mod scan_file;
 pub mod scan_mesh;
 pub mod scanset;
 pub mod source;
