@@ -3,15 +3,15 @@
 //! to mint-range. Set files are Stanford `.conf` or MeshLab `.aln`, by
 //! extension; scan paths inside them are relative to the set file.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use mint_range::align::align_with;
+use mint_range::align::align_file;
 use mint_range::icp::{AlignOptions, Metric, Status, Strategy};
 use mint_range::synth::SynthOptions;
 use mint_range::depth_grid::GridEncoding;
 use mint_range::grid_merge::GridMergeOptions;
 use mint_range::zipper::ZipperOptions;
-use mint_range::{load_set, MeshOptions, ScanEntry, ScanSet, SetFormat};
+use mint_range::ScanSet;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -227,12 +227,10 @@ pub fn cmd_scan(a: ScanArgs) -> Result<()> {
 }
 
 pub fn cmd_align(a: AlignArgs) -> Result<()> {
-    let t = std::time::Instant::now();
     let set = ScanSet::read(&a.set)?;
     let mut inputs: Vec<&std::path::Path> = vec![&a.set];
     inputs.extend(set.entries.iter().map(|e| e.path.as_path()));
     crate::paths::check_output(&a.out_set, &inputs)?;
-    let scans = load_set(&set, &a.set, &MeshOptions::default())?;
     let opts = AlignOptions {
         distance: a.distance,
         start_distance: a.start_distance,
@@ -253,28 +251,14 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
         global_rounds: a.global_rounds,
         ..Default::default()
     };
-    let initial: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
-    let t_register = std::time::Instant::now();
-    let r = align_with(&scans, &initial, &opts, &crate::progress::Bars::new(a.json))?;
-    let register_secs = t_register.elapsed().as_secs_f64();
-    let mut out = set.clone();
-    out.entries.clear();
-    for (i, e) in set.entries.iter().enumerate() {
-        if !matches!(r.reports[i].status, Status::Failed(_)) {
-            out.entries.push(ScanEntry { pose: r.poses[i], ..e.clone() });
-        }
-    }
-    if out.entries.is_empty() {
-        bail!("{}: no scan could be registered", a.set.display());
-    }
-    out.write(&a.out_set, SetFormat::from_path(&a.set))?;
-    let secs = t.elapsed().as_secs_f64();
+    let s = align_file(&a.set, &a.out_set, &opts, &crate::progress::Bars::new(a.json))?;
+    let (r, secs, register_secs) = (&s.result, s.seconds, s.register_seconds);
     if a.json {
         let v = serde_json::json!({ "set": a.set.display().to_string(), "out_set": a.out_set.display().to_string(), "global": opts.global, "distance": r.distance, "start_distance": r.start_distance, "seconds": secs, "register_seconds": register_secs, "peak_heap_bytes": crate::alloc::peak_heap(), "rounds": r.rounds, "scans": r.reports, "pairs": r.pairs });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
         let how = if opts.global { format!("multiview, {} rounds", r.rounds) } else { "growing model".to_string() };
-        eprintln!("aligned {} scans of {} ({how}; d = {:.4e}, start {:.4e}) in {secs:.2}s -> {}", scans.len(), a.set.display(), r.distance, r.start_distance, a.out_set.display());
+        eprintln!("aligned {} scans of {} ({how}; d = {:.4e}, start {:.4e}) in {secs:.2}s -> {}", s.scans, a.set.display(), r.distance, r.start_distance, a.out_set.display());
         eprintln!("  {:<24} {:<10} {:>10} {:>6} {:>8} {:>6} {:>9}  partners", "scan", "status", "rms", "rms/s", "pairs", "iters", "moved deg");
         for s in &r.reports {
             match &s.status {

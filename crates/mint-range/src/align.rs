@@ -1,4 +1,5 @@
-//! `mint align` as a library call: [`align`] checks the options, builds
+//! `mint align` as a library call: [`align_file`] reads a scan set, aligns
+//! it and writes the refined set; [`align`] checks the options, builds
 //! what pairing needs (a BVH and surface normals per scan, the pairing
 //! distances), then registers the scans by multiview ([`crate::multiview`],
 //! the default) or by the sequential strategies of [`crate::icp`]
@@ -7,9 +8,11 @@
 
 use crate::error::RangeError;
 use crate::geom::{add, normalize, tri_normal, Rigid, V3};
-use crate::icp::{distance_levels, register_sequential, AlignOptions, ScanReport, Targets};
+use crate::icp::{distance_levels, register_sequential, AlignOptions, ScanReport, Status, Targets};
 use crate::multiview::{register, PairReport};
-use crate::scan_mesh::ScanMesh;
+use crate::scan_mesh::{load_set, MeshOptions, ScanMesh};
+use crate::scanset::{ScanEntry, ScanSet, SetFormat};
+use std::path::Path;
 use mint_core::progress::{NoProgress, Progress};
 use mint_mesh::TriangleBvh;
 
@@ -90,4 +93,41 @@ fn moved(scans: &[ScanMesh], initial: &[Rigid], poses: &[Rigid], reports: &mut [
         r.moved_deg = deg;
         r.moved = shift;
     }
+}
+
+/// What [`align_file`] did.
+#[derive(Debug, Clone)]
+pub struct AlignFileSummary {
+    pub result: AlignResult,
+    pub scans: usize,
+    /// Seconds in all, and in registration alone.
+    pub seconds: f64,
+    pub register_seconds: f64,
+}
+
+/// Reads the scan set `set_path` (`.conf` or `.aln`), registers its scans
+/// from their poses ([`align_with`]) and writes the registered ones, with
+/// their refined poses, to `out_set` in the input's convention (scans that
+/// failed are left out and reported). Fails when no scan could be
+/// registered.
+pub fn align_file(set_path: &Path, out_set: &Path, opts: &AlignOptions, progress: &dyn Progress) -> Result<AlignFileSummary, RangeError> {
+    let t = std::time::Instant::now();
+    let set = ScanSet::read(set_path)?;
+    let scans = load_set(&set, set_path, &MeshOptions::default())?;
+    let initial: Vec<Rigid> = set.entries.iter().map(|e| e.pose).collect();
+    let t_register = std::time::Instant::now();
+    let result = align_with(&scans, &initial, opts, progress)?;
+    let register_seconds = t_register.elapsed().as_secs_f64();
+    let mut out = set.clone();
+    out.entries.clear();
+    for (i, e) in set.entries.iter().enumerate() {
+        if !matches!(result.reports[i].status, Status::Failed(_)) {
+            out.entries.push(ScanEntry { pose: result.poses[i], ..e.clone() });
+        }
+    }
+    if out.entries.is_empty() {
+        return Err(RangeError::Output { path: set_path.to_path_buf(), message: "no scan could be registered".into() });
+    }
+    out.write(out_set, SetFormat::from_path(set_path))?;
+    Ok(AlignFileSummary { result, scans: scans.len(), seconds: t.elapsed().as_secs_f64(), register_seconds })
 }
