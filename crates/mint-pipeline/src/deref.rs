@@ -29,7 +29,7 @@
 //! otherwise; the summary says which ran and why.
 
 use crate::error::PipelineError;
-use crate::passes::{discretize_slice, LocalMap, CHUNK_TRIANGLES};
+use crate::passes::{discretize_slice, write_chunks, LocalMap, CHUNK_TRIANGLES};
 use crate::progress::{Phase, Progress};
 use mint_core::grid::Grid;
 use mint_core::primitives::Transform;
@@ -656,20 +656,7 @@ fn assemble<R: Resolved>(
             });
         }
         drop(tx);
-        let volumes = &mut volumes;
-        let stop = &stop;
-        s.spawn(move || -> Result<(), StoreError> {
-            for (ci, recs, volume) in rx {
-                volumes[ci] = volume;
-                if let Err(e) = store.append(&recs) {
-                    stop.store(true, Ordering::Relaxed);
-                    return Err(e);
-                }
-            }
-            Ok(())
-        })
-        .join()
-        .expect("shard writer panicked")
+        write_chunks(rx, &mut volumes, store, &stop)
     });
     if let Some(e) = failed.into_inner().unwrap() {
         return Err(e);

@@ -279,20 +279,7 @@ pub(crate) fn discretize_direct(
             });
         }
         drop(rec_tx);
-        let volumes = &mut volumes;
-        let stop = &stop;
-        s.spawn(move || -> Result<(), StoreError> {
-            for (seq, recs, volume) in rec_rx {
-                volumes[seq] = volume;
-                if let Err(e) = store.append(&recs) {
-                    stop.store(true, Ordering::Relaxed);
-                    return Err(e);
-                }
-            }
-            Ok(())
-        })
-        .join()
-        .expect("shard writer panicked")
+        write_chunks(rec_rx, &mut volumes, store, &stop)
     });
     if let Some(e) = failed.into_inner().unwrap() {
         return Err(e);
@@ -300,6 +287,22 @@ pub(crate) fn discretize_direct(
     written?;
     progress.finish();
     Ok((end.saturating_sub(first), volumes))
+}
+
+/// The one shard writer of the parallel discretize passes (direct and
+/// sorted): appends each chunk's records to `store` as the workers send
+/// them (order does not matter: readers sort) and files each chunk's volume
+/// under its number. On a store error it raises `stop` for the workers and
+/// returns the error.
+pub(crate) fn write_chunks(rx: crossbeam_channel::Receiver<(usize, Vec<Intercept>, f64)>, volumes: &mut [f64], store: &mut ShardWriter, stop: &std::sync::atomic::AtomicBool) -> Result<(), StoreError> {
+    for (seq, recs, volume) in rx {
+        volumes[seq] = volume;
+        if let Err(e) = store.append(&recs) {
+            stop.store(true, Ordering::Relaxed);
+            return Err(e);
+        }
+    }
+    Ok(())
 }
 
 /// One chunk of the direct path: each triangle to local coordinates (the
