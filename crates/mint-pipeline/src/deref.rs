@@ -217,85 +217,86 @@ impl Record for Corner {
     }
 }
 
-/// A corner with its position, on its way to its face block. Two widths:
-/// `f32` when the file stores nothing wider (exact), `f64` otherwise.
-trait Resolved: Record + Sync {
-    fn new(corner: u32, p: [f64; 3]) -> Self;
-    fn corner(&self) -> u32;
-    fn pos(&self) -> [f64; 3];
+/// A coordinate as the sort stores it: `f32` when the file stores nothing
+/// wider (exact), `f64` otherwise.
+trait Coord: Copy + Send + Sync + 'static {
+    const SIZE: usize;
+    fn from_f64(x: f64) -> Self;
+    fn to_f64(self) -> f64;
+    fn put(self, out: &mut Vec<u8>);
+    fn get(b: &[u8]) -> Self;
 }
 
+impl Coord for f32 {
+    const SIZE: usize = 4;
+    #[inline]
+    fn from_f64(x: f64) -> Self {
+        x as f32
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        self as f64
+    }
+    #[inline]
+    fn put(self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+    #[inline]
+    fn get(b: &[u8]) -> Self {
+        f32::from_le_bytes(b[..4].try_into().unwrap())
+    }
+}
+
+impl Coord for f64 {
+    const SIZE: usize = 8;
+    #[inline]
+    fn from_f64(x: f64) -> Self {
+        x
+    }
+    #[inline]
+    fn to_f64(self) -> f64 {
+        self
+    }
+    #[inline]
+    fn put(self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+    #[inline]
+    fn get(b: &[u8]) -> Self {
+        f64::from_le_bytes(b[..8].try_into().unwrap())
+    }
+}
+
+/// A corner with its position, on its way to its face block.
 #[derive(Clone, Copy)]
-struct Resolved32 {
+struct Resolved<C: Coord> {
     corner: u32,
-    p: [f32; 3],
+    p: [C; 3],
 }
 
-impl Record for Resolved32 {
-    const SIZE: usize = 16;
+impl<C: Coord> Record for Resolved<C> {
+    const SIZE: usize = 4 + 3 * C::SIZE;
     #[inline]
     fn put(&self, out: &mut Vec<u8>) {
         out.extend_from_slice(&self.corner.to_le_bytes());
         for c in self.p {
-            out.extend_from_slice(&c.to_le_bytes());
+            c.put(out);
         }
     }
     #[inline]
     fn get(b: &[u8]) -> Self {
-        let f = |i: usize| f32::from_le_bytes(b[i..i + 4].try_into().unwrap());
-        Resolved32 { corner: u32::from_le_bytes(b[..4].try_into().unwrap()), p: [f(4), f(8), f(12)] }
+        Resolved { corner: u32::from_le_bytes(b[..4].try_into().unwrap()), p: [0, 1, 2].map(|k| C::get(&b[4 + k * C::SIZE..])) }
     }
 }
 
-impl Resolved for Resolved32 {
+impl<C: Coord> Resolved<C> {
     #[inline]
     fn new(corner: u32, p: [f64; 3]) -> Self {
-        Resolved32 { corner, p: p.map(|c| c as f32) }
-    }
-    #[inline]
-    fn corner(&self) -> u32 {
-        self.corner
+        Resolved { corner, p: p.map(C::from_f64) }
     }
     #[inline]
     fn pos(&self) -> [f64; 3] {
-        self.p.map(|c| c as f64)
-    }
-}
-
-#[derive(Clone, Copy)]
-struct Resolved64 {
-    corner: u32,
-    p: [f64; 3],
-}
-
-impl Record for Resolved64 {
-    const SIZE: usize = 28;
-    #[inline]
-    fn put(&self, out: &mut Vec<u8>) {
-        out.extend_from_slice(&self.corner.to_le_bytes());
-        for c in self.p {
-            out.extend_from_slice(&c.to_le_bytes());
-        }
-    }
-    #[inline]
-    fn get(b: &[u8]) -> Self {
-        let f = |i: usize| f64::from_le_bytes(b[i..i + 8].try_into().unwrap());
-        Resolved64 { corner: u32::from_le_bytes(b[..4].try_into().unwrap()), p: [f(4), f(12), f(20)] }
-    }
-}
-
-impl Resolved for Resolved64 {
-    #[inline]
-    fn new(corner: u32, p: [f64; 3]) -> Self {
-        Resolved64 { corner, p }
-    }
-    #[inline]
-    fn corner(&self) -> u32 {
-        self.corner
-    }
-    #[inline]
-    fn pos(&self) -> [f64; 3] {
-        self.p
+        self.p.map(C::to_f64)
     }
 }
 
@@ -367,14 +368,14 @@ pub(crate) fn discretize_sorted(
         .tempdir_in(spill_dir)
         .map_err(|source| PipelineError::Temp { path: spill_dir.to_path_buf(), op: "creating the dereference spill directory", source })?;
     if positions.exact_in_f32() {
-        run::<Resolved32>(faces, positions, grid, store, threads, progress, xf, tmp.path(), budget)
+        run::<f32>(faces, positions, grid, store, threads, progress, xf, tmp.path(), budget)
     } else {
-        run::<Resolved64>(faces, positions, grid, store, threads, progress, xf, tmp.path(), budget)
+        run::<f64>(faces, positions, grid, store, threads, progress, xf, tmp.path(), budget)
     }
 }
 
 #[allow(clippy::too_many_arguments)]
-fn run<R: Resolved>(
+fn run<C: Coord>(
     mut faces: Faces,
     positions: &VertexPositions,
     grid: &Grid,
@@ -391,7 +392,7 @@ fn run<R: Resolved>(
     // V_BITS). Face blocks are whole chunks: one chunk (its triangles stay
     // in cache while corners are placed) unless that makes more than
     // MAX_BUCKETS of them.
-    let per_vertex = if R::SIZE == 16 { 12 } else { 24 };
+    let per_vertex = 3 * C::SIZE as u64;
     let block_vertices = (BLOCK_BYTES / per_vertex).min(1 << V_BITS).max(nv.div_ceil(MAX_BUCKETS)).max(1);
     let vertex_blocks = nv.div_ceil(block_vertices).max(1);
     let chunk = CHUNK_TRIANGLES as u64;
@@ -503,7 +504,7 @@ fn run<R: Resolved>(
 
     // 2. Join each vertex block with its corners.
     let gather_budget = budget * 45 / 100 / threads as u64;
-    let gather: Vec<Mutex<Buckets<R>>> = (0..threads).map(|t| Mutex::new(Buckets::new(dir, &format!("positions-{t}"), face_blocks, gather_budget))).collect();
+    let gather: Vec<Mutex<Buckets<Resolved<C>>>> = (0..threads).map(|t| Mutex::new(Buckets::new(dir, &format!("positions-{t}"), face_blocks, gather_budget))).collect();
     progress.start(JOIN, vertex_blocks);
     {
         let next = AtomicUsize::new(0);
@@ -533,7 +534,7 @@ fn run<R: Resolved>(
                                 }
                                 for c in batch {
                                     let p = block[(c.v_block & ((1 << V_BITS) - 1)) as usize];
-                                    if let Err(e) = out.push((c.v_block >> V_BITS) as usize, R::new(c.corner, p)) {
+                                    if let Err(e) = out.push((c.v_block >> V_BITS) as usize, Resolved::<C>::new(c.corner, p)) {
                                         err = Some(e);
                                         return;
                                     }
@@ -567,7 +568,7 @@ fn run<R: Resolved>(
     for set in scatter {
         spilled += set.into_inner().unwrap().bytes_spilled();
     }
-    let gather: Vec<BucketReader<R>> = gather.into_iter().map(|m| m.into_inner().unwrap().finish()).collect();
+    let gather: Vec<BucketReader<Resolved<C>>> = gather.into_iter().map(|m| m.into_inner().unwrap().finish()).collect();
     spilled += gather.iter().map(|g| g.bytes_spilled()).sum::<u64>();
     let stats = SortStats { vertex_blocks, face_blocks: face_blocks as u64, bytes_spilled: spilled };
     if trace {
@@ -576,7 +577,7 @@ fn run<R: Resolved>(
     let t0 = std::time::Instant::now();
 
     // 3. Assemble face blocks and discretize them chunk by chunk.
-    let volumes = assemble::<R>(gather, &blocks, grid, store, threads, progress, xf, nfaces)?;
+    let volumes = assemble::<C>(gather, &blocks, grid, store, threads, progress, xf, nfaces)?;
     if trace {
         eprintln!("deref: assemble and discretize {:.2}s", t0.elapsed().as_secs_f64());
     }
@@ -584,8 +585,8 @@ fn run<R: Resolved>(
 }
 
 #[allow(clippy::too_many_arguments)]
-fn assemble<R: Resolved>(
-    gather: Vec<BucketReader<R>>,
+fn assemble<C: Coord>(
+    gather: Vec<BucketReader<Resolved<C>>>,
     blocks: &Blocks,
     grid: &Grid,
     store: &mut ShardWriter,
@@ -598,7 +599,7 @@ fn assemble<R: Resolved>(
     let [_, nb, _] = grid.local_dims();
     let local = LocalMap::new(grid);
     let axis = grid.slab_axis;
-    let gather: Vec<Mutex<BucketReader<R>>> = gather.into_iter().map(Mutex::new).collect();
+    let gather: Vec<Mutex<BucketReader<Resolved<C>>>> = gather.into_iter().map(Mutex::new).collect();
     let gather = &gather;
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
@@ -630,7 +631,7 @@ fn assemble<R: Resolved>(
                         let bucket = set.lock().unwrap().take(b);
                         let filled = bucket.read(|batch| {
                             for r in batch {
-                                let c = r.corner() as usize;
+                                let c = r.corner as usize;
                                 tris[c / 3][c % 3] = r.pos();
                             }
                         });
