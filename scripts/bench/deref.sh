@@ -2,7 +2,8 @@
 # Issue 12 benchmark: dereferencing faces by memory map or by sort, and the
 # bounded `mint check`.
 #   scripts/bench/deref.sh [FACES] [CELLS] [CGROUP_MIB]
-#     (default 100000000 faces, 10000000 cells, a 400 MiB memory cgroup)
+#     (default 100000000 faces, 10000000 cells, a 400 MiB memory cgroup;
+#      the runs inside it get --mem of half the cgroup)
 # 1. Warm cache: `mint resample --deref mmap|sort` on a torus in generation
 #    order and shuffled (`mint gen torus --order shuffled`), beside `cat`.
 # 2. Positions larger than the memory the process may use: each run inside a
@@ -18,10 +19,12 @@ SH="$WORK/torus-$FACES-shuffled.ply"
 [ -f "$SH" ] || "$MINT" gen torus "$SH" --faces "$FACES" --order shuffled > /dev/null
 machine
 echo "input: $IN and $SH ($FACES faces, $(stat -c %s "$IN") bytes each), --cells $CELLS"
-line() { python3 -c '
+line() { python3 - "$@" <<'PY'
 import json, sys
-j = json.loads(sys.argv[2])
-print(f"  {sys.argv[1]}: {j[\"seconds_total\"]:.2f} s (discretize {j[\"seconds_discretize\"]:.2f} s), peak heap {j[\"peak_heap_bytes\"]/2**20:.0f} MiB, spilled {j[\"deref_spilled_bytes\"]/2**30:.1f} GiB; {j[\"deref\"]}")' "$@"; }
+name, j = sys.argv[1], json.loads(sys.argv[2])
+print("  %s: %.2f s (discretize %.2f s), peak heap %.0f MiB, spilled %.1f GiB; %s" % (name, j["seconds_total"], j["seconds_discretize"], j["peak_heap_bytes"] / 2**20, j["deref_spilled_bytes"] / 2**30, j["deref"]))
+PY
+}
 echo "1. warm cache"
 cat "$IN" > /dev/null; echo "  cat: $(seconds cat "$IN") s"
 for f in "$IN" "$SH"; do
@@ -30,7 +33,8 @@ for f in "$IN" "$SH"; do
     line "$(basename "$f") --deref $d" "$("$MINT" resample "$f" "$WORK/dr.ply" --cells "$CELLS" --deref "$d" --json --quiet)"
   done
 done
-echo "2. cold cache, in a ${CG_MIB} MiB memory cgroup (page cache included), --mem 200M"
+MEM=$((CG_MIB / 2))M
+echo "2. cold cache, in a ${CG_MIB} MiB memory cgroup (page cache included), --mem $MEM"
 CG=/sys/fs/cgroup/memory/mint-bench
 if [ "$(id -u)" = 0 ] && [ -d /sys/fs/cgroup/memory ] && mkdir -p "$CG" 2>/dev/null; then
   echo $((CG_MIB << 20)) > "$CG/memory.limit_in_bytes"
@@ -38,8 +42,11 @@ if [ "$(id -u)" = 0 ] && [ -d /sys/fs/cgroup/memory ] && mkdir -p "$CG" 2>/dev/n
   cold; echo "  cat (cold, no cgroup): $(seconds cat "$SH") s"
   for run in "$IN mmap" "$SH sort" "$SH auto" "$SH mmap"; do
     set -- $run; cold
-    out=$(bash -c "echo \$\$ > $CG/cgroup.procs; exec timeout -s KILL 300 $MINT resample $1 $WORK/dr.ply --cells $CELLS --deref $2 --mem 200M --json --quiet" || true)
-    if [ -n "$out" ]; then line "$(basename "$1") --deref $2" "$out"; else echo "  $(basename "$1") --deref $2: stopped after 300 s"; fi
+    t0=$(date +%s)
+    out=$(bash -c "echo \$\$ > $CG/cgroup.procs; exec timeout -s KILL 300 $MINT resample $1 $WORK/dr.ply --cells $CELLS --deref $2 --mem $MEM --json --quiet" 2> "$WORK/dr.err") && rc=0 || rc=$?
+    if [ "$rc" = 0 ]; then line "$(basename "$1") --deref $2" "$out"
+    elif [ $(( $(date +%s) - t0 )) -ge 300 ]; then echo "  $(basename "$1") --deref $2: stopped after 300 s"
+    else echo "  $(basename "$1") --deref $2: failed (exit $rc): $(tail -1 "$WORK/dr.err")"; fi
   done
   rmdir "$CG" 2>/dev/null || true
 else
@@ -48,5 +55,9 @@ fi
 echo "3. mint check --mem 256M under prlimit --data=512M, warm"
 cat "$IN" > /dev/null
 timed prlimit --data=536870912 "$MINT" check "$IN" --mem 256M --json > "$WORK/check.json"
-python3 -c 'import json; j=json.load(open("'"$WORK/check.json"'")); print(f"  watertight {j[\"watertight\"]}, genus {j[\"genus_total\"]}, spilled {j[\"spilled_bytes\"]/2**30:.1f} GiB")'
-rm -f "$WORK/dr.ply" "$WORK/check.json"
+python3 - "$WORK/check.json" <<'PY'
+import json, sys
+j = json.load(open(sys.argv[1]))
+print("  watertight %s, genus %d, spilled %.1f GiB" % (j["watertight"], j["genus_total"], j["spilled_bytes"] / 2**30))
+PY
+rm -f "$WORK/dr.ply" "$WORK/dr.err" "$WORK/check.json"
