@@ -479,7 +479,11 @@ fn decimate_hits_its_target_keeps_closed_inputs_closed_and_errs_less_with_more_f
         last_error = f64::INFINITY;
         for target in [2_000u64, 10_000, 40_000] {
             let out = d.path().join(format!("{shape}-{target}.ply"));
-            let j: serde_json::Value = serde_json::from_str(&ok(&["decimate", p(&input), p(&out), "--faces", &target.to_string(), "--json"])).unwrap();
+            // 8 N intermediate faces (below the default's 200k floor, which
+            // would resample these 200k-face inputs whole for every target
+            // and leave the error to the resampling alone).
+            let m = (8 * target).min(200_000).to_string();
+            let j: serde_json::Value = serde_json::from_str(&ok(&["decimate", p(&input), p(&out), "--faces", &target.to_string(), "--intermediate", &m, "--json"])).unwrap();
             let got = j["output_faces"].as_u64().unwrap();
             assert!(got.abs_diff(target) as f64 <= 0.02 * target as f64, "{shape} {target}: {got} faces");
             assert_eq!(j["output_watertight"], true, "{shape} {target}: {j}");
@@ -492,6 +496,11 @@ fn decimate_hits_its_target_keeps_closed_inputs_closed_and_errs_less_with_more_f
             last_error = mean;
         }
     }
+    // By default the intermediate has at least 200k faces (at most the
+    // input's): small targets choose the shape from a fine resampling.
+    let out = d.path().join("floor.ply");
+    let j: serde_json::Value = serde_json::from_str(&ok(&["decimate", p(&d.path().join("torus.ply")), p(&out), "--faces", "1000", "--json"])).unwrap();
+    assert_eq!(j["intermediate_faces_asked"].as_u64(), Some(200_000));
     // A target below what a closed surface can have is refused.
     let o = run(&["decimate", p(&d.path().join("torus.ply")), p(&d.path().join("x.ply")), "--faces", "3"]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("at least 4"));
