@@ -162,11 +162,7 @@ impl TriangleRecords {
                     let bytes = &data[start + first as usize * 13..start + end as usize * 13];
                     for (i, r) in bytes.chunks_exact(13).enumerate() {
                         let k = first + i as u64;
-                        let t = [
-                            u32::from_le_bytes([r[1], r[2], r[3], r[4]]),
-                            u32::from_le_bytes([r[5], r[6], r[7], r[8]]),
-                            u32::from_le_bytes([r[9], r[10], r[11], r[12]]),
-                        ];
+                        let t = common_indices(r);
                         if r[0] != 3 || t.iter().any(|&v| v as i64 >= nv) {
                             return Err(self.bad_record(data, k, element, start + k as usize * 13));
                         }
@@ -262,11 +258,7 @@ impl TriangleRecords {
             if r[0] != 3 {
                 return Err(self.not_triangle(r[0] as i64, k, element, start + k as usize * 13));
             }
-            let t = [
-                u32::from_le_bytes([r[1], r[2], r[3], r[4]]),
-                u32::from_le_bytes([r[5], r[6], r[7], r[8]]),
-                u32::from_le_bytes([r[9], r[10], r[11], r[12]]),
-            ];
+            let t = common_indices(r);
             if t[0] >= nv || t[1] >= nv || t[2] >= nv {
                 let bad = t.iter().copied().find(|&v| v >= nv).unwrap();
                 // An i32 index read as u32: report it as the file wrote it.
@@ -280,4 +272,12 @@ impl TriangleRecords {
         }
         Ok(())
     }
+}
+
+/// The three indices of a record in the common layout (`uchar 3`, then
+/// three little-endian 32-bit indices; 13 bytes).
+#[inline(always)]
+fn common_indices(r: &[u8]) -> [u32; 3] {
+    let w = |i: usize| u32::from_le_bytes([r[i], r[i + 1], r[i + 2], r[i + 3]]);
+    [w(1), w(5), w(9)]
 }
