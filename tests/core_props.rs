@@ -8,7 +8,7 @@
 //! edits as flags), not a seed, so that proptest shrinks a failure to a few
 //! points; failures found are kept in `proptest-regressions/`.
 
-use mint_core::reconstruct::resample_in_core;
+use mint_core::in_core::resample_in_core;
 use mint_core::{Grid, GridSize, TriMesh};
 use mint_testkit::hull::{convex_hull, soup};
 use mint_testkit::topology::check_closed_oriented;
@@ -148,7 +148,7 @@ proptest! {
 
     #[test]
     fn random_soups_always_give_closed_manifolds_under_robust_rules(data in soup_strategy(), cells in 100u64..20000, rule_pick in 0usize..3) {
-        use mint_core::robust::resample_in_core_with;
+        use mint_core::in_core::resample_in_core_with;
         use mint_core::signs::SignRule;
         let tris = soup_of(&data);
         prop_assume!(!tris.is_empty());
@@ -168,7 +168,7 @@ proptest! {
     /// non-manifold edge or vertex, nor an inconsistently oriented edge.
     #[test]
     fn random_soups_with_open_holes_stay_manifold(data in soup_strategy(), cells in 500u64..20000, max_hole in 1u32..6) {
-        use mint_core::robust::resample_in_core_holes;
+        use mint_core::in_core::resample_in_core_holes;
         use mint_core::signs::SignRule;
         let tris = soup_of(&data);
         prop_assume!(!tris.is_empty());

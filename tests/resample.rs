@@ -271,7 +271,7 @@ fn a_shuffled_copy_resamples_to_the_same_bytes_with_mmap_and_sort_dereferencing(
 /// code that runs.
 #[test]
 fn the_engine_and_the_in_core_hole_protocol_give_the_same_mesh() {
-    use mint_core::robust::resample_in_core_holes;
+    use mint_core::in_core::resample_in_core_holes;
     let dir = tempfile::tempdir().unwrap();
     let scan = write_mesh(dir.path(), "scan.ply", |s| {
         mint_gen::scan_like(60_000, 3, &Default::default(), s).unwrap();

@@ -22,6 +22,7 @@
 //! crossing on that family (the perturbed lines miss it); its neighbours carry
 //! the crossings.
 
+use crate::intercept::{Intercept, FAMILY_A, FAMILY_B, FAMILY_S};
 use crate::predicates::{edge_side, normal_signs, plane_side};
 
 /// How far inside its cell edge a crossing value is kept, in cells.
@@ -43,6 +44,19 @@ pub struct Crossing {
     pub value: f64,
     /// True when the line enters the solid here.
     pub entering: bool,
+}
+
+impl Crossing {
+    /// Packs the crossing into its 16-byte record, on a grid with `nb`
+    /// cells along local axis b (family-S lines are numbered `a * (nb + 1) + b`).
+    #[inline]
+    pub fn intercept(&self, nb: u32) -> Intercept {
+        match self.family as u32 {
+            FAMILY_A => Intercept::new(self.v as u32, FAMILY_A, self.u as u32, self.value, self.entering),
+            FAMILY_B => Intercept::new(self.u as u32, FAMILY_B, self.v as u32, self.value, self.entering),
+            _ => Intercept::new(self.cell as u32, FAMILY_S, self.u as u32 * (nb + 1) + self.v as u32, self.value, self.entering),
+        }
+    }
 }
 
 /// Reports every crossing of triangle `p` (local grid coordinates) with the

@@ -57,15 +57,16 @@ impl Expr {
 /// that edge (operands whose state does not change have none): walk the
 /// operands' vertices in order, flipping each operand's state, and stop at
 /// the first flip that changes the expression. With one operand this is
-/// that operand's vertex; for A ∪ A it is A's vertex again.
-pub(crate) fn result_vertex(expr: &Expr, lower: &mut [bool], changes: &mut [(f64, usize)]) -> Option<f64> {
+/// that operand's vertex; for A ∪ A it is A's vertex again. Returns the
+/// vertex and the operand it came from.
+pub(crate) fn result_vertex(expr: &Expr, lower: &mut [bool], changes: &mut [(f64, usize)]) -> Option<(f64, usize)> {
     changes.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     let mut r = expr.eval(lower);
     for &(v, o) in changes.iter() {
         lower[o] = !lower[o];
         let r2 = expr.eval(lower);
         if r2 != r {
-            return Some(v);
+            return Some((v, o));
         }
         r = r2;
     }

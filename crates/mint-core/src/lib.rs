@@ -7,18 +7,23 @@
 //! - [`discretize`]: one triangle → its signed [`Crossing`]s with grid lines;
 //! - [`intercept`]: the 16-byte [`Intercept`] record, per-line sorting and the removal filter;
 //! - [`mc_table`]: the generated marching-cubes table;
-//! - [`reconstruct`]: one layer of cells → vertices and triangles (the paper's strict rule);
-//! - [`primitives`]: analytic solids that intersect grid lines exactly (for CSG);
-//! - [`holes`]: which hole-capping cells stay open under `--max-hole`;
-//! - [`signs`], [`robust`]: sign rules for dirty scans and the state-first reconstruction;
+//! - [`cells`]: slab results and the one walk over a slab's cells, numbering vertices;
+//! - [`reconstruct`]: a slab of cells → vertices and triangles (the paper's strict rule);
+//! - [`signs`]: sign rules for dirty scans, node states and the census that picks a rule;
 //! - [`expr`]: CSG expressions over solids and where their value changes along an edge;
+//! - [`holes`]: which hole-capping cells stay open under `--max-hole`;
+//! - [`robust`]: the state-first reconstruction of one solid or a CSG expression, closing holes;
+//! - [`primitives`]: analytic solids that intersect grid lines exactly (for CSG);
+//! - [`in_core`]: the whole resampling in memory (strict, robust, hole protocol), for tests and small inputs;
 //! - [`rng`]: SplitMix64, the seeded generator shared by samplers and generators;
 //! - [`sink`]: the [`MeshSink`] trait through which meshes leave algorithms.
 
+pub mod cells;
 pub mod discretize;
 pub mod expr;
 pub mod grid;
 pub mod holes;
+pub mod in_core;
 pub mod intercept;
 pub mod mc_table;
 pub mod predicates;

@@ -487,7 +487,7 @@ mod tests {
 mod plane_tests {
     use super::*;
     use crate::grid::{Grid, GridSize};
-    use crate::reconstruct::intercept_local_position;
+    use crate::cells::intercept_local_position;
 
     #[test]
     fn plane_intercepts_lie_on_the_surface() {

@@ -26,19 +26,61 @@
 //! its S records on it and the plane above, so the output is the same for
 //! any slab partition.
 
-use crate::grid::Grid;
-use crate::intercept::{filter_plane, Intercept, PlaneLines, FAMILY_A, FAMILY_B, FAMILY_S};
-use crate::mc_table::{corner_offset, mc_table, EDGE_CORNERS};
-use crate::reconstruct::{active_cells, intercept_local_position, SlabResult};
-use crate::signs::{effective_rule, lines, nearest_vote, resign_parity, winding_valid, LineCensus, NodeStates, RepairStats, SignRule};
-use crate::holes::{cell_id, OpenCells};
+use crate::cells::{push_cell_triangles, walk_slab, SlabResult};
 use crate::expr::{result_vertex, Expr};
+use crate::grid::Grid;
+use crate::holes::{cell_id, OpenCells};
+use crate::intercept::{filter_plane, Intercept, PlaneLines, FAMILY_A, FAMILY_B, FAMILY_S};
+use crate::mc_table::{corner_offset, EDGE_CORNERS};
+use crate::signs::{effective_rule, lines, nearest_vote, resign_parity, winding_valid, LineCensus, NodeStates, RepairStats, SignRule};
 use crate::MARGIN;
+
+/// A plane's edge vertices in vertex order (sorted by
+/// [`Intercept::sort_key`]), each with a flag that says it was synthesized:
+/// its edge had no intercept, so it caps a hole.
+#[derive(Debug, Clone, Default)]
+struct EdgeVertices {
+    records: Vec<Intercept>,
+    synthesized: Vec<bool>,
+}
+
+impl EdgeVertices {
+    fn push(&mut self, (record, synthesized): (Intercept, bool)) {
+        debug_assert!(self.records.last().is_none_or(|l| l.sort_key() < record.sort_key()), "edge vertices out of order");
+        self.records.push(record);
+        self.synthesized.push(synthesized);
+    }
+    fn extend(&mut self, other: &EdgeVertices) {
+        for k in 0..other.records.len() {
+            self.push((other.records[k], other.synthesized[k]));
+        }
+    }
+    /// Keeps the vertices for which `keep` is true.
+    fn retain(&mut self, keep: impl Fn(&Intercept) -> bool) {
+        let mut out = 0;
+        for k in 0..self.records.len() {
+            if keep(&self.records[k]) {
+                self.records[out] = self.records[k];
+                self.synthesized[out] = self.synthesized[k];
+                out += 1;
+            }
+        }
+        self.records.truncate(out);
+        self.synthesized.truncate(out);
+    }
+    /// The vertex on cell `cell` of line (`family`, `index`), if any: its
+    /// position and whether it was synthesized.
+    fn on_edge(&self, family: u32, index: u32, cell: u32) -> Option<(f64, bool)> {
+        let pl = PlaneLines::new(&self.records);
+        let r = pl.in_cell(pl.line(family, index), cell);
+        (!r.is_empty()).then(|| (self.records[r.start].value(), self.synthesized[r.start]))
+    }
+}
 
 /// One plane after its states and A/B vertices are decided.
 struct Prepared {
-    /// One record per A/B edge with a state change, sorted.
-    ab: Vec<Intercept>,
+    /// One vertex per A/B edge with a state change.
+    ab: EdgeVertices,
     /// The plane's raw family-S records (layer above), sorted.
     s_raw: Vec<Intercept>,
     states: NodeStates,
@@ -148,18 +190,18 @@ fn select(cell_records: &[Intercept], entering: bool, rule: SignRule, stats: &mu
     Some(pick.iter().sum::<f64>() / pick.len() as f64)
 }
 
-fn vertex_record(plane: u32, family: u32, index: u32, cell: u32, value: Option<f64>, entering: bool, stats: &mut RepairStats) -> Intercept {
+/// The vertex of an edge with a state change: the selected position kept
+/// a margin inside its cell, or, with none, a synthesized one at the
+/// edge's midpoint (flagged).
+fn vertex_record(plane: u32, family: u32, index: u32, cell: u32, value: Option<f64>, entering: bool, stats: &mut RepairStats) -> (Intercept, bool) {
     let c = cell as f64;
-    let v = match value {
-        // An exact midpoint marks a synthesized vertex: keep real ones off it.
-        Some(v) if v == c + 0.5 => f64::from_bits((c + 0.5).to_bits() + 1),
-        Some(v) => v.clamp(c + MARGIN, c + 1.0 - MARGIN),
+    match value {
+        Some(v) => (Intercept::new(plane, family, index, v.clamp(c + MARGIN, c + 1.0 - MARGIN), entering), false),
         None => {
             stats.synthesized_vertices += 1;
-            c + 0.5
+            (Intercept::new(plane, family, index, c + 0.5, entering), true)
         }
-    };
-    Intercept::new(plane, family, index, v, entering)
+    }
 }
 
 /// Decides a plane's node states and its A/B edge vertices.
@@ -208,7 +250,7 @@ fn prepare_plane(mut raw: Vec<Intercept>, plane: u32, na: u32, nb: u32, rule: Si
         }
     }
     // One vertex per A edge and per B edge whose end states differ.
-    let mut ab = Vec::new();
+    let mut ab = EdgeVertices::default();
     let empty = Line { records: Vec::new(), rule: Some(rule) };
     let mut used = 0u64;
     let mut total = 0u64;
@@ -260,8 +302,8 @@ fn cell_slice(records: &[Intercept], cell: u32) -> &[Intercept] {
 
 /// The family-S vertices of layer `k` (between planes with `lower` and
 /// `upper` states), one per node whose state changes across the layer.
-fn layer_s_vertices(s_raw: &[Intercept], lower: &NodeStates, upper: &NodeStates, k: u32, na: u32, nb: u32, rule: SignRule, stats: &mut RepairStats) -> Vec<Intercept> {
-    let mut out = Vec::new();
+fn layer_s_vertices(s_raw: &[Intercept], lower: &NodeStates, upper: &NodeStates, k: u32, na: u32, nb: u32, rule: SignRule, stats: &mut RepairStats) -> EdgeVertices {
+    let mut out = EdgeVertices::default();
     let lines_view = PlaneLines::new(s_raw);
     let mut used = 0usize;
     for i in 0..=na {
@@ -342,128 +384,97 @@ pub fn reconstruct_slab_solids(
         })
         .collect();
     // Per operand, per owned layer: its S vertices.
-    let s_finals: Vec<Vec<Vec<Intercept>>> = (0..m)
+    let s_finals: Vec<Vec<EdgeVertices>> = (0..m)
         .map(|o| {
             (0..n - 1)
                 .map(|p| {
                     let pr = &prepared[o];
-                    let mut s = layer_s_vertices(&pr[p].s_raw, &pr[p].states, &pr[p + 1].states, k0 + p as u32, na, nb, rules[o], &mut stats);
-                    s.sort_unstable_by_key(|r| r.sort_key());
-                    s
+                    layer_s_vertices(&pr[p].s_raw, &pr[p].states, &pr[p + 1].states, k0 + p as u32, na, nb, rules[o], &mut stats)
                 })
                 .collect()
         })
         .collect();
-    // Final records per plane: A/B (every plane), S (owned planes).
-    let mut finals: Vec<Vec<Intercept>> = Vec::with_capacity(n);
+    // Final vertices per plane: A/B (every plane), then S (owned planes);
+    // each part is built in vertex order, so the whole is too.
+    let mut finals: Vec<EdgeVertices> = Vec::with_capacity(n);
     for p in 0..n {
         let mut f = if single { prepared[0][p].ab.clone() } else { combine_ab(&prepared, p, &states[p], k0 + p as u32, na, nb, expr) };
         if p + 1 < n {
             if single {
-                f.extend_from_slice(&s_finals[0][p]);
+                f.extend(&s_finals[0][p]);
             } else {
-                f.extend(combine_s(&prepared, &s_finals, p, &states[p], &states[p + 1], k0 + p as u32, na, nb, expr));
+                f.extend(&combine_s(&prepared, &s_finals, p, &states[p], &states[p + 1], k0 + p as u32, na, nb, expr));
             }
         }
-        f.sort_unstable_by_key(|r| r.sort_key());
         if let Some(open) = open {
             f.retain(|r| !open.surrounds(r, [na, nb]));
         }
         finals.push(f);
     }
-    let mut bases = Vec::with_capacity(n);
-    let mut total = 0u64;
-    for f in &finals {
-        bases.push(total as u32);
-        total += f.len() as u64;
-    }
+    let records: Vec<&[Intercept]> = finals.iter().map(|f| f.records.as_slice()).collect();
     let mut out = SlabResult::default();
-    let mut cells = Vec::new();
-    for layer in 0..n - 1 {
-        for r in &finals[layer] {
-            out.vertices.push(grid.to_world(intercept_local_position(r, nb)));
+    walk_slab(grid, k0, &records, &mut out, |layer, i, j, out| {
+        let cell = cell_id([i, j, layer.k], [na, nb]);
+        if open.is_some_and(|o| o.contains(cell)) {
+            return;
         }
-        let lower = PlaneLines::new(&finals[layer]);
-        let upper = PlaneLines::new(&finals[layer + 1]);
-        active_cells(&lower, &upper, na, nb, &mut cells);
-        out.stats.active_cells += cells.len() as u64;
-        let k = k0 + layer as u32;
-        let st = [&states[layer], &states[layer + 1]];
-        let pl = [&lower, &upper];
-        for &id in &cells {
-            let (i, j) = ((id % na as u64) as u32, (id / na as u64) as u32);
-            let cell = cell_id([i, j, k], [na, nb]);
-            if open.is_some_and(|o| o.contains(cell)) {
+        let st = [&states[layer.index], &states[layer.index + 1]];
+        let mut code = 0u8;
+        for c in 0..8u8 {
+            let [x, y, z] = corner_offset(c);
+            if st[z as usize].get(i + x, j + y) {
+                code |= 1 << c;
+            }
+        }
+        let mut hole = false;
+        let mut ids = [u32::MAX; 12];
+        for e in 0..12u8 {
+            let [c0, c1] = EDGE_CORNERS[e as usize];
+            if ((code >> c0) & 1) == ((code >> c1) & 1) {
                 continue;
             }
-            let mut code = 0u8;
-            for c in 0..8u8 {
-                let [x, y, z] = corner_offset(c);
-                if st[z as usize].get(i + x, j + y) {
-                    code |= 1 << c;
-                }
-            }
-            let mut hole = false;
-            let mut ids = [u32::MAX; 12];
-            for e in 0..12u8 {
-                let [c0, c1] = EDGE_CORNERS[e as usize];
-                if ((code >> c0) & 1) == ((code >> c1) & 1) {
-                    continue;
-                }
-                let o = corner_offset(c0);
-                let (plane, range) = match e / 4 {
-                    0 => {
-                        let z = o[2] as usize;
-                        (z, pl[z].in_cell(pl[z].line(FAMILY_A, j + o[1]), i))
-                    }
-                    1 => {
-                        let z = o[2] as usize;
-                        (z, pl[z].in_cell(pl[z].line(FAMILY_B, i + o[0]), j))
-                    }
-                    _ => (0, lower.in_cell(lower.line(FAMILY_S, (i + o[0]) * (nb + 1) + (j + o[1])), k)),
-                };
-                assert_eq!(range.len(), 1, "robust reconstruction: edge {e} of cell ({i},{j},{k}) has {} vertices", range.len());
-                let r = pl[plane].records()[range.start];
-                hole |= r.value() == r.cell() as f64 + 0.5;
-                ids[e as usize] = bases[layer + plane] + range.start as u32;
-            }
-            if hole {
-                out.hole_cells.push(cell);
-            }
-            for t in mc_table().triangles(code) {
-                out.faces.push(t.map(|e| ids[e as usize]));
-            }
+            let (z, range) = layer.edge(i, j, e);
+            assert_eq!(range.len(), 1, "robust reconstruction: edge {e} of cell ({i},{j},{}) has {} vertices", layer.k, range.len());
+            hole |= finals[layer.index + z].synthesized[range.start];
+            ids[e as usize] = layer.vertex_id(z, range.start);
         }
-    }
-    out.stats.vertices = out.vertices.len() as u64;
-    out.stats.faces = out.faces.len() as u64;
+        if hole {
+            out.hole_cells.push(cell);
+        }
+        push_cell_triangles(code, &ids, &mut out.faces);
+    });
     (out, stats)
 }
 
-/// The vertex of operand `o` on a cell edge, if its state changes there.
-fn operand_vertex(records: &[Intercept], family: u32, index: u32, cell: u32) -> Option<f64> {
-    let pl = PlaneLines::new(records);
-    let r = pl.in_cell(pl.line(family, index), cell);
-    (!r.is_empty()).then(|| records[r.start].value())
+/// The result's vertex on one edge: where the expression changes along it
+/// ([`result_vertex`]), given each operand's vertex on that edge; a
+/// synthesized operand vertex, or no change at all, makes a synthesized one.
+fn combined_vertex(expr: &Expr, lower: &mut [bool], changes: &mut Vec<(f64, usize)>, synthesized: &[bool], cell: u32) -> (f64, bool) {
+    match result_vertex(expr, lower, changes) {
+        Some((v, o)) => (v, synthesized[o]),
+        None => (cell as f64 + 0.5, true),
+    }
 }
 
 /// The result's A/B edge vertices of plane `p`.
 #[allow(clippy::too_many_arguments)]
-fn combine_ab(prepared: &[Vec<Prepared>], p: usize, states: &NodeStates, plane: u32, na: u32, nb: u32, expr: &Expr) -> Vec<Intercept> {
+fn combine_ab(prepared: &[Vec<Prepared>], p: usize, states: &NodeStates, plane: u32, na: u32, nb: u32, expr: &Expr) -> EdgeVertices {
     let m = prepared.len();
-    let mut out = Vec::new();
+    let mut out = EdgeVertices::default();
     let mut lower = vec![false; m];
+    let mut synthesized = vec![false; m];
     let mut changes = Vec::with_capacity(m);
-    let mut edge = |family: u32, index: u32, cell: u32, n0: (u32, u32), entering: bool, out: &mut Vec<Intercept>| {
+    let mut edge = |family: u32, index: u32, cell: u32, n0: (u32, u32), entering: bool, out: &mut EdgeVertices| {
         changes.clear();
         for o in 0..m {
             lower[o] = prepared[o][p].states.get(n0.0, n0.1);
-            if let Some(v) = operand_vertex(&prepared[o][p].ab, family, index, cell) {
+            if let Some((v, synth)) = prepared[o][p].ab.on_edge(family, index, cell) {
                 changes.push((v, o));
+                synthesized[o] = synth;
             }
         }
-        let v = result_vertex(expr, &mut lower, &mut changes).unwrap_or(cell as f64 + 0.5);
-        out.push(Intercept::new(plane, family, index, v, entering));
+        let (v, synth) = combined_vertex(expr, &mut lower, &mut changes, &synthesized, cell);
+        out.push((Intercept::new(plane, family, index, v, entering), synth));
     };
     for j in 0..=nb {
         for i in 0..na {
@@ -486,10 +497,11 @@ fn combine_ab(prepared: &[Vec<Prepared>], p: usize, states: &NodeStates, plane: 
 
 /// The result's S edge vertices of layer `p` (between planes `p`, `p + 1`).
 #[allow(clippy::too_many_arguments)]
-fn combine_s(prepared: &[Vec<Prepared>], s_finals: &[Vec<Vec<Intercept>>], p: usize, lo: &NodeStates, hi: &NodeStates, k: u32, na: u32, nb: u32, expr: &Expr) -> Vec<Intercept> {
+fn combine_s(prepared: &[Vec<Prepared>], s_finals: &[Vec<EdgeVertices>], p: usize, lo: &NodeStates, hi: &NodeStates, k: u32, na: u32, nb: u32, expr: &Expr) -> EdgeVertices {
     let m = prepared.len();
-    let mut out = Vec::new();
+    let mut out = EdgeVertices::default();
     let mut lower = vec![false; m];
+    let mut synthesized = vec![false; m];
     let mut changes = Vec::with_capacity(m);
     for i in 0..=na {
         for j in 0..=nb {
@@ -501,98 +513,22 @@ fn combine_s(prepared: &[Vec<Prepared>], s_finals: &[Vec<Vec<Intercept>>], p: us
             changes.clear();
             for o in 0..m {
                 lower[o] = prepared[o][p].states.get(i, j);
-                if let Some(v) = operand_vertex(&s_finals[o][p], FAMILY_S, idx, k) {
+                if let Some((v, synth)) = s_finals[o][p].on_edge(FAMILY_S, idx, k) {
                     changes.push((v, o));
+                    synthesized[o] = synth;
                 }
             }
-            let v = result_vertex(expr, &mut lower, &mut changes).unwrap_or(k as f64 + 0.5);
-            out.push(Intercept::new(k, FAMILY_S, idx, v, s1));
+            let (v, synth) = combined_vertex(expr, &mut lower, &mut changes, &synthesized, k);
+            out.push((Intercept::new(k, FAMILY_S, idx, v, s1), synth));
         }
     }
     out
 }
 
-/// [`crate::reconstruct::resample_in_core`] under a sign rule: `Orient` is the strict path;
-/// `Union`, `Parity` and `Auto` (resolved by a census of all planes) use the
-/// robust state-first reconstruction of this module, which closes every hole.
-pub fn resample_in_core_with<I>(
-    grid: &Grid,
-    triangles: I,
-    rule: crate::signs::SignRule,
-    sink: &mut dyn crate::MeshSink,
-) -> Result<(SlabResult, crate::signs::RepairStats, crate::signs::SignRule), crate::SinkError>
-where
-    I: IntoIterator<Item = [[f64; 3]; 3]>,
-{
-    resample_in_core_holes(grid, triangles, rule, None, sink).map(|(r, s, rule, _)| (r, s, rule))
-}
-
-/// The whole hole protocol in core, as the staged engine runs it across
-/// slabs (its `reconstruct` and `reopen` stages): reconstruct once, closing
-/// every hole and collecting the hole-capping cells; group them and, with
-/// `max_hole`, choose the cells to leave open ([`crate::holes::open_cells`]);
-/// if any, reconstruct again with those cells open. Returns what
-/// [`resample_in_core_with`] returns and the hole statistics. `Orient` has
-/// no holes to close (its non-canonical cells stay empty).
-pub fn resample_in_core_holes<I>(
-    grid: &Grid,
-    triangles: I,
-    rule: crate::signs::SignRule,
-    max_hole: Option<u32>,
-    sink: &mut dyn crate::MeshSink,
-) -> Result<(SlabResult, crate::signs::RepairStats, crate::signs::SignRule, crate::holes::HoleStats), crate::SinkError>
-where
-    I: IntoIterator<Item = [[f64; 3]; 3]>,
-{
-    use crate::signs::SignRule;
-    if rule == SignRule::Orient {
-        let r = crate::reconstruct::resample_in_core(grid, triangles, sink)?;
-        return Ok((r, Default::default(), SignRule::Orient, Default::default()));
-    }
-    let mut planes = crate::reconstruct::discretize_in_core(grid, triangles);
-    let rule = if rule == SignRule::Auto {
-        let mut census = crate::signs::LineCensus::default();
-        for p in &mut planes {
-            census += census_plane(p);
-        }
-        census.resolve()
-    } else {
-        rule
-    };
-    let Some(k) = max_hole else {
-        let (result, repair) = reconstruct_slab_robust(grid, 0, planes, rule);
-        return emit(result, repair, rule, Default::default(), sink);
-    };
-    let (mut result, mut repair) = reconstruct_slab_robust(grid, 0, planes.clone(), rule);
-    let mut cells = result.hole_cells.clone();
-    let (open, holes) = crate::holes::open_cells(&mut cells, grid.local_dims(), k);
-    if !open.is_empty() {
-        (result, repair) = reconstruct_slab_solids(grid, 0, vec![planes], &[rule], &Expr::Operand(0), Some(&open));
-    }
-    emit(result, repair, rule, holes, sink)
-}
-
-/// Sends a result to `sink` and passes it on.
-fn emit(
-    result: SlabResult,
-    repair: crate::signs::RepairStats,
-    rule: crate::signs::SignRule,
-    holes: crate::holes::HoleStats,
-    sink: &mut dyn crate::MeshSink,
-) -> Result<(SlabResult, crate::signs::RepairStats, crate::signs::SignRule, crate::holes::HoleStats), crate::SinkError> {
-    for v in &result.vertices {
-        sink.vertex(*v)?;
-    }
-    for f in &result.faces {
-        sink.face(*f)?;
-    }
-    Ok((result, repair, rule, holes))
-}
-
 #[cfg(test)]
 mod tests {
-    use super::resample_in_core_with;
     use crate::grid::{Grid, GridSize};
+    use crate::in_core::resample_in_core_with;
     use crate::reconstruct::tests::sphere;
     use crate::signs::SignRule;
     use crate::TriMesh;

@@ -11,7 +11,7 @@ use crate::error::PipelineError;
 use crate::progress::Progress;
 use mint_core::grid::Grid;
 use mint_core::primitives::Transform;
-use mint_core::reconstruct::{crossing_to_intercept, SlabResult};
+use mint_core::cells::SlabResult;
 use mint_core::signs::RepairStats;
 use mint_core::{discretize_triangle, FilterStats, Intercept};
 use mint_io::{MeshReader, TriangleChunk, TriangleRecords, TriangleVisitor, VertexPositions};
@@ -161,7 +161,7 @@ pub(crate) fn discretize_all(
                         };
                         let local = [at(tri[0]), at(tri[1]), at(tri[2])];
                         volume += signed_volume6(&local);
-                        discretize_triangle(&local, |c| recs.push(crossing_to_intercept(&c, nb)));
+                        discretize_triangle(&local, |c| recs.push(c.intercept(nb)));
                     }
                     let _ = free_tx.try_send(chunk);
                     if rec_tx.send((seq, recs, volume)).is_err() {
@@ -388,7 +388,7 @@ fn triangle<const S: usize>(p: &[[f64; 3]; 3], local: &LocalMap, xf: Option<&Tra
     };
     let l = [map(p[0]), map(p[1]), map(p[2])];
     *v += signed_volume6(&l);
-    discretize_triangle(&l, |x| recs.push(crossing_to_intercept(&x, nb)));
+    discretize_triangle(&l, |x| recs.push(x.intercept(nb)));
 }
 
 /// [`Grid::to_local`] with its axes and scale taken out of the loop (the

@@ -57,7 +57,6 @@ use crate::error::RangeError;
 use crate::geom::{normalize, tri_normal, Rigid};
 use crate::source::ScanSource;
 use mint_core::progress::{NoProgress, Progress};
-use mint_core::reconstruct::crossing_to_intercept;
 use mint_core::signs::SignRule;
 use mint_core::{discretize_triangle, Crossing, Grid, GridSize, Intercept, MARGIN};
 use serde::Serialize;
@@ -429,7 +428,7 @@ pub fn grid_merge_with<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts:
             };
             let value = value.clamp(x + MARGIN, x + 1.0 - MARGIN);
             let c = Crossing { family: fam as u8, u: p[(fam + 1) % 3] as i64, v: p[(fam + 2) % 3] as i64, cell: p[fam] as i64, value, entering };
-            let r = crossing_to_intercept(&c, dims[1]);
+            let r = c.intercept(dims[1]);
             planes[r.plane as usize].push(r);
         }
     }
