@@ -591,6 +591,27 @@ mod tests {
     }
 
     #[test]
+    fn a_real_vertex_at_an_edge_midpoint_is_kept_and_not_taken_for_a_hole() {
+        // A box whose faces lie halfway between grid planes: every crossing
+        // value is exactly `cell + 0.5`, the position a synthesized vertex
+        // takes. The flag, not the value, marks holes: none here, and the
+        // values are kept as they are.
+        let (lo, hi) = ([0.5, 1.5, -0.5], [3.5, 3.5, 2.5]);
+        for axis in 0..3 {
+            let g = Grid::around([0.0, 0.0, -2.0], [4.0, 5.0, 3.0], GridSize::CellSize(1.0), [0.0; 3], Some(axis)).unwrap();
+            let mut m = TriMesh::default();
+            let (r, repair, rule, holes) = crate::in_core::resample_in_core_holes(&g, crate::reconstruct::tests::cube(lo, hi), SignRule::Auto, Some(0), &mut m).unwrap();
+            assert_eq!(rule, SignRule::Union);
+            assert_eq!((repair.synthesized_vertices, r.hole_cells.len(), holes), (0, 0, Default::default()));
+            assert!(closed(&m) && !m.faces.is_empty());
+            for p in &m.positions {
+                let on_face = (0..3).any(|d| p[d] == lo[d] || p[d] == hi[d]);
+                assert!(on_face, "vertex {p:?} is not on a face of the box");
+            }
+        }
+    }
+
+    #[test]
     fn a_sphere_with_a_hole_is_closed_and_two_overlapping_copies_merge() {
         let s = sphere([0.0; 3], 1.0, 30, 60);
         // Remove a cap of faces near the north pole: a hole ~ 0.5 wide.
