@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use crate::atomic::AtomicFile;
 use crate::error::Error;
 use crate::format::Format;
-use crate::positions::{Emit, Positions};
+use crate::positions::{Emit, Positions, Reject};
 
 /// What a file says about itself, from its header (see [`read_info`]).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -123,6 +123,56 @@ pub(crate) trait FaceStream: Send {
     /// ([`crate::visit::TriangleRecords`]); `None` unless splittable.
     fn fixed_faces(&self) -> Result<Option<crate::visit::FixedFaces>, Error> {
         Ok(None)
+    }
+}
+
+/// The polygon a text format's [`FaceStream`] is emitting as a fan of
+/// triangles `(c0, c(i-1), ci)`, kept across `fill` calls: parse a face
+/// record's corners with [`PolygonFan::clear`] and [`PolygonFan::push`],
+/// call [`PolygonFan::ready`], then [`PolygonFan::emit`] until it is done.
+#[derive(Debug, Default)]
+pub(crate) struct PolygonFan {
+    /// Corners (0-based, range-checked by the format).
+    corners: Vec<u32>,
+    /// The next triangle to emit: `(c0, c(next-1), c(next))`.
+    next: usize,
+}
+
+impl PolygonFan {
+    /// Starts a new face record.
+    pub(crate) fn clear(&mut self) {
+        self.corners.clear();
+        self.next = 0;
+    }
+    /// Adds the record's next corner.
+    pub(crate) fn push(&mut self, corner: u32) {
+        self.corners.push(corner);
+    }
+    /// The record is read: a face of fewer than three corners is dropped
+    /// and counted in `stats.short_faces`.
+    pub(crate) fn ready(&mut self, stats: &mut ReadStats) {
+        if self.corners.len() < 3 {
+            stats.short_faces += 1;
+            self.corners.clear();
+        }
+        self.next = 2;
+    }
+    /// Emits the pending triangles while `out` has room. `Ok(true)`: the
+    /// polygon is done; `Ok(false)`: `out` is full; `Err(v)`: vertex `v` of
+    /// a triangle is not finite.
+    #[inline]
+    pub(crate) fn emit(&mut self, out: &mut Emit) -> Result<bool, u32> {
+        while self.next < self.corners.len() {
+            if !out.room() {
+                return Ok(false);
+            }
+            let c = &self.corners;
+            if let Err(Reject::NotFinite(v)) = out.tri_checked([c[0], c[self.next - 1], c[self.next]]) {
+                return Err(v);
+            }
+            self.next += 1;
+        }
+        Ok(true)
     }
 }
 

@@ -24,8 +24,8 @@ use std::sync::Arc;
 use crate::error::{show_token, Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
 use crate::positions::not_finite;
-use crate::positions::{Emit, Positions, Reject};
-use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
+use crate::positions::{Emit, Positions};
+use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, PolygonFan, ReadStats};
 use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
 use crate::backend::{write_point, FormatWriter, OutFile, WriteOptions};
 use crate::Format;
@@ -186,7 +186,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         return Err(Error::unsupported(path, format!("{} vertices; mint reads at most {} (32-bit indices)", s.nv, u32::MAX)).at_element("v"));
     }
     let positions = Positions::spilled(Arc::new(spill.into_mapped()?), s.nv as u32);
-    let body = MeshBody { path: path.to_path_buf(), map: map.clone(), pos: s.body, base: s.base(), f_rec: 0, poly: Vec::new(), next: 0, rec_at: 0 };
+    let body = MeshBody { path: path.to_path_buf(), map: map.clone(), pos: s.body, base: s.base(), f_rec: 0, fan: PolygonFan::default(), rec_at: 0 };
     Ok(Opened { info: make_info(&s), positions, body: Box::new(body), range_grid: None, spilled_vertices: s.nv })
 }
 
@@ -197,8 +197,7 @@ struct MeshBody {
     pos: usize,
     base: i64,
     f_rec: u64,
-    poly: Vec<u32>,
-    next: usize,
+    fan: PolygonFan,
     rec_at: usize,
 }
 
@@ -209,16 +208,13 @@ impl FaceStream for MeshBody {
         let nv = out.pos.count();
         let mut lines = Lines::new(data, self.pos);
         loop {
-            while self.next < self.poly.len() {
-                if !out.room() {
+            match self.fan.emit(out) {
+                Ok(true) => {}
+                Ok(false) => {
                     self.pos = lines.pos;
                     return Ok(true);
                 }
-                let t = [self.poly[0], self.poly[self.next - 1], self.poly[self.next]];
-                if let Err(Reject::NotFinite(v)) = out.tri_checked(t) {
-                    return Err(not_finite(&self.path, v, out.pos).at_element("f").at_record(self.f_rec - 1).at_line(line_of(data, self.rec_at)));
-                }
-                self.next += 1;
+                Err(v) => return Err(not_finite(&self.path, v, out.pos).at_element("f").at_record(self.f_rec - 1).at_line(line_of(data, self.rec_at))),
             }
             let Some((at, line)) = lines.next_line() else {
                 self.pos = data.len();
@@ -228,7 +224,7 @@ impl FaceStream for MeshBody {
             if kind != Kind::Face {
                 continue;
             }
-            self.poly.clear();
+            self.fan.clear();
             for tok in words(rest) {
                 let i = parse_i64(tok).unwrap_or(-1) - self.base;
                 if i < 0 || i >= nv as i64 {
@@ -247,15 +243,11 @@ impl FaceStream for MeshBody {
                     .at_line(line_of(data, at))
                     .at_byte(at as u64));
                 }
-                self.poly.push(i as u32);
+                self.fan.push(i as u32);
             }
             self.f_rec += 1;
             self.rec_at = at;
-            if self.poly.len() < 3 {
-                stats.short_faces += 1;
-                self.poly.clear();
-            }
-            self.next = 2;
+            self.fan.ready(stats);
         }
     }
 

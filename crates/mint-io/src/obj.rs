@@ -20,8 +20,8 @@ use std::sync::Arc;
 use crate::error::{show_token, Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
 use crate::positions::not_finite;
-use crate::positions::{Emit, Positions, Reject};
-use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
+use crate::positions::{Emit, Positions};
+use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, PolygonFan, ReadStats};
 use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
 use crate::backend::{write_point, FormatWriter, OutFile, WriteOptions};
 use crate::Format;
@@ -149,7 +149,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         return Err(Error::unsupported(path, format!("{nv} vertices; mint reads at most {} (32-bit indices)", u32::MAX)).at_element("v"));
     }
     let positions = Positions::spilled(Arc::new(spill.into_mapped()?), nv as u32);
-    let body = ObjBody { path: path.to_path_buf(), map, pos: 0, v_seen: 0, f_rec: 0, poly: Vec::new(), next: 0, rec_at: 0 };
+    let body = ObjBody { path: path.to_path_buf(), map, pos: 0, v_seen: 0, f_rec: 0, fan: PolygonFan::default(), rec_at: 0 };
     Ok(Opened { info: make_info(nv, nf, comments), positions, body: Box::new(body), range_grid: None, spilled_vertices: nv })
 }
 
@@ -163,18 +163,16 @@ struct ObjBody {
     v_seen: u64,
     /// `f` lines before `pos`.
     f_rec: u64,
-    /// Corners of the current polygon (0-based, range-checked) and the next
-    /// fan triangle to emit (`poly[0], poly[next-1], poly[next]`).
-    poly: Vec<u32>,
-    next: usize,
+    /// The current polygon.
+    fan: PolygonFan,
     /// Where the current polygon's line starts.
     rec_at: usize,
 }
 
 impl ObjBody {
-    /// Parses the corners of an `f` line into `self.poly`.
+    /// Parses the corners of an `f` line into `self.fan`.
     fn parse_face(&mut self, data: &[u8], rest: &[u8], nv: u32, at: usize) -> Result<(), Error> {
-        self.poly.clear();
+        self.fan.clear();
         let record = self.f_rec;
         for tok in words(rest) {
             let num = match tok.iter().position(|&b| b == b'/') {
@@ -194,7 +192,7 @@ impl ObjBody {
                     format!("vertex index {i} is out of range ({} vertices in the file, {} defined before this line)", nv, self.v_seen),
                 ));
             }
-            self.poly.push(abs as u32);
+            self.fan.push(abs as u32);
         }
         Ok(())
     }
@@ -207,16 +205,13 @@ impl FaceStream for ObjBody {
         let nv = out.pos.count();
         let mut lines = Lines::new(data, self.pos);
         loop {
-            while self.next < self.poly.len() {
-                if !out.room() {
+            match self.fan.emit(out) {
+                Ok(true) => {}
+                Ok(false) => {
                     self.pos = lines.pos;
                     return Ok(true);
                 }
-                let t = [self.poly[0], self.poly[self.next - 1], self.poly[self.next]];
-                if let Err(Reject::NotFinite(v)) = out.tri_checked(t) {
-                    return Err(err_at(not_finite(&self.path, v, out.pos), data, "f", self.f_rec - 1, self.rec_at));
-                }
-                self.next += 1;
+                Err(v) => return Err(err_at(not_finite(&self.path, v, out.pos), data, "f", self.f_rec - 1, self.rec_at)),
             }
             let Some((at, line)) = lines.next_joined() else {
                 self.pos = data.len();
@@ -228,11 +223,7 @@ impl FaceStream for ObjBody {
                     self.parse_face(data, rest, nv, at)?;
                     self.f_rec += 1;
                     self.rec_at = at;
-                    if self.poly.len() < 3 {
-                        stats.short_faces += 1;
-                        self.poly.clear();
-                    }
-                    self.next = 2;
+                    self.fan.ready(stats);
                 }
                 _ => {}
             }

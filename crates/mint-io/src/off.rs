@@ -22,8 +22,8 @@ use crate::error::{show_token, Error, ErrorKind};
 use crate::format::off_keyword;
 use crate::mapped::{Mapped, SpillFile};
 use crate::positions::not_finite;
-use crate::positions::{Emit, Positions, Reject};
-use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, ReadStats};
+use crate::positions::{Emit, Positions};
+use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, PolygonFan, ReadStats};
 use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
 use crate::backend::{write_point, FormatWriter, OutFile, WriteOptions};
 use crate::Format;
@@ -170,7 +170,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         spill.write_point(p)?;
     }
     let positions = Positions::spilled(Arc::new(spill.into_mapped()?), h.nv as u32);
-    let body = OffBody { path: path.to_path_buf(), map: map.clone(), pos: lines.pos.min(data.len()), nf: h.nf, rec: 0, poly: Vec::new(), next: 0, rec_at: 0 };
+    let body = OffBody { path: path.to_path_buf(), map: map.clone(), pos: lines.pos.min(data.len()), nf: h.nf, rec: 0, fan: PolygonFan::default(), rec_at: 0 };
     Ok(Opened { info: make_info(&h), positions, body: Box::new(body), range_grid: None, spilled_vertices: h.nv })
 }
 
@@ -182,14 +182,13 @@ struct OffBody {
     nf: u64,
     /// Face lines read.
     rec: u64,
-    poly: Vec<u32>,
-    next: usize,
+    fan: PolygonFan,
     rec_at: usize,
 }
 
 impl OffBody {
     fn parse_face(&mut self, data: &[u8], line: &[u8], a: usize, nv: u32) -> Result<(), Error> {
-        self.poly.clear();
+        self.fan.clear();
         let r = self.rec;
         let err = |kind, msg: String| at(Error::new(kind, &self.path, msg), data, "face", Some(r), a);
         let mut w = words(line);
@@ -203,7 +202,7 @@ impl OffBody {
             if i < 0 || i >= nv as i64 {
                 return Err(err(ErrorKind::Index, format!("vertex index {i} is out of range (the file has {nv} vertices)")));
             }
-            self.poly.push(i as u32);
+            self.fan.push(i as u32);
         }
         Ok(())
     }
@@ -216,16 +215,13 @@ impl FaceStream for OffBody {
         let nv = out.pos.count();
         let mut lines = Lines::new(data, self.pos);
         loop {
-            while self.next < self.poly.len() {
-                if !out.room() {
+            match self.fan.emit(out) {
+                Ok(true) => {}
+                Ok(false) => {
                     self.pos = lines.pos;
                     return Ok(true);
                 }
-                let t = [self.poly[0], self.poly[self.next - 1], self.poly[self.next]];
-                if let Err(Reject::NotFinite(v)) = out.tri_checked(t) {
-                    return Err(at(not_finite(&self.path, v, out.pos), data, "face", Some(self.rec - 1), self.rec_at));
-                }
-                self.next += 1;
+                Err(v) => return Err(at(not_finite(&self.path, v, out.pos), data, "face", Some(self.rec - 1), self.rec_at)),
             }
             if self.rec == self.nf {
                 // Only blank lines and comments may follow.
@@ -254,11 +250,7 @@ impl FaceStream for OffBody {
             self.parse_face(data, line, a, nv)?;
             self.rec += 1;
             self.rec_at = a;
-            if self.poly.len() < 3 {
-                stats.short_faces += 1;
-                self.poly.clear();
-            }
-            self.next = 2;
+            self.fan.ready(stats);
         }
     }
 

@@ -104,29 +104,7 @@ impl TriangleBvh {
                 what: "a BVH needs at least one face",
             });
         }
-        if positions.len() > u32::MAX as usize {
-            return Err(MeshError::TooManyVertices {
-                vertices: positions.len(),
-            });
-        }
-        if faces.len() > u32::MAX as usize {
-            return Err(MeshError::TooManyFaces {
-                faces: faces.len(),
-                max: u32::MAX as usize,
-            });
-        }
-        let nv = positions.len() as u32;
-        if let Some(face) = faces
-            .par_iter()
-            .position_first(|f| f.iter().any(|&i| i >= nv))
-        {
-            let index = *faces[face].iter().find(|&&i| i >= nv).expect("found above");
-            return Err(MeshError::IndexOutOfRange {
-                face,
-                index,
-                vertices: positions.len(),
-            });
-        }
+        MeshError::validate(positions, faces, u32::MAX as usize)?;
 
         let mut items: Vec<Item> = faces
             .par_iter()

@@ -145,7 +145,8 @@ pub fn check_mesh(mesh: &TriMesh) -> CheckReport {
 /// Checks a mesh, returning an error for out-of-range indices or sizes
 /// beyond `u32` indexing instead of panicking.
 pub fn try_check(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<CheckReport, MeshError> {
-    validate(positions, faces)?;
+    // The three corners of every face must fit in a u32 corner table.
+    MeshError::validate(positions, faces, (u32::MAX / 3) as usize)?;
     let nv = positions.len();
 
     // Geometry: bbox over vertices, volume/area/degeneracy over faces.
@@ -248,35 +249,6 @@ pub fn report_from(t: Totals) -> CheckReport {
         surface_area: t.geom.area2 / 2.0,
         watertight,
     }
-}
-
-/// Rejects out-of-range indices and sizes beyond `u32` indexing; reports the
-/// first bad face.
-fn validate(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> Result<(), MeshError> {
-    if positions.len() > u32::MAX as usize {
-        return Err(MeshError::TooManyVertices {
-            vertices: positions.len(),
-        });
-    }
-    if faces.len() > (u32::MAX / 3) as usize {
-        return Err(MeshError::TooManyFaces {
-            faces: faces.len(),
-            max: (u32::MAX / 3) as usize,
-        });
-    }
-    let nv = positions.len() as u32;
-    if let Some(face) = faces
-        .par_iter()
-        .position_first(|f| f.iter().any(|&i| i >= nv))
-    {
-        let index = *faces[face].iter().find(|&&i| i >= nv).expect("found above");
-        return Err(MeshError::IndexOutOfRange {
-            face,
-            index,
-            vertices: positions.len(),
-        });
-    }
-    Ok(())
 }
 
 /// True when a face repeats a vertex index.
@@ -482,6 +454,32 @@ impl Incidence {
     }
 }
 
+/// The root of `x`'s class in a union-find forest (`parent[r] == r` at a
+/// root), halving the path on the way.
+#[inline]
+pub fn find_root(parent: &mut [u32], mut x: u32) -> u32 {
+    while parent[x as usize] != x {
+        let g = parent[parent[x as usize] as usize];
+        parent[x as usize] = g;
+        x = g;
+    }
+    x
+}
+
+/// Joins the classes of `a` and `b`, linking the larger root under the
+/// smaller: `parent[x] <= x` always, so classes come out labelled in the
+/// order of their smallest member (the order [`check`] numbers components).
+/// True when two classes were merged.
+#[inline]
+pub fn union_smallest(parent: &mut [u32], a: u32, b: u32) -> bool {
+    let (ra, rb) = (find_root(parent, a), find_root(parent, b));
+    if ra == rb {
+        return false;
+    }
+    parent[ra.max(rb) as usize] = ra.min(rb);
+    true
+}
+
 /// Union-find over vertices through faces. Returns per-vertex component
 /// labels (`NONE` for unreferenced vertices), the number of referenced
 /// vertices and the number of components. Roots are always the smallest
@@ -489,29 +487,12 @@ impl Incidence {
 fn component_labels(nv: usize, faces: &[[u32; 3]]) -> (Vec<u32>, u64, u64) {
     let mut parent: Vec<u32> = (0..nv as u32).collect();
     let mut referenced = vec![false; nv];
-    fn find(p: &mut [u32], mut x: u32) -> u32 {
-        while p[x as usize] != x {
-            let g = p[p[x as usize] as usize];
-            p[x as usize] = g;
-            x = g;
-        }
-        x
-    }
-    fn union(p: &mut [u32], a: u32, b: u32) {
-        let (ra, rb) = (find(p, a), find(p, b));
-        // Link the larger root under the smaller: parent[x] <= x always.
-        if ra < rb {
-            p[rb as usize] = ra;
-        } else if rb < ra {
-            p[ra as usize] = rb;
-        }
-    }
     for f in faces {
         for &i in f {
             referenced[i as usize] = true;
         }
-        union(&mut parent, f[0], f[1]);
-        union(&mut parent, f[0], f[2]);
+        union_smallest(&mut parent, f[0], f[1]);
+        union_smallest(&mut parent, f[0], f[2]);
     }
     // In place: parent[v] <= v, so by the time v is visited its parent holds
     // a final label (roots get fresh labels in ascending order).
@@ -692,7 +673,7 @@ pub fn scan_vertex(v: u32, fan: &[(u32, u32)], s: &mut VertexScratch, counts: &m
                 n_in += 1;
             }
             let k = (keys[h] & 0x7FFF_FFFF) as u32;
-            if local_union(lp, first, k) {
+            if union_smallest(lp, first, k) {
                 unions += 1;
             }
             h += 1;
@@ -727,24 +708,6 @@ pub fn scan_vertex(v: u32, fan: &[(u32, u32)], s: &mut VertexScratch, counts: &m
         counts.duplicates += dup.windows(2).filter(|p| p[0] == p[1]).count() as u64;
     }
     VertexTopology { edges_here, faces_here, bad, simple_next: (bout == 1 && bin == 1).then_some(next) }
-}
-
-/// Union in a small local forest; true if two classes were merged.
-fn local_union(p: &mut [u32], a: u32, b: u32) -> bool {
-    let find = |p: &mut [u32], mut x: u32| {
-        while p[x as usize] != x {
-            let g = p[p[x as usize] as usize];
-            p[x as usize] = g;
-            x = g;
-        }
-        x
-    };
-    let (ra, rb) = (find(p, a), find(p, b));
-    if ra == rb {
-        return false;
-    }
-    p[ra.max(rb) as usize] = ra.min(rb);
-    true
 }
 
 /// Duplicates among collapsed faces (the per-vertex pass never sees them).

@@ -43,3 +43,24 @@ pub enum MeshError {
         what: &'static str,
     },
 }
+
+impl MeshError {
+    /// Checks an indexed mesh before an in-core operation: at most
+    /// `u32::MAX` vertices and `max_faces` faces, and every index in range
+    /// (the first bad face is reported).
+    pub fn validate(positions: &[[f64; 3]], faces: &[[u32; 3]], max_faces: usize) -> Result<(), MeshError> {
+        use rayon::prelude::*;
+        if positions.len() > u32::MAX as usize {
+            return Err(MeshError::TooManyVertices { vertices: positions.len() });
+        }
+        if faces.len() > max_faces {
+            return Err(MeshError::TooManyFaces { faces: faces.len(), max: max_faces });
+        }
+        let nv = positions.len() as u32;
+        if let Some(face) = faces.par_iter().position_first(|f| f.iter().any(|&i| i >= nv)) {
+            let index = *faces[face].iter().find(|&&i| i >= nv).expect("found above");
+            return Err(MeshError::IndexOutOfRange { face, index, vertices: positions.len() });
+        }
+        Ok(())
+    }
+}

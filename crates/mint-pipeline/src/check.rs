@@ -26,7 +26,7 @@
 use crate::error::PipelineError;
 use crate::progress::{Phase, Progress};
 use mint_io::{MeshReader, ReadOptions, TriangleChunk, VertexPositions};
-use mint_mesh::check::{fan_pair, is_collapsed, report_from, scan_vertex, Bbox, FaceGeom, TopologyCounts, Totals, VertexScratch, FACE_CHUNK};
+use mint_mesh::check::{fan_pair, is_collapsed, report_from, scan_vertex, union_smallest, Bbox, FaceGeom, TopologyCounts, Totals, VertexScratch, FACE_CHUNK};
 use mint_mesh::weld::position_key;
 use mint_mesh::CheckReport;
 use mint_store::{Buckets, Record, StoreError};
@@ -145,28 +145,6 @@ impl Bits {
     #[inline]
     fn get(&self, i: u32) -> bool {
         self.0[i as usize / 64] >> (i % 64) & 1 == 1
-    }
-}
-
-#[inline]
-fn find(p: &mut [u32], mut x: u32) -> u32 {
-    while p[x as usize] != x {
-        let g = p[p[x as usize] as usize];
-        p[x as usize] = g;
-        x = g;
-    }
-    x
-}
-
-/// Links the larger root under the smaller, so `parent[x] <= x` always and
-/// components come out numbered by their smallest vertex, as in core.
-#[inline]
-fn union(p: &mut [u32], a: u32, b: u32) {
-    let (ra, rb) = (find(p, a), find(p, b));
-    if ra < rb {
-        p[rb as usize] = ra;
-    } else if rb < ra {
-        p[ra as usize] = rb;
     }
 }
 
@@ -371,8 +349,8 @@ fn link(parent: &mut [u32], referenced: &mut Bits, has_collapsed: &mut Bits, f: 
     for v in f {
         referenced.set(v);
     }
-    union(parent, f[0], f[1]);
-    union(parent, f[0], f[2]);
+    union_smallest(parent, f[0], f[1]);
+    union_smallest(parent, f[0], f[2]);
     if is_collapsed(&f) {
         has_collapsed.set(f[0]);
     }
