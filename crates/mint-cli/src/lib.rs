@@ -5,16 +5,10 @@
 //! through temporary files that are renamed only on success.
 
 pub mod alloc;
-mod commands;
-mod contour_cmds;
-mod gen_cmds;
-mod grid_cmds;
-mod mesh_cmds;
-mod picture_cmds;
+mod cli;
+mod cmd;
 mod jobs;
 mod paths;
-mod range_cmds;
-mod stage_cmds;
 pub mod progress;
 pub mod units;
 
@@ -26,9 +20,9 @@ static GLOBAL: alloc::CountingAllocator = alloc::CountingAllocator;
 
 /// Runs the command line and returns the process exit code.
 pub fn main() -> ExitCode {
-    let cli = commands::Cli::parse();
+    let cli = cli::Cli::parse();
     progress::install_ctrlc();
-    match commands::run(cli) {
+    match cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             // One line: the error and its causes.

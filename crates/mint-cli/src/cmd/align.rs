@@ -319,7 +319,7 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
     let s = mint_range::merge_file(&a.set, &a.output, &opts, &bars)?;
     let (report, check, secs) = (&s.report, &s.check, s.seconds);
     if a.preview {
-        crate::picture_cmds::write_preview(&[a.output.as_path()], &a.output, a.json, &bars)?;
+        crate::cmd::render::write_preview(&[a.output.as_path()], &a.output, a.json, &bars)?;
     }
     if a.json {
         let key = report.method();

@@ -7,8 +7,8 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use mint_io::WriteOptions;
 use std::path::PathBuf;
-use crate::grid_cmds::resample_and_report;
-use crate::mesh_cmds::print_check;
+use crate::cmd::decimate::resample_and_report;
+use crate::cmd::check::print_check;
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Shape {

@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use mint_pipeline::{resample, ResampleOptions};
 use std::path::PathBuf;
-use crate::picture_cmds::write_preview;
+use crate::cmd::render::write_preview;
 
 #[derive(Args, Debug)]
 pub struct DecimateArgs {

@@ -328,7 +328,7 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
     let s = run::reconstruct_file(&a.input, &output, method, write_options(a.ascii, a.double), &crate::progress::Bars::new(a.quiet || a.json))?;
     let line = contours_line(&s, &a.input.display().to_string(), &output);
     if a.preview {
-        crate::picture_cmds::write_preview(&[output.as_path()], &output, a.quiet || a.json, &crate::progress::Bars::new(a.quiet || a.json))?;
+        crate::cmd::render::write_preview(&[output.as_path()], &output, a.quiet || a.json, &crate::progress::Bars::new(a.quiet || a.json))?;
     }
     report(&s, &a.stats, a.quiet, a.json, line)
 }
@@ -356,7 +356,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
         let s = rebuild_roi(&a, &set, roi, sopts, method, &output)?;
         let line = contours_line(&s, &format!("{} {}", a.input.display(), roi.label()), &output);
         if a.preview {
-            crate::picture_cmds::write_preview(&[output.as_path()], &output, quiet, &crate::progress::Bars::new(quiet))?;
+            crate::cmd::render::write_preview(&[output.as_path()], &output, quiet, &crate::progress::Bars::new(quiet))?;
         }
         return report(&s, &a.stats, a.quiet, a.json, line);
     }
@@ -405,7 +405,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
     }
     if a.preview && !written.is_empty() {
         let paths: Vec<&Path> = written.iter().map(|p| p.as_path()).collect();
-        crate::picture_cmds::write_preview(&paths, &dir.join("rois.ply"), quiet, &crate::progress::Bars::new(quiet))?;
+        crate::cmd::render::write_preview(&paths, &dir.join("rois.ply"), quiet, &crate::progress::Bars::new(quiet))?;
     }
     if !quiet {
         eprintln!("{} ROIs written to {}, peak heap {}", written.len(), dir.display(), human_bytes(alloc::peak_heap()));

@@ -7,10 +7,10 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 pub(crate) use crate::jobs::*;
-use crate::gen_cmds::*;
-use crate::grid_cmds::*;
-use crate::mesh_cmds::*;
-use crate::picture_cmds::*;
+use crate::cmd::gen::*;
+use crate::cmd::decimate::*;
+use crate::cmd::check::*;
+use crate::cmd::render::*;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -109,7 +109,7 @@ A vertex exactly on a plane counts as above it, so every crossing is decided exa
 leave open chains, which are closed to the nearest chain start. Contours that are degenerate or cross \
 another are dropped (and counted), so the output is always a valid profile.\n\n\
 Example:\n  mint slice bunny.ply bunny.pro --sections 100 --axis y")]
-    Slice(crate::contour_cmds::SliceArgs),
+    Slice(crate::cmd::contours::SliceArgs),
     /// Rebuild a surface from a stack of planar contours (.pro, or a DICOM
     /// RT structure set) by the angle criterion or by marching cubes.
     #[command(long_about = "Rebuild a surface from a profile (.pro) or a DICOM RT structure set (.dcm, found by \
@@ -130,7 +130,7 @@ Any holes and branching; watertight with --caps.\n\n\
 Examples:\n  mint contours organ.pro organ.ply --method mc --cubes 256 --caps --stats run.json\n  \
 mint contours vase.pro vase.wrl --method angle --threshold 0.7 --caps\n  \
 mint contours rtss.dcm heart.ply --roi Heart --method angle --caps")]
-    Contours(crate::contour_cmds::ContoursArgs),
+    Contours(crate::cmd::contours::ContoursArgs),
     /// Reduce an over-tessellated mesh by merging near-coplanar triangles
     /// (normals within --angle degrees) and re-triangulating each region.
     #[command(long_about = "Reduce an over-tessellated mesh with the normal optimizer (Dangl 1998, 3).\n\n\
@@ -141,7 +141,7 @@ first; boundary vertices collinear with their neighbours in every region around 
 Other regions stay as they are. No vertex moves: planar regions stay planar, and the topology and \
 boundary are kept.\n\n\
 Example:\n  mint optimize marching-cubed.ply clean.ply --angle 5 --stats opt.json")]
-    Optimize(crate::contour_cmds::OptimizeArgs),
+    Optimize(crate::cmd::contours::OptimizeArgs),
     /// Cast range images of a mesh from N viewpoints: test scans with true
     /// (and, on request, perturbed) poses in a .conf.
     #[command(long_about = "Cast range images of a mesh from N viewpoints, as an orthographic range scanner would.\n\n\
@@ -151,7 +151,7 @@ mint's depth grid of docs/FORMATS.md), view_NN.mesh.ply (its triangle mesh), and
 convention) with the true pose of every view. With --perturb-deg/--perturb-frac it also writes \
 scans-perturbed.conf, every view but the first moved at random: ground truth for `mint align`.\n\n\
 Example:\n  mint scan bunny.ply scans/ --views 8 --noise 0.0005 --perturb-deg 5 --perturb-frac 0.05")]
-    Scan(crate::range_cmds::ScanArgs),
+    Scan(crate::cmd::align::ScanArgs),
     /// Register range scans to each other (constrained ICP) and write the refined poses.
     #[command(long_about = "Register range scans to each other with constrained ICP (Turk and Levoy 1994).\n\n\
 Reads a scan set (Stanford .conf or MeshLab .aln; scans are PLY range images or meshes) with \
@@ -162,7 +162,7 @@ convergence, over a hierarchy of subsampled scans with d halving per level: poin
 the coarse levels, Horn's point-to-point quaternion on the last (--metric). Scans join a growing model, the best-overlapping first; a scan \
 that cannot be registered is reported and left out of OUT_SET.\n\n\
 Example:\n  mint align bun.conf bun-aligned.conf")]
-    Align(crate::range_cmds::AlignArgs),
+    Align(crate::cmd::align::AlignArgs),
     /// Merge registered range scans into one mesh: zippering + consensus, or on a grid.
     #[command(long_about = "Merge registered range scans into one mesh.\n\n\
 --method zipper (default; Turk and Levoy 1994): scans are added one at a time: overlapping \
@@ -178,7 +178,7 @@ confidence, and the resampler rebuilds the surface. The result is always closed 
 2-manifold, oriented); unseen regions are closed where the surrounding inside and outside \
 meet.\n\n\
 Examples:\n  mint zipper bun-aligned.conf bunny.ply\n  mint zipper bun-aligned.conf bunny-closed.ply --method grid --cells 2000000")]
-    Zipper(crate::range_cmds::ZipperArgs),
+    Zipper(crate::cmd::align::ZipperArgs),
     /// Run resample, bool or csg as separate tasks: plan, run one task,
     /// watch (for resuming, and for clusters and schedulers).
     #[command(subcommand, long_about = "Run resample, bool or csg as stages of separate tasks, for schedulers and clusters.\n\n\
@@ -193,7 +193,7 @@ Example:\n  mint stage plan resample scan.ply out.ply --cells 100000000 --work /
 mint stage run /shared/run bounds 0     # ... every task of every stage, in stage order\n  \
 mint stage status /shared/run\n\n\
 `mint slurm` does all of this on a Slurm cluster; docs/SCALE.md has the recipe for other schedulers.")]
-    Stage(crate::stage_cmds::StageCommand),
+    Stage(crate::cmd::stage::StageCommand),
     /// Run resample, bool or csg on a Slurm cluster: one job array per stage.
     #[command(long_about = "Run resample, bool or csg on a Slurm cluster.\n\n\
 Writes the plan into --work DIR (which every node must see at the same path), writes one sbatch \
@@ -203,7 +203,7 @@ Prints the job ids. --dry-run writes the scripts and submits nothing; --wait fol
 squeue and exits with its status. Extra sbatch options (partition, account, time, memory) go in \
 --sbatch \"...\".\n\n\
 Example:\n  mint slurm resample scan.ply out.ply --cells 100000000 --work /shared/run --parts 32 --slabs 32 \\\n      --sbatch \"--partition=batch --time=2:00:00\" --wait")]
-    Slurm(crate::stage_cmds::SlurmArgs),
+    Slurm(crate::cmd::stage::SlurmArgs),
 }
 
 pub fn run(cli: Cli) -> Result<()> {
@@ -220,13 +220,13 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Decimate(a) => cmd_decimate(a),
         Command::Gen(a) => cmd_gen(a),
         Command::Demo(a) => cmd_demo(a),
-        Command::Slice(a) => crate::contour_cmds::cmd_slice(a),
-        Command::Contours(a) => crate::contour_cmds::cmd_contours(a),
-        Command::Optimize(a) => crate::contour_cmds::cmd_optimize(a),
-        Command::Scan(a) => crate::range_cmds::cmd_scan(a),
-        Command::Align(a) => crate::range_cmds::cmd_align(a),
-        Command::Zipper(a) => crate::range_cmds::cmd_zipper(a),
-        Command::Stage(c) => crate::stage_cmds::cmd_stage(c),
-        Command::Slurm(a) => crate::stage_cmds::cmd_slurm(a),
+        Command::Slice(a) => crate::cmd::contours::cmd_slice(a),
+        Command::Contours(a) => crate::cmd::contours::cmd_contours(a),
+        Command::Optimize(a) => crate::cmd::contours::cmd_optimize(a),
+        Command::Scan(a) => crate::cmd::align::cmd_scan(a),
+        Command::Align(a) => crate::cmd::align::cmd_align(a),
+        Command::Zipper(a) => crate::cmd::align::cmd_zipper(a),
+        Command::Stage(c) => crate::cmd::stage::cmd_stage(c),
+        Command::Slurm(a) => crate::cmd::stage::cmd_slurm(a),
     }
 }
