@@ -3,13 +3,24 @@
 //! (or `--json`), and turn any error into one line on stderr and a non-zero
 //! exit code. No output file is left behind on error or Ctrl-C: writers go
 //! through temporary files that are renamed only on success.
+//!
+//! `cli` holds the parser (the subcommand list and its help) and the
+//! dispatch; `cmd` has one module per subcommand. What several commands
+//! share: `jobs` (argument groups and option builders), `summary` (the
+//! resampling, grid-job and check reports), `preview` (the `--preview`
+//! pictures), `contour_report` (the contour commands' summary and status
+//! file), `paths` (output checks), `progress` (bars and Ctrl-C), `units`
+//! (sizes) and `alloc` (the counting allocator).
 
 pub mod alloc;
 mod cli;
 mod cmd;
+mod contour_report;
 mod jobs;
 mod paths;
+mod preview;
 pub mod progress;
+mod summary;
 pub mod units;
 
 use clap::Parser;

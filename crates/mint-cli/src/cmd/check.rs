@@ -1,11 +1,15 @@
-//! `mint info`, `convert`, `validate`, `check` and `distance`: reading, converting and judging mesh files.
+//! `mint check`: judges a mesh of any size (counts, components, boundary and
+//! non-manifold edges, orientation, degenerate and duplicate faces, genus,
+//! volume) and gives one verdict, watertight or not. Calls
+//! `mint_pipeline::check_file` (and `mint_mesh::self_intersections` for
+//! `--self-intersections`).
 
-use crate::jobs::*;
+use crate::jobs::{default_mem, load_mesh};
 use crate::progress::Bars;
+use crate::summary::print_check;
 use crate::units::human_bytes;
-use anyhow::{bail, Context, Result};
+use anyhow::Result;
 use clap::Args;
-use mint_io::WriteOptions;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -46,186 +50,6 @@ pub struct CheckArgs {
     pub quiet: bool,
 }
 
-#[derive(Args, Debug)]
-pub struct DistanceArgs {
-    /// The mesh sampled first (A → B, then B → A).
-    pub a: PathBuf,
-    /// The other mesh.
-    pub b: PathBuf,
-    /// Area-uniform samples per direction.
-    #[arg(long, default_value_t = 1_000_000)]
-    pub samples: usize,
-    /// Seed of the sample positions.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Print the result as JSON.
-    #[arg(long)]
-    pub json: bool,
-}
-
-#[derive(Args, Debug)]
-pub struct ValidateArgs {
-    /// Mesh file.
-    pub file: PathBuf,
-    /// Directory for temporary spill files (ASCII input) [default: the system temp dir].
-    #[arg(long)]
-    pub tmp: Option<PathBuf>,
-    /// No progress bars.
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the result as JSON.
-    #[arg(long)]
-    pub json: bool,
-}
-
-#[derive(Args, Debug)]
-pub struct InfoArgs {
-    /// Mesh file.
-    pub file: PathBuf,
-    /// Print as JSON.
-    #[arg(long)]
-    pub json: bool,
-}
-
-#[derive(Args, Debug)]
-pub struct ConvertArgs {
-    /// Input mesh.
-    pub input: PathBuf,
-    /// Output mesh; the format follows the extension.
-    pub output: PathBuf,
-    /// Write ASCII instead of binary (PLY/STL).
-    #[arg(long)]
-    pub ascii: bool,
-    /// Write vertex coordinates as f64 (PLY).
-    #[arg(long)]
-    pub double: bool,
-    /// Directory for temporary spill files [default: the system temp dir].
-    #[arg(long)]
-    pub tmp: Option<PathBuf>,
-    /// No progress bars.
-    #[arg(long, short)]
-    pub quiet: bool,
-}
-
-pub(crate) fn cmd_info(a: InfoArgs) -> Result<()> {
-    let info = mint_io::read_info(&a.file)?;
-    if a.json {
-        let v = serde_json::json!({
-            "file": a.file.display().to_string(),
-            "format": format!("{:?}", info.format),
-            "encoding": info.encoding,
-            "vertices": info.vertex_count,
-            "faces": info.face_count,
-            "elements": info.elements.iter().map(|e| serde_json::json!({
-                "name": e.name, "count": e.count, "properties": e.properties
-            })).collect::<Vec<_>>(),
-            "comments": info.comments,
-            "obj_info": info.obj_info,
-        });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else {
-        println!("{}: {:?} ({})", a.file.display(), info.format, info.encoding);
-        println!("  vertices  {}", info.vertex_count);
-        match info.face_count {
-            Some(n) => println!("  faces     {n}"),
-            None => println!("  faces     (not stated in the header)"),
-        }
-        for e in &info.elements {
-            println!("  element {} {}", e.name, e.count);
-            for p in &e.properties {
-                println!("    {p}");
-            }
-        }
-        for c in &info.comments {
-            println!("  comment {c}");
-        }
-        for c in &info.obj_info {
-            println!("  obj_info {c}");
-        }
-    }
-    Ok(())
-}
-
-pub(crate) fn cmd_convert(a: ConvertArgs) -> Result<()> {
-    crate::paths::check_output(&a.output, &[&a.input])?;
-    let bars = Bars::new(a.quiet);
-    use mint_pipeline::{Phase, Progress};
-    bars.start(Phase::named("convert"), 0);
-    let read = mint_io::ReadOptions { spill_dir: a.tmp.clone(), ..Default::default() };
-    let write = WriteOptions { ascii: a.ascii, double: a.double, ..Default::default() };
-    let mut last = 0u64;
-    let summary = mint_io::convert_cancellable(&a.input, &a.output, read, write, &mut |done, _total| {
-        bars.advance(done.saturating_sub(last));
-        last = last.max(done);
-        !crate::progress::interrupted()
-    })
-    .with_context(|| format!("converting {} to {}", a.input.display(), a.output.display()))?;
-    bars.finish();
-    if !a.quiet {
-        eprintln!(
-            "converted {} ({:?}) -> {} ({:?}): {} vertices, {} triangles, {}",
-            a.input.display(),
-            summary.input_format,
-            a.output.display(),
-            summary.output_format,
-            summary.vertices_written,
-            summary.triangles,
-            human_bytes(summary.bytes_written)
-        );
-    }
-    Ok(())
-}
-
-
-pub(crate) fn cmd_validate(a: ValidateArgs) -> Result<()> {
-    use mint_pipeline::{Phase, Progress};
-    let t = std::time::Instant::now();
-    let mut reader = mint_io::MeshReader::open(&a.file, mint_io::ReadOptions { spill_dir: a.tmp.clone(), ..Default::default() })?;
-    let bars = Bars::new(a.quiet || a.json);
-    bars.start(Phase::named("validate"), reader.info().face_count.unwrap_or(0));
-    let mut chunk = mint_io::TriangleChunk::default();
-    let mut triangles = 0u64;
-    // A checksum over positions keeps the read from being optimized away and
-    // lets two runs be compared.
-    let mut checksum = 0.0f64;
-    while reader.next_chunk(&mut chunk)? {
-        triangles += chunk.positions.len() as u64;
-        for t in &chunk.positions {
-            checksum += t[0][0] + t[1][1] + t[2][2];
-        }
-        bars.advance(chunk.positions.len() as u64);
-        if crate::progress::interrupted() {
-            bail!("interrupted");
-        }
-    }
-    bars.finish();
-    for w in reader.warnings() {
-        eprintln!("mint: warning: {w}");
-    }
-    let secs = t.elapsed().as_secs_f64();
-    let bytes = std::fs::metadata(&a.file).map(|m| m.len()).unwrap_or(0);
-    let tps = triangles as f64 / secs.max(1e-9);
-    let mbs = bytes as f64 / 1e6 / secs.max(1e-9);
-    if a.json {
-        let v = serde_json::json!({
-            "file": a.file.display().to_string(), "vertices": reader.vertex_count(), "triangles": triangles,
-            "seconds": secs, "triangles_per_second": tps, "mb_per_second": mbs, "checksum": checksum,
-        });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else {
-        println!(
-            "{}: ok, {} vertices, {} triangles in {:.3}s ({:.1} M triangles/s, {:.0} MB/s)",
-            a.file.display(),
-            reader.vertex_count(),
-            triangles,
-            secs,
-            tps / 1e6,
-            mbs
-        );
-    }
-    Ok(())
-}
-
 pub(crate) fn cmd_check(a: CheckArgs) -> Result<()> {
     let threads = if a.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { a.threads };
     let opts = mint_pipeline::CheckOptions { mem_bytes: a.mem.unwrap_or_else(default_mem), weld: !a.no_weld, tmp_dir: a.tmp.clone(), threads, list_boundary: 0 };
@@ -263,42 +87,6 @@ pub(crate) fn cmd_check(a: CheckArgs) -> Result<()> {
     }
     if a.strict && !r.watertight {
         std::process::exit(3);
-    }
-    Ok(())
-}
-
-pub(crate) fn print_check(name: &str, r: &mint_mesh::CheckReport) {
-    println!("{name}: {}", if r.watertight { "watertight (closed, 2-manifold, consistently oriented)" } else { "NOT watertight" });
-    println!("  vertices {} ({} unreferenced), faces {}", r.vertices, r.unreferenced_vertices, r.faces);
-    if r.welded_vertices > 0 {
-        println!("  welded {} vertices at identical positions into earlier ones (--no-weld judges the indices as written)", r.welded_vertices);
-    }
-    if let (Some(lo), Some(hi)) = (r.bbox_min, r.bbox_max) {
-        println!("  bbox [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
-    }
-    println!("  components {} ({} closed), genus of closed ones {:?} (total {})", r.components, r.closed_components, r.genera, r.genus_total);
-    println!("  edges {}, boundary edges {} in {} loops ({} on non-simple boundaries)", r.edges, r.boundary_edges, r.boundary_loops, r.non_simple_boundary_edges);
-    println!("  non-manifold edges {}, non-manifold vertices {}", r.non_manifold_edges, r.non_manifold_vertices);
-    println!("  inconsistently oriented edges {}", r.inconsistently_oriented_edges);
-    println!("  degenerate faces {} ({} with a repeated index), duplicate faces {}", r.degenerate_faces, r.collapsed_faces, r.duplicate_faces);
-    println!("  Euler characteristic {}, signed volume {:.9}, area {:.9}", r.euler_characteristic, r.signed_volume, r.surface_area);
-}
-
-pub(crate) fn cmd_distance(a: DistanceArgs) -> Result<()> {
-    let ma = load_mesh(&a.a)?;
-    let mb = load_mesh(&a.b)?;
-    let (ab, ba) = mint_mesh::try_symmetric_distance((&ma.0, &ma.1), (&mb.0, &mb.1), a.samples, a.seed)
-        .with_context(|| format!("distance between {} and {}", a.a.display(), a.b.display()))?;
-    if a.json {
-        let v = serde_json::json!({ "a": a.a.display().to_string(), "b": a.b.display().to_string(), "a_to_b": ab, "b_to_a": ba });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else {
-        for (name, r) in [(format!("{} -> {}", a.a.display(), a.b.display()), &ab), (format!("{} -> {}", a.b.display(), a.a.display()), &ba)] {
-            println!("{name} ({} samples)", r.samples);
-            println!("  mean {:.6e} ({:.3e} of diagonal)", r.mean, r.mean_rel);
-            println!("  rms  {:.6e} ({:.3e} of diagonal)", r.rms, r.rms_rel);
-            println!("  max  {:.6e} ({:.3e} of diagonal) at {:?}", r.max, r.max_rel, r.max_point);
-        }
     }
     Ok(())
 }
