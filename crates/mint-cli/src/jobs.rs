@@ -1,18 +1,17 @@
 //! The argument groups and option builders that several commands share:
 //! the job arguments of `resample`, `bool` and `csg` (also parsed by
-//! `mint stage plan` and `mint slurm`), their translation into library
-//! options, the resampling summary's printing, and the in-memory mesh
-//! loader of the in-core commands. Command modules import from here; this
-//! module imports no command module.
+//! `mint stage plan` and `mint slurm`, as a `JobCommand`), their translation
+//! into library options and into a staged run's plan, and the in-memory
+//! mesh loader of the in-core commands. Command modules import from here;
+//! this module imports no command module.
 
-use crate::alloc;
-use crate::units::{human_bytes, parse_bytes};
+use crate::units::parse_bytes;
 use anyhow::{bail, Context, Result};
-use clap::{Args, ValueEnum};
+use clap::{Args, Subcommand, ValueEnum};
 use mint_core::GridSize;
 use mint_io::WriteOptions;
-use mint_pipeline::ResampleOptions;
-use std::path::PathBuf;
+use mint_pipeline::{Job, Plan, ResampleOptions};
+use std::path::{Path, PathBuf};
 
 #[derive(Args, Debug, Clone)]
 pub struct ResampleArgs {
@@ -246,81 +245,6 @@ pub(crate) fn resample_input(input: &std::path::Path, work: Option<&std::path::P
     })
 }
 
-/// Prints a resampling summary: JSON on stdout, or lines on stderr.
-pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, json: bool, quiet: bool, mem: u64) -> Result<()> {
-    let peak_heap = alloc::peak_heap();
-    let peak_rss = alloc::peak_rss();
-    let warnings = summary_warnings(summary);
-    print_warnings(&warnings);
-    if json {
-        let mut v = serde_json::to_value(summary)?;
-        v["warnings"] = warnings.into();
-        v["mem_budget_bytes"] = mem.into();
-        v["peak_heap_bytes"] = peak_heap.into();
-        v["peak_rss_bytes"] = peak_rss.into();
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !quiet {
-        let s = summary;
-        eprintln!("resampled {} -> {}", s.input, s.output);
-        eprintln!(
-            "  input        {} vertices, {} faces{}",
-            s.input_vertices,
-            s.input_faces,
-            if s.orientation_inverted { " (inside-out: signs reversed)" } else { "" }
-        );
-        eprintln!(
-            "  grid         {}x{}x{} cells of {:.6} (slabs along {}: {}, {} threads)",
-            s.grid_cells[0], s.grid_cells[1], s.grid_cells[2], s.cell_size, s.slab_axis, s.slabs, s.threads
-        );
-        eprintln!(
-            "  intercepts   {} found, {} removed, {} kept ({} of shards)",
-            s.intercepts_found,
-            s.intercepts_removed,
-            s.intercepts_kept,
-            human_bytes(s.shard_bytes)
-        );
-        eprintln!("  output       {} vertices, {} faces", s.output_vertices, s.output_faces);
-        if !s.deref.is_empty() {
-            let spilled = if s.deref_spilled_bytes > 0 { format!(" ({} spilled to disk)", human_bytes(s.deref_spilled_bytes)) } else { String::new() };
-            eprintln!("  faces        dereferenced by {}{spilled}", s.deref);
-        }
-        if s.sign_rule == "orient" {
-            eprintln!("  signs        orient; non-canonical cells {} (left open)", s.non_canonical_cells);
-        } else {
-            eprintln!(
-                "  signs        {} ({} of {} lines winding-valid, {} odd); {} lines through holes, {} vertices synthesized, {} overlapping edges merged",
-                s.sign_rule, s.census_winding_valid, s.census_lines, s.census_odd, s.inconsistent_lines, s.synthesized_vertices, s.merged_edges
-            );
-            eprintln!(
-                "  holes        {} closed, {} left open ({} cells); the output's boundary: {} edges in {} loops",
-                s.holes_closed, s.holes_left_open, s.open_cells, s.output_boundary_edges, s.output_boundary_loops
-            );
-        }
-        eprintln!(
-            "  time         {:.2}s (bounds {:.2}s, discretize {:.2}s, reconstruct {:.2}s, write {:.2}s)",
-            s.seconds_total, s.seconds_bounds, s.seconds_discretize, s.seconds_reconstruct, s.seconds_write
-        );
-        if s.distributed {
-            eprintln!("  memory       per task: see each task's line (mint stage run) or its log");
-        } else {
-            eprintln!(
-                "  memory       peak heap {}, peak RSS {}, budget {}",
-                human_bytes(peak_heap),
-                peak_rss.map(human_bytes).unwrap_or_else(|| "?".into()),
-                human_bytes(mem)
-            );
-        }
-    }
-    if let Some(dir) = &summary.work_dir {
-        if !json && !quiet && summary.distributed {
-            eprintln!("  work dir     {dir} (remove it when you no longer need its results)");
-        } else if !json && !quiet {
-            eprintln!("  work dir     {dir} ({} tasks run, {} found done); remove it when you no longer need to resume", summary.tasks_run, summary.tasks_resumed);
-        }
-    }
-    Ok(())
-}
-
 /// Reads a whole mesh into memory (positions as f64).
 pub fn load_mesh(path: &std::path::Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>)> {
     let mut reader = mint_io::MeshReader::open(path, mint_io::ReadOptions { resolve_positions: false, ..Default::default() })?;
@@ -338,11 +262,6 @@ pub fn load_mesh(path: &std::path::Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>
         eprintln!("mint: warning: {w}");
     }
     Ok((positions, faces))
-}
-
-/// `OUT.png` beside `output` (its extension replaced).
-pub(crate) fn preview_path(output: &std::path::Path) -> PathBuf {
-    output.with_extension("png")
 }
 
 pub(crate) fn grid_options(g: &GridArgs) -> Result<ResampleOptions> {
@@ -365,48 +284,6 @@ pub(crate) fn grid_options(g: &GridArgs) -> Result<ResampleOptions> {
         max_hole: None,
         ..Default::default()
     })
-}
-
-/// Warnings about a run that succeeded: an empty output, and why.
-pub(crate) fn summary_warnings(s: &mint_pipeline::ResampleSummary) -> Vec<String> {
-    let mut w = Vec::new();
-    if s.output_faces == 0 {
-        let why = if s.intercepts_found == 0 {
-            "no grid line crosses the surface (it is flat between grid lines or smaller than a cell; use smaller cells)"
-        } else if s.intercepts_kept == 0 {
-            "every crossing cancelled (the surface is thinner than a cell, or not closed)"
-        } else {
-            "no cell changes from outside to inside (the surface is thinner than a cell, not closed, or its holes were left open)"
-        };
-        w.push(format!("{}: the output is empty: {why}", s.output));
-    }
-    w
-}
-
-/// Prints the warnings on stderr, one line each (also with --quiet and --json).
-fn print_warnings(warnings: &[String]) {
-    for w in warnings {
-        eprintln!("mint: warning: {w}");
-    }
-}
-
-pub(crate) fn report(g: &GridArgs, s: &mint_pipeline::ResampleSummary) -> Result<()> {
-    let warnings = summary_warnings(s);
-    print_warnings(&warnings);
-    if g.json {
-        let mut v = serde_json::to_value(s)?;
-        v["warnings"] = warnings.into();
-        v["peak_heap_bytes"] = alloc::peak_heap().into();
-        v["peak_rss_bytes"] = alloc::peak_rss().into();
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !g.quiet {
-        eprintln!("{} -> {}", s.input, s.output);
-        eprintln!("  grid         {}x{}x{} cells of {:.6} ({} slabs)", s.grid_cells[0], s.grid_cells[1], s.grid_cells[2], s.cell_size, s.slabs);
-        eprintln!("  input        {} mesh faces; operand signs: {}", s.input_faces, s.sign_rule);
-        eprintln!("  output       {} vertices, {} faces", s.output_vertices, s.output_faces);
-        eprintln!("  time         {:.2}s; peak heap {}", s.seconds_total, human_bytes(alloc::peak_heap()));
-    }
-    Ok(())
 }
 
 /// The files a scene reads: the scene file and its meshes.
@@ -479,4 +356,59 @@ impl DerefArg {
             DerefArg::Sort => "sort",
         }
     }
+}
+
+/// The job of a staged run, with the options of the one-process command.
+#[derive(Subcommand, Debug)]
+pub enum JobCommand {
+    /// Resample a mesh (every `mint resample` option).
+    Resample(ResampleArgs),
+    /// A boolean of two meshes (every `mint bool` option).
+    #[command(name = "bool")]
+    Bool(BoolArgs),
+    /// A CSG scene (every `mint csg` option).
+    Csg(CsgArgs),
+}
+
+/// The job, its options and its output, from a job command's arguments.
+/// Range images are triangulated into the work directory first.
+pub(crate) fn job_of(c: &JobCommand) -> Result<(Job, ResampleOptions, PathBuf, bool, bool)> {
+    Ok(match c {
+        JobCommand::Resample(a) => {
+            let opts = resample_options(a)?;
+            let Some(work) = &a.staged.work else { bail!("a staged run needs --work DIR (a directory every task can reach)") };
+            crate::paths::check_output(&a.output, &[&a.input])?;
+            let (input, _) = resample_input(&a.input, Some(work), work)?;
+            (Job::Resample { input: abs(&input) }, opts, a.output.clone(), a.json, a.quiet)
+        }
+        JobCommand::Bool(a) => {
+            let op = match a.op {
+                BoolOpArg::Union => "union",
+                BoolOpArg::Intersection => "intersection",
+                BoolOpArg::Difference => "difference",
+            };
+            crate::paths::check_output(&a.output, &[&a.a, &a.b])?;
+            (Job::Bool { op: op.into(), a: abs(&a.a), b: abs(&a.b) }, grid_options(&a.grid)?, a.output.clone(), a.grid.json, a.grid.quiet)
+        }
+        JobCommand::Csg(a) => {
+            let text = std::fs::read_to_string(&a.scene).with_context(|| format!("{}: cannot read the scene", a.scene.display()))?;
+            let scene = mint_pipeline::parse_scene(&text, &a.scene)?;
+            crate::paths::check_output(&a.output, &scene_inputs(&a.scene, &scene))?;
+            (Job::Csg { scene: abs(&a.scene) }, grid_options(&a.grid)?, a.output.clone(), a.grid.json, a.grid.quiet)
+        }
+    })
+}
+
+/// `p` made absolute: tasks may run in another directory, on another machine.
+pub(crate) fn abs(p: &Path) -> PathBuf {
+    mint_pipeline::plan::absolute(p)
+}
+
+/// The plan of a staged run of the job (written into its --work DIR), the
+/// directory, and the job's --json and --quiet.
+pub(crate) fn plan_of(c: &JobCommand) -> Result<(Plan, PathBuf, bool, bool)> {
+    let (job, opts, output, json, quiet) = job_of(c)?;
+    let Some(dir) = opts.work_dir.clone() else { bail!("a staged run needs --work DIR (a directory every task can reach)") };
+    let plan = mint_pipeline::plan_run(job, None, &output, &opts, &dir)?;
+    Ok((plan, dir, json, quiet))
 }

@@ -3,19 +3,24 @@
 //! (or `--json`), and turn any error into one line on stderr and a non-zero
 //! exit code. No output file is left behind on error or Ctrl-C: writers go
 //! through temporary files that are renamed only on success.
+//!
+//! `cli` holds the parser (the subcommand list and its help) and the
+//! dispatch; `cmd` has one module per subcommand. What several commands
+//! share: `jobs` (argument groups and option builders), `summary` (the
+//! resampling, grid-job and check reports), `preview` (the `--preview`
+//! pictures), `contour_report` (the contour commands' summary and status
+//! file), `paths` (output checks), `progress` (bars and Ctrl-C), `units`
+//! (sizes) and `alloc` (the counting allocator).
 
 pub mod alloc;
-mod commands;
-mod contour_cmds;
-mod gen_cmds;
-mod grid_cmds;
-mod mesh_cmds;
-mod picture_cmds;
+mod cli;
+mod cmd;
+mod contour_report;
 mod jobs;
 mod paths;
-mod range_cmds;
-mod stage_cmds;
+mod preview;
 pub mod progress;
+mod summary;
 pub mod units;
 
 use clap::Parser;
@@ -26,9 +31,9 @@ static GLOBAL: alloc::CountingAllocator = alloc::CountingAllocator;
 
 /// Runs the command line and returns the process exit code.
 pub fn main() -> ExitCode {
-    let cli = commands::Cli::parse();
+    let cli = cli::Cli::parse();
     progress::install_ctrlc();
-    match commands::run(cli) {
+    match cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             // One line: the error and its causes.

@@ -1,14 +1,12 @@
-//! The layered-reconstruction subcommands: `mint slice` (mesh → contour
-//! stack), `mint contours` (contour stack → mesh, by the angle criterion or
-//! marching cubes; the stack a profile or an ROI of a DICOM RT structure
-//! set, with `--roi`, `--all-rois` and `--list-rois`) and `mint optimize`
-//! (the normal-angle optimizer). Each
-//! handler checks its arguments, calls one driver of `mint_contour::run`,
-//! prints a one-paragraph summary (or `--json`) and writes the `--stats`
-//! status file: time, counts, every parameter used (defaults included) and
-//! the method's own counters, plus the peak heap.
+//! `mint contours`: rebuilds a surface from a stack of planar contours, by
+//! the angle criterion or by marching cubes; the stack is a profile (.pro)
+//! or an ROI of a DICOM RT structure set (`--roi`, `--all-rois`,
+//! `--list-rois`). Calls `mint_contour::run::reconstruct_file` (profiles)
+//! or `mint_contour::run::reconstruct_sections` on the stacks of
+//! `mint_contour::rtstruct` (DICOM).
 
 use crate::alloc;
+use crate::contour_report::{report, status, write_options, write_stats};
 use crate::units::human_bytes;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
@@ -16,40 +14,7 @@ use mint_contour::angle::AngleOptions;
 use mint_contour::mc::McOptions;
 use mint_contour::rtstruct;
 use mint_contour::run::{self, Method, MethodStats, RunStats};
-use mint_io::WriteOptions;
 use std::path::{Path, PathBuf};
-
-/// An axis of the input mesh.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SliceAxis {
-    X,
-    Y,
-    Z,
-}
-
-#[derive(Args, Debug)]
-pub struct SliceArgs {
-    /// Input mesh (any format mint reads).
-    pub input: PathBuf,
-    /// Output profile (.pro), written to a temporary file and renamed at the end.
-    pub output: PathBuf,
-    /// Number of cutting planes, evenly spaced across the mesh's extent along
-    /// the axis (plane k at min + (k + 1/2) * extent / N).
-    #[arg(long)]
-    pub sections: u32,
-    /// Axis the planes are orthogonal to.
-    #[arg(long, value_enum, default_value_t = SliceAxis::Z)]
-    pub axis: SliceAxis,
-    /// Write the status file (time, counts, parameters) as JSON here.
-    #[arg(long, value_name = "FILE.json")]
-    pub stats: Option<PathBuf>,
-    /// No summary (errors are still printed).
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the summary as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
-}
 
 /// A reconstruction method.
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -147,90 +112,6 @@ pub struct ContoursArgs {
     pub json: bool,
 }
 
-#[derive(Args, Debug)]
-pub struct OptimizeArgs {
-    /// Input mesh.
-    pub input: PathBuf,
-    /// Output mesh; the format follows the extension.
-    pub output: PathBuf,
-    /// Normal angle threshold in degrees: triangles merge into a region when
-    /// all their normals lie within this angle of one another; 0 merges only
-    /// exactly coplanar triangles.
-    #[arg(long)]
-    pub angle: f64,
-    /// Write ASCII instead of binary (PLY/STL).
-    #[arg(long)]
-    pub ascii: bool,
-    /// Write vertex coordinates as f64 instead of f32.
-    #[arg(long)]
-    pub double: bool,
-    /// Write the status file (time, counts, parameters) as JSON here.
-    #[arg(long, value_name = "FILE.json")]
-    pub stats: Option<PathBuf>,
-    /// No summary (errors are still printed).
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the summary as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
-}
-
-/// The status JSON: the run's stats plus the peak heap.
-fn status(s: &RunStats) -> Result<serde_json::Value> {
-    let mut v = serde_json::to_value(s)?;
-    v["peak_heap_bytes"] = alloc::peak_heap().into();
-    Ok(v)
-}
-
-/// Writes the status file atomically (temporary name, then rename).
-fn write_stats(path: &Path, v: &serde_json::Value) -> Result<()> {
-    let tmp = path.with_extension("json.mint-tmp");
-    std::fs::write(&tmp, serde_json::to_string_pretty(v)? + "\n").with_context(|| format!("{}: writing the status file", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("{}: renaming the status file", path.display()))?;
-    Ok(())
-}
-
-/// Prints and records a finished run.
-fn report(s: &RunStats, stats: &Option<PathBuf>, quiet: bool, json: bool, line: String) -> Result<()> {
-    let v = status(s)?;
-    if let Some(p) = stats {
-        write_stats(p, &v)?;
-    }
-    if json {
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !quiet {
-        eprintln!("{line}");
-        eprintln!("  time {:.3}s, peak heap {}", s.seconds, human_bytes(alloc::peak_heap()));
-    }
-    Ok(())
-}
-
-fn write_options(ascii: bool, double: bool) -> WriteOptions {
-    WriteOptions { ascii, double, ..Default::default() }
-}
-
-pub fn cmd_slice(a: SliceArgs) -> Result<()> {
-    crate::paths::check_output(&a.output, &[&a.input])?;
-    if let Some(st) = &a.stats {
-        crate::paths::check_output(st, &[&a.input, &a.output])?;
-    }
-    let axis = a.axis as usize;
-    let s = run::slice_file(&a.input, &a.output, a.sections, axis, &crate::progress::Bars::new(a.quiet || a.json))?;
-    let MethodStats::Slice(d) = &s.details else { unreachable!() };
-    let line = format!(
-        "sliced {} -> {}: {} of {} planes met the mesh, {} contours, {} vertices ({} open chains closed, {} contours dropped)",
-        a.input.display(),
-        a.output.display(),
-        d.sections,
-        d.planes,
-        d.contours,
-        d.vertices,
-        d.chains_closed,
-        d.contours_dropped
-    );
-    report(&s, &a.stats, a.quiet, a.json, line)
-}
-
 /// Is `path` a DICOM file: by content, or by a `.dcm` name (so that a
 /// non-DICOM file named so gets the DICOM reader's "not a DICOM file")?
 fn is_dicom(path: &Path) -> Result<bool> {
@@ -319,7 +200,7 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
     let output = a.output.clone().expect("clap requires the output");
     crate::paths::check_output(&output, &[&a.input])?;
     if a.preview {
-        crate::paths::check_output(&crate::jobs::preview_path(&output), &[&a.input])?;
+        crate::paths::check_output(&crate::preview::preview_path(&output), &[&a.input])?;
     }
     if let Some(st) = &a.stats {
         crate::paths::check_output(st, &[&a.input, &output])?;
@@ -328,7 +209,7 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
     let s = run::reconstruct_file(&a.input, &output, method, write_options(a.ascii, a.double), &crate::progress::Bars::new(a.quiet || a.json))?;
     let line = contours_line(&s, &a.input.display().to_string(), &output);
     if a.preview {
-        crate::picture_cmds::write_preview(&[output.as_path()], &output, a.quiet || a.json, &crate::progress::Bars::new(a.quiet || a.json))?;
+        crate::preview::write_preview(&[output.as_path()], &output, a.quiet || a.json, &crate::progress::Bars::new(a.quiet || a.json))?;
     }
     report(&s, &a.stats, a.quiet, a.json, line)
 }
@@ -347,7 +228,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
         let output = a.output.clone().expect("clap requires the output");
         crate::paths::check_output(&output, &[&a.input])?;
         if a.preview {
-            crate::paths::check_output(&crate::jobs::preview_path(&output), &[&a.input])?;
+            crate::paths::check_output(&crate::preview::preview_path(&output), &[&a.input])?;
         }
         if let Some(st) = &a.stats {
             crate::paths::check_output(st, &[&a.input, &output])?;
@@ -356,7 +237,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
         let s = rebuild_roi(&a, &set, roi, sopts, method, &output)?;
         let line = contours_line(&s, &format!("{} {}", a.input.display(), roi.label()), &output);
         if a.preview {
-            crate::picture_cmds::write_preview(&[output.as_path()], &output, quiet, &crate::progress::Bars::new(quiet))?;
+            crate::preview::write_preview(&[output.as_path()], &output, quiet, &crate::progress::Bars::new(quiet))?;
         }
         return report(&s, &a.stats, a.quiet, a.json, line);
     }
@@ -405,7 +286,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
     }
     if a.preview && !written.is_empty() {
         let paths: Vec<&Path> = written.iter().map(|p| p.as_path()).collect();
-        crate::picture_cmds::write_preview(&paths, &dir.join("rois.ply"), quiet, &crate::progress::Bars::new(quiet))?;
+        crate::preview::write_preview(&paths, &dir.join("rois.ply"), quiet, &crate::progress::Bars::new(quiet))?;
     }
     if !quiet {
         eprintln!("{} ROIs written to {}, peak heap {}", written.len(), dir.display(), human_bytes(alloc::peak_heap()));
@@ -479,28 +360,4 @@ fn roi_file_names(rois: &[rtstruct::Roi]) -> Vec<String> {
             }
         })
         .collect()
-}
-
-pub fn cmd_optimize(a: OptimizeArgs) -> Result<()> {
-    crate::paths::check_output(&a.output, &[&a.input])?;
-    if let Some(st) = &a.stats {
-        crate::paths::check_output(st, &[&a.input, &a.output])?;
-    }
-    let s = run::optimize_file(&a.input, &a.output, a.angle, write_options(a.ascii, a.double))?;
-    let MethodStats::Optimize(d) = &s.details else { unreachable!() };
-    let line = format!(
-        "optimized {} -> {}: {} -> {} faces ({:.1}% fewer), {} -> {} vertices; {} regions, {} re-triangulated, {} kept, {} collinear vertices dropped",
-        a.input.display(),
-        a.output.display(),
-        d.faces_in,
-        d.faces_out,
-        100.0 * (1.0 - d.faces_out as f64 / (d.faces_in.max(1)) as f64),
-        d.vertices_in,
-        d.vertices_out,
-        d.regions,
-        d.regions_optimized,
-        d.regions_kept,
-        d.collinear_dropped
-    );
-    report(&s, &a.stats, a.quiet, a.json, line)
 }

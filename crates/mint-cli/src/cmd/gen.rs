@@ -1,14 +1,14 @@
-//! `mint gen` and `mint demo`: synthetic meshes, and the main job end to end on one.
+//! `mint gen`: a synthetic test mesh (sphere, torus, genus-n plate, many
+//! components, or a scan-like surface with a defect list beside it),
+//! streamed to disk at any size, in order or shuffled. Calls the generators
+//! of `mint_gen` (`sphere`, `torus`, `genus`, `components`, `scan_like`,
+//! `torus_shuffled`, `shuffle_mesh`); `mint demo` runs it through `cmd_gen`.
 
-use crate::jobs::*;
-use crate::progress::Bars;
 use crate::units::human_bytes;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use mint_io::WriteOptions;
 use std::path::PathBuf;
-use crate::grid_cmds::resample_and_report;
-use crate::mesh_cmds::print_check;
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Shape {
@@ -59,24 +59,6 @@ pub struct GenArgs {
 pub enum OrderArg {
     InOrder,
     Shuffled,
-}
-
-#[derive(Args, Debug)]
-pub struct DemoArgs {
-    /// Faces of the generated input.
-    #[arg(long, default_value_t = 2_000_000)]
-    pub faces: u64,
-    /// Grid cells of the resampling.
-    #[arg(long, default_value_t = 1_000_000)]
-    pub cells: u64,
-    /// Keep the input and output in this directory [default: a temporary
-    /// directory, removed at the end].
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// Where to write the before/after picture [default: mint-demo.png in
-    /// the --out directory, else in the current directory].
-    #[arg(long, value_name = "PNG")]
-    pub picture: Option<PathBuf>,
 }
 
 /// Generates `a.shape` into `w`: what was generated, and the scan's defects.
@@ -138,74 +120,4 @@ pub(crate) fn cmd_gen(a: GenArgs) -> Result<()> {
 /// `out.ply` -> `out.defects.json`.
 pub(crate) fn sidecar_path(out: &std::path::Path) -> PathBuf {
     out.with_extension("defects.json")
-}
-
-pub(crate) fn cmd_demo(a: DemoArgs) -> Result<()> {
-    let tmp;
-    let dir = match &a.out {
-        Some(d) => {
-            std::fs::create_dir_all(d).with_context(|| format!("{}: creating the output directory", d.display()))?;
-            d.clone()
-        }
-        None => {
-            tmp = tempfile_dir()?;
-            tmp.path().to_path_buf()
-        }
-    };
-    let input = dir.join("demo-genus3.ply");
-    let output = dir.join("demo-genus3-resampled.ply");
-    eprintln!("1/3 generating a genus-3 solid with about {} faces: {}", a.faces, input.display());
-    cmd_gen(GenArgs { shape: Shape::Genus, output: input.clone(), faces: a.faces, seed: 1, genus: 3, ascii: false, order: OrderArg::InOrder, json: false })?;
-    eprintln!("2/3 resampling it on about {} cells", a.cells);
-    let s = resample_and_report(ResampleArgs {
-        input: input.clone(),
-        output: output.clone(),
-        cells: Some(a.cells),
-        cell_size: None,
-        mem: None,
-        threads: 0,
-        tmp: None,
-        axis: AxisArg::Auto,
-        slab: None,
-        staged: StagedArgs::default(),
-        signs: SignsArg::Auto,
-        max_hole: 16,
-        close_all: false,
-        grid_offset: None,
-        ascii: false,
-        double: false,
-        quiet: false,
-        json: false,
-        preview: false,
-    })?;
-    eprintln!("3/3 checking the output");
-    let (positions, faces) = load_mesh(&output)?;
-    let r = mint_mesh::try_check(&positions, &faces)?;
-    print_check(&output.display().to_string(), &r);
-    if !(r.watertight && r.genus_total == 3 && s.non_canonical_cells == 0) {
-        bail!("demo output is not a watertight genus-3 surface: this is a bug, please report it");
-    }
-    let png = a.picture.clone().unwrap_or_else(|| a.out.as_ref().map_or_else(|| PathBuf::from("mint-demo.png"), |d| d.join("mint-demo.png")));
-    let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, ..Default::default() };
-    mint_render::render_files(&[input.as_path(), output.as_path()], &png, &o, &Bars::new(true))?;
-    println!("demo ok: {} faces -> {} faces, watertight, genus 3", s.input_faces, s.output_faces);
-    println!("picture: {} (input left, resampled right)", png.display());
-    Ok(())
-}
-
-struct TempDir(PathBuf);
-impl TempDir {
-    fn path(&self) -> &std::path::Path {
-        &self.0
-    }
-}
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-fn tempfile_dir() -> Result<TempDir> {
-    let base = std::env::temp_dir().join(format!("mint-demo-{}", std::process::id()));
-    std::fs::create_dir_all(&base).with_context(|| format!("{}: creating a temporary directory", base.display()))?;
-    Ok(TempDir(base))
 }

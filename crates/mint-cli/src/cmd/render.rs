@@ -1,6 +1,8 @@
-//! `mint render` and the `--preview` pictures of the other commands.
+//! `mint render`: a PNG picture of one or more meshes of any size, by a
+//! streaming z-buffer rasterizer (shading, or the distance to a reference;
+//! wireframe, boundary edges). Calls `mint_render::render_files` (and
+//! `mint_pipeline::check_file` for `--show-boundary`).
 
-use crate::jobs::*;
 use crate::progress::Bars;
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
@@ -134,17 +136,6 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         if let (Some(max), Some(mean)) = (s.distance_max, s.distance_mean) {
             eprintln!("  distance to the reference over the visible surface: mean {mean:.3e}, max {max:.3e} (the colour bar's top)");
         }
-    }
-    Ok(())
-}
-
-/// `--preview`: `OUT.png` beside `output`, the meshes side by side.
-pub(crate) fn write_preview(meshes: &[&std::path::Path], output: &std::path::Path, quiet: bool, bars: &Bars) -> Result<()> {
-    let png = preview_path(output);
-    let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, ..Default::default() };
-    mint_render::render_files(meshes, &png, &o, bars)?;
-    if !quiet {
-        eprintln!("preview: {} ({})", png.display(), meshes.iter().map(|m| m.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned())).collect::<Vec<_>>().join(", "));
     }
     Ok(())
 }

@@ -1,14 +1,16 @@
-//! `mint resample`, `bool`, `csg` and `decimate`: the jobs of the staged engine run in one process.
+//! `mint decimate`: a mesh of any size down to a target face count, by an
+//! out-of-core resampling to an intermediate mesh and an in-core quadric
+//! simplification. Calls `mint_pipeline::decimate`.
 
 use crate::alloc;
-use crate::jobs::*;
+use crate::jobs::default_mem;
+use crate::preview::{preview_path, write_before_after};
 use crate::progress::Bars;
 use crate::units::{human_bytes, parse_bytes};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use clap::Args;
-use mint_pipeline::{resample, ResampleOptions};
+use mint_pipeline::ResampleOptions;
 use std::path::PathBuf;
-use crate::picture_cmds::write_preview;
 
 #[derive(Args, Debug)]
 pub struct DecimateArgs {
@@ -49,31 +51,6 @@ pub struct DecimateArgs {
     pub json: bool,
 }
 
-pub(crate) fn cmd_resample(a: ResampleArgs) -> Result<()> {
-    resample_and_report(a).map(|_| ())
-}
-
-pub(crate) fn resample_and_report(a: ResampleArgs) -> Result<mint_pipeline::ResampleSummary> {
-    let opts = resample_options(&a)?;
-    crate::paths::check_output(&a.output, &[&a.input])?;
-    let mem = opts.mem_bytes;
-    let tmp_root = a.tmp.clone().unwrap_or_else(|| a.output.parent().filter(|p| !p.as_os_str().is_empty()).map(PathBuf::from).unwrap_or_else(|| PathBuf::from(".")));
-    let (input, _range_mesh) = resample_input(&a.input, a.staged.work.as_deref(), &tmp_root)?;
-    let bars = Bars::new(a.quiet || a.json);
-    let mut summary = resample(&input, &a.output, &opts, &bars)?;
-    summary.input = a.input.display().to_string();
-    if a.preview {
-        let png = preview_path(&a.output);
-        let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, ..Default::default() };
-        mint_render::render_files(&[input.as_path(), a.output.as_path()], &png, &o, &bars)?;
-        if !a.quiet && !a.json {
-            eprintln!("preview: {} (input left, output right)", png.display());
-        }
-    }
-    print_resample_summary(&summary, a.json, a.quiet, mem)?;
-    Ok(summary)
-}
-
 pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
     crate::paths::check_output(&a.output, &[&a.input])?;
     if a.preview {
@@ -89,12 +66,7 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
     let bars = Bars::new(a.quiet || a.json);
     let s = mint_pipeline::decimate(&a.input, &a.output, &o, &bars)?;
     if a.preview {
-        let png = preview_path(&a.output);
-        let ro = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, ..Default::default() };
-        mint_render::render_files(&[a.input.as_path(), a.output.as_path()], &png, &ro, &bars)?;
-        if !a.quiet && !a.json {
-            eprintln!("preview: {} (input left, output right)", png.display());
-        }
+        write_before_after(&a.input, &a.output, a.quiet || a.json, &bars)?;
     }
     if a.json {
         let mut v = serde_json::to_value(&s)?;
@@ -120,39 +92,4 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         eprintln!("mint: warning: the output is less clean than the resampling (see the summary)");
     }
     Ok(())
-}
-
-pub(crate) fn cmd_bool(a: BoolArgs) -> Result<()> {
-    let opts = grid_options(&a.grid)?;
-    crate::paths::check_output(&a.output, &[&a.a, &a.b])?;
-    let op = match a.op {
-        BoolOpArg::Union => mint_core::expr::BoolOp::Union,
-        BoolOpArg::Intersection => mint_core::expr::BoolOp::Intersection,
-        BoolOpArg::Difference => mint_core::expr::BoolOp::Difference,
-    };
-    let bars = Bars::new(a.grid.quiet || a.grid.json);
-    let s = mint_pipeline::boolean(op, &a.a, &a.b, &a.output, &opts, &bars)?;
-    if a.grid.preview {
-        write_preview(&[a.a.as_path(), a.b.as_path(), a.output.as_path()], &a.output, a.grid.quiet || a.grid.json, &bars)?;
-    }
-    report(&a.grid, &s)
-}
-
-pub(crate) fn cmd_csg(a: CsgArgs) -> Result<()> {
-    let opts = grid_options(&a.grid)?;
-    crate::paths::check_output(&a.output, &[&a.scene])?;
-    let text = std::fs::read_to_string(&a.scene).with_context(|| format!("{}: cannot read the scene", a.scene.display()))?;
-    let scene = mint_pipeline::parse_scene(&text, &a.scene)?;
-    crate::paths::check_output(&a.output, &scene_inputs(&a.scene, &scene))?;
-    let bars = Bars::new(a.grid.quiet || a.grid.json);
-    let s = mint_pipeline::csg(&scene, &a.scene.display().to_string(), &a.output, &opts, &bars)?;
-    if a.grid.preview {
-        let mut meshes: Vec<&std::path::Path> = scene.operands.iter().filter_map(|o| match o {
-            mint_pipeline::scene::Operand::Mesh { path, .. } => Some(path.as_path()),
-            _ => None,
-        }).collect();
-        meshes.push(a.output.as_path());
-        write_preview(&meshes, &a.output, a.grid.quiet || a.grid.json, &bars)?;
-    }
-    report(&a.grid, &s)
 }

@@ -1,16 +1,12 @@
 //! The `mint` command line: the subcommand list (clap derive, with help that
-//! teaches) and the dispatch to each command's module (`grid_cmds`,
-//! `mesh_cmds`, `picture_cmds`, `gen_cmds`, `contour_cmds`, `range_cmds`,
-//! `stage_cmds`), which parse, call a library entry point and print.
+//! teaches) and the dispatch to each command's module in `crate::cmd`, which
+//! parses, calls a library entry point and prints.
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
-pub(crate) use crate::jobs::*;
-use crate::gen_cmds::*;
-use crate::grid_cmds::*;
-use crate::mesh_cmds::*;
-use crate::picture_cmds::*;
+use crate::cmd::{align, boolean, check, contours, convert, csg, decimate, demo, distance, gen, info, optimize, render, resample, scan, slice, slurm, stage, validate, zipper};
+use crate::jobs::{BoolArgs, CsgArgs, ResampleArgs};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -60,7 +56,7 @@ meshoptimizer's quadric edge-collapse simplifier to N faces. The result is check
 resampling is closed and 2-manifold, so is the output (the simplifier's target is relaxed rather than \
 hand over a worse mesh, and the summary says so).\n\n\
 Examples:\n  mint decimate scan.ply small.ply --faces 1000000\n  mint decimate huge.ply lod.ply --faces 50000 --intermediate 400000 --mem 2G --json")]
-    Decimate(DecimateArgs),
+    Decimate(decimate::DecimateArgs),
     /// Boolean of two meshes on one grid (union, intersection, difference),
     /// computed on the grid's intersection lists: out of core, watertight.
     #[command(name = "bool")]
@@ -73,18 +69,18 @@ Example scene:\n  { \"difference\": [ { \"box\": { \"size\": [2, 2, 2] }, \"rota
 See crates/mint-pipeline/src/scene.rs for the whole format (defs and refs, halfspace normal/offset).")]
     Csg(CsgArgs),
     /// Show a mesh file's format, counts and properties without reading its body.
-    Info(InfoArgs),
+    Info(info::InfoArgs),
     /// Convert between mesh formats (PLY, OBJ, STL, OFF), streaming.
-    Convert(ConvertArgs),
+    Convert(convert::ConvertArgs),
     /// Stream every triangle of a file with positions resolved: validates
     /// indices and coordinates and reports the read speed.
-    Validate(ValidateArgs),
+    Validate(validate::ValidateArgs),
     /// Judge a mesh: counts, components, boundary and non-manifold edges,
     /// orientation, degenerate and duplicate faces, genus, volume, and one
     /// verdict: watertight or not. Exit code 0 either way; read the verdict.
-    Check(CheckArgs),
+    Check(check::CheckArgs),
     /// Metro-style surface distance between two meshes, both directions.
-    Distance(DistanceArgs),
+    Distance(distance::DistanceArgs),
     /// Draw a picture of one or more meshes of any size (PNG), streaming.
     #[command(long_about = "Draw a picture of one or more meshes of any size, as PNG.\n\n\
 A streaming z-buffer rasterizer: every triangle is projected and drawn on its own, so memory is the \
@@ -94,12 +90,12 @@ joint bounding box; flat shading from each face's normal with a fixed light; fac
 under the same camera; --view all draws seven views (iso, front, right, top, back, left, bottom), one \
 row each. The bytes are the same on any machine.\n\n\
 Examples:\n  mint render scan.ply scan.png\n  mint render scan.ply resampled.ply compare.png --view all --size 600x450")]
-    Render(RenderArgs),
+    Render(render::RenderArgs),
     /// Generate a synthetic test mesh, streamed to disk (any size).
-    Gen(GenArgs),
+    Gen(gen::GenArgs),
     /// Generate a genus-3 solid, resample it, and check the result: mint's
     /// main job on a built-in input, end to end.
-    Demo(DemoArgs),
+    Demo(demo::DemoArgs),
     /// Cut a mesh by N parallel planes into a stack of contours (a .pro
     /// profile): test data for `mint contours`, and cross-sections for users.
     #[command(long_about = "Cut a mesh by N parallel planes into a profile (.pro): a stack of sections, \
@@ -109,7 +105,7 @@ A vertex exactly on a plane counts as above it, so every crossing is decided exa
 leave open chains, which are closed to the nearest chain start. Contours that are degenerate or cross \
 another are dropped (and counted), so the output is always a valid profile.\n\n\
 Example:\n  mint slice bunny.ply bunny.pro --sections 100 --axis y")]
-    Slice(crate::contour_cmds::SliceArgs),
+    Slice(slice::SliceArgs),
     /// Rebuild a surface from a stack of planar contours (.pro, or a DICOM
     /// RT structure set) by the angle criterion or by marching cubes.
     #[command(long_about = "Rebuild a surface from a profile (.pro) or a DICOM RT structure set (.dcm, found by \
@@ -130,7 +126,7 @@ Any holes and branching; watertight with --caps.\n\n\
 Examples:\n  mint contours organ.pro organ.ply --method mc --cubes 256 --caps --stats run.json\n  \
 mint contours vase.pro vase.wrl --method angle --threshold 0.7 --caps\n  \
 mint contours rtss.dcm heart.ply --roi Heart --method angle --caps")]
-    Contours(crate::contour_cmds::ContoursArgs),
+    Contours(contours::ContoursArgs),
     /// Reduce an over-tessellated mesh by merging near-coplanar triangles
     /// (normals within --angle degrees) and re-triangulating each region.
     #[command(long_about = "Reduce an over-tessellated mesh with the normal optimizer (Dangl 1998, 3).\n\n\
@@ -141,7 +137,7 @@ first; boundary vertices collinear with their neighbours in every region around 
 Other regions stay as they are. No vertex moves: planar regions stay planar, and the topology and \
 boundary are kept.\n\n\
 Example:\n  mint optimize marching-cubed.ply clean.ply --angle 5 --stats opt.json")]
-    Optimize(crate::contour_cmds::OptimizeArgs),
+    Optimize(optimize::OptimizeArgs),
     /// Cast range images of a mesh from N viewpoints: test scans with true
     /// (and, on request, perturbed) poses in a .conf.
     #[command(long_about = "Cast range images of a mesh from N viewpoints, as an orthographic range scanner would.\n\n\
@@ -151,7 +147,7 @@ mint's depth grid of docs/FORMATS.md), view_NN.mesh.ply (its triangle mesh), and
 convention) with the true pose of every view. With --perturb-deg/--perturb-frac it also writes \
 scans-perturbed.conf, every view but the first moved at random: ground truth for `mint align`.\n\n\
 Example:\n  mint scan bunny.ply scans/ --views 8 --noise 0.0005 --perturb-deg 5 --perturb-frac 0.05")]
-    Scan(crate::range_cmds::ScanArgs),
+    Scan(scan::ScanArgs),
     /// Register range scans to each other (constrained ICP) and write the refined poses.
     #[command(long_about = "Register range scans to each other with constrained ICP (Turk and Levoy 1994).\n\n\
 Reads a scan set (Stanford .conf or MeshLab .aln; scans are PLY range images or meshes) with \
@@ -162,7 +158,7 @@ convergence, over a hierarchy of subsampled scans with d halving per level: poin
 the coarse levels, Horn's point-to-point quaternion on the last (--metric). Scans join a growing model, the best-overlapping first; a scan \
 that cannot be registered is reported and left out of OUT_SET.\n\n\
 Example:\n  mint align bun.conf bun-aligned.conf")]
-    Align(crate::range_cmds::AlignArgs),
+    Align(align::AlignArgs),
     /// Merge registered range scans into one mesh: zippering + consensus, or on a grid.
     #[command(long_about = "Merge registered range scans into one mesh.\n\n\
 --method zipper (default; Turk and Levoy 1994): scans are added one at a time: overlapping \
@@ -178,7 +174,7 @@ confidence, and the resampler rebuilds the surface. The result is always closed 
 2-manifold, oriented); unseen regions are closed where the surrounding inside and outside \
 meet.\n\n\
 Examples:\n  mint zipper bun-aligned.conf bunny.ply\n  mint zipper bun-aligned.conf bunny-closed.ply --method grid --cells 2000000")]
-    Zipper(crate::range_cmds::ZipperArgs),
+    Zipper(zipper::ZipperArgs),
     /// Run resample, bool or csg as separate tasks: plan, run one task,
     /// watch (for resuming, and for clusters and schedulers).
     #[command(subcommand, long_about = "Run resample, bool or csg as stages of separate tasks, for schedulers and clusters.\n\n\
@@ -193,7 +189,7 @@ Example:\n  mint stage plan resample scan.ply out.ply --cells 100000000 --work /
 mint stage run /shared/run bounds 0     # ... every task of every stage, in stage order\n  \
 mint stage status /shared/run\n\n\
 `mint slurm` does all of this on a Slurm cluster; docs/SCALE.md has the recipe for other schedulers.")]
-    Stage(crate::stage_cmds::StageCommand),
+    Stage(stage::StageCommand),
     /// Run resample, bool or csg on a Slurm cluster: one job array per stage.
     #[command(long_about = "Run resample, bool or csg on a Slurm cluster.\n\n\
 Writes the plan into --work DIR (which every node must see at the same path), writes one sbatch \
@@ -203,30 +199,30 @@ Prints the job ids. --dry-run writes the scripts and submits nothing; --wait fol
 squeue and exits with its status. Extra sbatch options (partition, account, time, memory) go in \
 --sbatch \"...\".\n\n\
 Example:\n  mint slurm resample scan.ply out.ply --cells 100000000 --work /shared/run --parts 32 --slabs 32 \\\n      --sbatch \"--partition=batch --time=2:00:00\" --wait")]
-    Slurm(crate::stage_cmds::SlurmArgs),
+    Slurm(slurm::SlurmArgs),
 }
 
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Resample(a) => cmd_resample(a),
-        Command::Bool(a) => cmd_bool(a),
-        Command::Csg(a) => cmd_csg(a),
-        Command::Info(a) => cmd_info(a),
-        Command::Convert(a) => cmd_convert(a),
-        Command::Validate(a) => cmd_validate(a),
-        Command::Check(a) => cmd_check(a),
-        Command::Distance(a) => cmd_distance(a),
-        Command::Render(a) => cmd_render(a),
-        Command::Decimate(a) => cmd_decimate(a),
-        Command::Gen(a) => cmd_gen(a),
-        Command::Demo(a) => cmd_demo(a),
-        Command::Slice(a) => crate::contour_cmds::cmd_slice(a),
-        Command::Contours(a) => crate::contour_cmds::cmd_contours(a),
-        Command::Optimize(a) => crate::contour_cmds::cmd_optimize(a),
-        Command::Scan(a) => crate::range_cmds::cmd_scan(a),
-        Command::Align(a) => crate::range_cmds::cmd_align(a),
-        Command::Zipper(a) => crate::range_cmds::cmd_zipper(a),
-        Command::Stage(c) => crate::stage_cmds::cmd_stage(c),
-        Command::Slurm(a) => crate::stage_cmds::cmd_slurm(a),
+        Command::Resample(a) => resample::cmd_resample(a),
+        Command::Bool(a) => boolean::cmd_bool(a),
+        Command::Csg(a) => csg::cmd_csg(a),
+        Command::Info(a) => info::cmd_info(a),
+        Command::Convert(a) => convert::cmd_convert(a),
+        Command::Validate(a) => validate::cmd_validate(a),
+        Command::Check(a) => check::cmd_check(a),
+        Command::Distance(a) => distance::cmd_distance(a),
+        Command::Render(a) => render::cmd_render(a),
+        Command::Decimate(a) => decimate::cmd_decimate(a),
+        Command::Gen(a) => gen::cmd_gen(a),
+        Command::Demo(a) => demo::cmd_demo(a),
+        Command::Slice(a) => slice::cmd_slice(a),
+        Command::Contours(a) => contours::cmd_contours(a),
+        Command::Optimize(a) => optimize::cmd_optimize(a),
+        Command::Scan(a) => scan::cmd_scan(a),
+        Command::Align(a) => align::cmd_align(a),
+        Command::Zipper(a) => zipper::cmd_zipper(a),
+        Command::Stage(c) => stage::cmd_stage(c),
+        Command::Slurm(a) => slurm::cmd_slurm(a),
     }
 }

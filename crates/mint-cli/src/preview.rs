@@ -1,0 +1,40 @@
+//! The `--preview` pictures: OUT.png beside a command's output, the meshes
+//! side by side under one camera (800x600, iso view), drawn by
+//! `mint_render::render_files`. Used by resample, decimate, bool, csg,
+//! contours and zipper.
+
+use crate::progress::Bars;
+use anyhow::Result;
+use std::path::{Path, PathBuf};
+
+/// `OUT.png` beside `output` (its extension replaced).
+pub(crate) fn preview_path(output: &Path) -> PathBuf {
+    output.with_extension("png")
+}
+
+/// Draws `meshes` side by side into the preview picture of `output`, and
+/// returns its path.
+fn draw_preview(meshes: &[&Path], output: &Path, bars: &Bars) -> Result<PathBuf> {
+    let png = preview_path(output);
+    let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, ..Default::default() };
+    mint_render::render_files(meshes, &png, &o, bars)?;
+    Ok(png)
+}
+
+/// `--preview`: `OUT.png` beside `output`, the meshes side by side.
+pub(crate) fn write_preview(meshes: &[&Path], output: &Path, quiet: bool, bars: &Bars) -> Result<()> {
+    let png = draw_preview(meshes, output, bars)?;
+    if !quiet {
+        eprintln!("preview: {} ({})", png.display(), meshes.iter().map(|m| m.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned())).collect::<Vec<_>>().join(", "));
+    }
+    Ok(())
+}
+
+/// `--preview` of resample and decimate: the input left, the output right.
+pub(crate) fn write_before_after(input: &Path, output: &Path, quiet: bool, bars: &Bars) -> Result<()> {
+    let png = draw_preview(&[input, output], output, bars)?;
+    if !quiet {
+        eprintln!("preview: {} (input left, output right)", png.display());
+    }
+    Ok(())
+}

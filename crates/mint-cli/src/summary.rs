@@ -1,0 +1,142 @@
+//! Summaries that several commands print: the resampling's (`resample`,
+//! `stage run`, `slurm`), the grid jobs' (`bool`, `csg`), each with a
+//! warning when the output is empty, and the check report (`check`, `demo`).
+
+use crate::alloc;
+use crate::jobs::GridArgs;
+use crate::units::human_bytes;
+use anyhow::Result;
+
+/// Prints a resampling summary: JSON on stdout, or lines on stderr.
+pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, json: bool, quiet: bool, mem: u64) -> Result<()> {
+    let peak_heap = alloc::peak_heap();
+    let peak_rss = alloc::peak_rss();
+    let warnings = summary_warnings(summary);
+    print_warnings(&warnings);
+    if json {
+        let mut v = serde_json::to_value(summary)?;
+        v["warnings"] = warnings.into();
+        v["mem_budget_bytes"] = mem.into();
+        v["peak_heap_bytes"] = peak_heap.into();
+        v["peak_rss_bytes"] = peak_rss.into();
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else if !quiet {
+        let s = summary;
+        eprintln!("resampled {} -> {}", s.input, s.output);
+        eprintln!(
+            "  input        {} vertices, {} faces{}",
+            s.input_vertices,
+            s.input_faces,
+            if s.orientation_inverted { " (inside-out: signs reversed)" } else { "" }
+        );
+        eprintln!(
+            "  grid         {}x{}x{} cells of {:.6} (slabs along {}: {}, {} threads)",
+            s.grid_cells[0], s.grid_cells[1], s.grid_cells[2], s.cell_size, s.slab_axis, s.slabs, s.threads
+        );
+        eprintln!(
+            "  intercepts   {} found, {} removed, {} kept ({} of shards)",
+            s.intercepts_found,
+            s.intercepts_removed,
+            s.intercepts_kept,
+            human_bytes(s.shard_bytes)
+        );
+        eprintln!("  output       {} vertices, {} faces", s.output_vertices, s.output_faces);
+        if !s.deref.is_empty() {
+            let spilled = if s.deref_spilled_bytes > 0 { format!(" ({} spilled to disk)", human_bytes(s.deref_spilled_bytes)) } else { String::new() };
+            eprintln!("  faces        dereferenced by {}{spilled}", s.deref);
+        }
+        if s.sign_rule == "orient" {
+            eprintln!("  signs        orient; non-canonical cells {} (left open)", s.non_canonical_cells);
+        } else {
+            eprintln!(
+                "  signs        {} ({} of {} lines winding-valid, {} odd); {} lines through holes, {} vertices synthesized, {} overlapping edges merged",
+                s.sign_rule, s.census_winding_valid, s.census_lines, s.census_odd, s.inconsistent_lines, s.synthesized_vertices, s.merged_edges
+            );
+            eprintln!(
+                "  holes        {} closed, {} left open ({} cells); the output's boundary: {} edges in {} loops",
+                s.holes_closed, s.holes_left_open, s.open_cells, s.output_boundary_edges, s.output_boundary_loops
+            );
+        }
+        eprintln!(
+            "  time         {:.2}s (bounds {:.2}s, discretize {:.2}s, reconstruct {:.2}s, write {:.2}s)",
+            s.seconds_total, s.seconds_bounds, s.seconds_discretize, s.seconds_reconstruct, s.seconds_write
+        );
+        if s.distributed {
+            eprintln!("  memory       per task: see each task's line (mint stage run) or its log");
+        } else {
+            eprintln!(
+                "  memory       peak heap {}, peak RSS {}, budget {}",
+                human_bytes(peak_heap),
+                peak_rss.map(human_bytes).unwrap_or_else(|| "?".into()),
+                human_bytes(mem)
+            );
+        }
+    }
+    if let Some(dir) = &summary.work_dir {
+        if !json && !quiet && summary.distributed {
+            eprintln!("  work dir     {dir} (remove it when you no longer need its results)");
+        } else if !json && !quiet {
+            eprintln!("  work dir     {dir} ({} tasks run, {} found done); remove it when you no longer need to resume", summary.tasks_run, summary.tasks_resumed);
+        }
+    }
+    Ok(())
+}
+
+/// Warnings about a run that succeeded: an empty output, and why.
+pub(crate) fn summary_warnings(s: &mint_pipeline::ResampleSummary) -> Vec<String> {
+    let mut w = Vec::new();
+    if s.output_faces == 0 {
+        let why = if s.intercepts_found == 0 {
+            "no grid line crosses the surface (it is flat between grid lines or smaller than a cell; use smaller cells)"
+        } else if s.intercepts_kept == 0 {
+            "every crossing cancelled (the surface is thinner than a cell, or not closed)"
+        } else {
+            "no cell changes from outside to inside (the surface is thinner than a cell, not closed, or its holes were left open)"
+        };
+        w.push(format!("{}: the output is empty: {why}", s.output));
+    }
+    w
+}
+
+/// Prints the warnings on stderr, one line each (also with --quiet and --json).
+fn print_warnings(warnings: &[String]) {
+    for w in warnings {
+        eprintln!("mint: warning: {w}");
+    }
+}
+
+pub(crate) fn report(g: &GridArgs, s: &mint_pipeline::ResampleSummary) -> Result<()> {
+    let warnings = summary_warnings(s);
+    print_warnings(&warnings);
+    if g.json {
+        let mut v = serde_json::to_value(s)?;
+        v["warnings"] = warnings.into();
+        v["peak_heap_bytes"] = alloc::peak_heap().into();
+        v["peak_rss_bytes"] = alloc::peak_rss().into();
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else if !g.quiet {
+        eprintln!("{} -> {}", s.input, s.output);
+        eprintln!("  grid         {}x{}x{} cells of {:.6} ({} slabs)", s.grid_cells[0], s.grid_cells[1], s.grid_cells[2], s.cell_size, s.slabs);
+        eprintln!("  input        {} mesh faces; operand signs: {}", s.input_faces, s.sign_rule);
+        eprintln!("  output       {} vertices, {} faces", s.output_vertices, s.output_faces);
+        eprintln!("  time         {:.2}s; peak heap {}", s.seconds_total, human_bytes(alloc::peak_heap()));
+    }
+    Ok(())
+}
+
+pub(crate) fn print_check(name: &str, r: &mint_mesh::CheckReport) {
+    println!("{name}: {}", if r.watertight { "watertight (closed, 2-manifold, consistently oriented)" } else { "NOT watertight" });
+    println!("  vertices {} ({} unreferenced), faces {}", r.vertices, r.unreferenced_vertices, r.faces);
+    if r.welded_vertices > 0 {
+        println!("  welded {} vertices at identical positions into earlier ones (--no-weld judges the indices as written)", r.welded_vertices);
+    }
+    if let (Some(lo), Some(hi)) = (r.bbox_min, r.bbox_max) {
+        println!("  bbox [{:.6}, {:.6}, {:.6}] .. [{:.6}, {:.6}, {:.6}]", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+    }
+    println!("  components {} ({} closed), genus of closed ones {:?} (total {})", r.components, r.closed_components, r.genera, r.genus_total);
+    println!("  edges {}, boundary edges {} in {} loops ({} on non-simple boundaries)", r.edges, r.boundary_edges, r.boundary_loops, r.non_simple_boundary_edges);
+    println!("  non-manifold edges {}, non-manifold vertices {}", r.non_manifold_edges, r.non_manifold_vertices);
+    println!("  inconsistently oriented edges {}", r.inconsistently_oriented_edges);
+    println!("  degenerate faces {} ({} with a repeated index), duplicate faces {}", r.degenerate_faces, r.collapsed_faces, r.duplicate_faces);
+    println!("  Euler characteristic {}, signed volume {:.9}, area {:.9}", r.euler_characteristic, r.signed_volume, r.surface_area);
+}
