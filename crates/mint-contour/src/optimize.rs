@@ -40,6 +40,7 @@
 
 use crate::geom2d::{first_crossing, orient, signed_area, P2};
 use crate::triangulate::triangulate;
+use glam::DVec3;
 use mint_core::TriMesh;
 use robust::{orient3d, Coord3D};
 use serde::Serialize;
@@ -71,18 +72,12 @@ pub struct OptimizeStats {
     pub rounds: u64,
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn unit(a: [f64; 3]) -> Option<[f64; 3]> {
-    let l = dot(a, a).sqrt();
-    (l > 0.0 && l.is_finite()).then(|| [a[0] / l, a[1] / l, a[2] / l])
+/// `a / |a|`, or `None` for a zero or non-finite length. It divides by the
+/// length: glam's `try_normalize` multiplies by the reciprocal, which
+/// rounds differently and could change the regions and the output.
+fn unit(a: DVec3) -> Option<DVec3> {
+    let l = a.length();
+    (l > 0.0 && l.is_finite()).then(|| a / l)
 }
 fn c3(p: [f64; 3]) -> Coord3D<f64> {
     Coord3D { x: p[0], y: p[1], z: p[2] }
@@ -92,8 +87,8 @@ fn c3(p: [f64; 3]) -> Coord3D<f64> {
 #[derive(Debug, Clone)]
 struct Free {
     loops: Vec<Vec<u32>>,
-    u: [f64; 3],
-    v: [f64; 3],
+    u: DVec3,
+    v: DVec3,
 }
 
 /// Optimizes a triangle mesh with the normal-angle threshold `angle_deg`.
@@ -101,7 +96,8 @@ pub fn optimize(positions: &[[f64; 3]], faces: &[[u32; 3]], angle_deg: f64) -> (
     let nf = faces.len();
     let mut stats = OptimizeStats { faces_in: nf as u64, vertices_in: positions.len() as u64, ..Default::default() };
     let pos = |i: u32| positions[i as usize];
-    let normals: Vec<Option<[f64; 3]>> = faces.iter().map(|f| unit(cross(sub(pos(f[1]), pos(f[0])), sub(pos(f[2]), pos(f[0]))))).collect();
+    let p3 = |i: u32| DVec3::from(positions[i as usize]);
+    let normals: Vec<Option<DVec3>> = faces.iter().map(|f| unit((p3(f[1]) - p3(f[0])).cross(p3(f[2]) - p3(f[0])))).collect();
 
     // Edge adjacency: the neighbour across each face edge over manifold edges.
     let mut edges: Vec<((u32, u32), u32, u8)> = Vec::with_capacity(3 * nf);
@@ -161,9 +157,9 @@ pub fn optimize(positions: &[[f64; 3]], faces: &[[u32; 3]], angle_deg: f64) -> (
                     }
                     let Some(m) = normals[g as usize] else { continue };
                     let ok = if alpha == 0.0 {
-                        dot(m, n0) > 0.0 && faces[g as usize].iter().all(|&v| orient3d(c3(sf[0]), c3(sf[1]), c3(sf[2]), c3(pos(v))) == 0.0)
+                        m.dot(n0) > 0.0 && faces[g as usize].iter().all(|&v| orient3d(c3(sf[0]), c3(sf[1]), c3(sf[2]), c3(pos(v))) == 0.0)
                     } else {
-                        let phi = dot(axis, m).clamp(-1.0, 1.0).acos();
+                        let phi = axis.dot(m).clamp(-1.0, 1.0).acos();
                         if phi <= half {
                             true
                         } else {
@@ -174,7 +170,7 @@ pub fn optimize(positions: &[[f64; 3]], faces: &[[u32; 3]], angle_deg: f64) -> (
                                 let s = phi.sin();
                                 let w1 = (phi - d).sin() / s;
                                 let w2 = d.sin() / s;
-                                if let Some(a) = unit([w1 * axis[0] + w2 * m[0], w1 * axis[1] + w2 * m[1], w1 * axis[2] + w2 * m[2]]) {
+                                if let Some(a) = unit(w1 * axis + w2 * m) {
                                     axis = a;
                                     half = new_half;
                                     true
@@ -237,7 +233,7 @@ pub fn optimize(positions: &[[f64; 3]], faces: &[[u32; 3]], angle_deg: f64) -> (
                 let l = &free[r as usize].as_ref().unwrap().loops[li as usize];
                 let n = l.len();
                 let (u, w) = (l[(k as usize + n - 1) % n], l[(k as usize + 1) % n]);
-                collinear(pos(u), pos(v), pos(w))
+                collinear(p3(u), p3(v), p3(w))
             });
             if all {
                 dropped.insert(v, ());
@@ -253,7 +249,7 @@ pub fn optimize(positions: &[[f64; 3]], faces: &[[u32; 3]], angle_deg: f64) -> (
                 failed.push(r);
                 continue;
             }
-            let uv: Vec<Vec<P2>> = loops.iter().map(|l| l.iter().map(|&v| [dot(pos(v), f.u), dot(pos(v), f.v)]).collect()).collect();
+            let uv: Vec<Vec<P2>> = loops.iter().map(|l| l.iter().map(|&v| [p3(v).dot(f.u), p3(v).dot(f.v)]).collect()).collect();
             let refs: Vec<&[P2]> = uv.iter().map(|x| x.as_slice()).collect();
             if first_crossing(&refs).is_some() || signed_area(&uv[0]) <= 0.0 || uv[1..].iter().any(|h| signed_area(h) >= 0.0) {
                 failed.push(r);
@@ -353,15 +349,15 @@ pub fn optimize(positions: &[[f64; 3]], faces: &[[u32; 3]], angle_deg: f64) -> (
 }
 
 /// `v` lies on the segment `uw` (within the tolerance).
-fn collinear(u: [f64; 3], v: [f64; 3], w: [f64; 3]) -> bool {
-    let d = sub(w, u);
-    let l2 = dot(d, d);
+fn collinear(u: DVec3, v: DVec3, w: DVec3) -> bool {
+    let d = w - u;
+    let l2 = d.dot(d);
     if l2 == 0.0 {
         return false;
     }
-    let x = cross(d, sub(v, u));
-    let t = dot(sub(v, u), d);
-    dot(x, x) <= COLLINEAR_TOLERANCE * COLLINEAR_TOLERANCE * l2 * l2 && t > 0.0 && t < l2
+    let x = d.cross(v - u);
+    let t = (v - u).dot(d);
+    x.dot(x) <= COLLINEAR_TOLERANCE * COLLINEAR_TOLERANCE * l2 * l2 && t > 0.0 && t < l2
 }
 
 /// The boundary of a region if it is free (see the module docs).
@@ -370,15 +366,14 @@ fn free_region(members: &[u32], faces: &[[u32; 3]], neighbour: &[[u32; 3]], regi
     let mut next: HashMap<u32, u32> = HashMap::new();
     let mut verts: HashMap<u32, ()> = HashMap::new();
     let mut boundary = 0usize;
-    let mut area = [0.0; 3];
+    let mut area = DVec3::ZERO;
     for &fi in members {
         let f = faces[fi as usize];
         for &v in &f {
             verts.insert(v, ());
         }
-        let (a, b, c) = (positions[f[0] as usize], positions[f[1] as usize], positions[f[2] as usize]);
-        let n = cross(sub(b, a), sub(c, a));
-        area = [area[0] + n[0], area[1] + n[1], area[2] + n[2]];
+        let [a, b, c] = f.map(|i| DVec3::from(positions[i as usize]));
+        area += (b - a).cross(c - a);
         for e in 0..3 {
             let g = neighbour[fi as usize][e];
             if g == u32::MAX || region[g as usize] != r {
@@ -422,13 +417,13 @@ fn free_region(members: &[u32], faces: &[[u32; 3]], neighbour: &[[u32; 3]], regi
     // Projection on the Newell plane keeps every face counter-clockwise.
     let n = unit(area)?;
     let k = (0..3).min_by(|&a, &b| n[a].abs().total_cmp(&n[b].abs())).unwrap();
-    let mut e = [0.0; 3];
+    let mut e = DVec3::ZERO;
     e[k] = 1.0;
-    let u = unit(cross(n, e))?;
-    let v = cross(n, u);
+    let u = unit(n.cross(e))?;
+    let v = n.cross(u);
     let proj = |i: u32| -> P2 {
-        let p = positions[i as usize];
-        [dot(p, u), dot(p, v)]
+        let p = DVec3::from(positions[i as usize]);
+        [p.dot(u), p.dot(v)]
     };
     for &fi in members {
         let f = faces[fi as usize];

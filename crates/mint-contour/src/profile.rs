@@ -42,6 +42,7 @@
 
 use crate::error::{ProfileError, ProfileErrorKind as K};
 use crate::geom2d::{first_crossing, P2};
+use glam::DVec3;
 use std::collections::VecDeque;
 use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
@@ -196,14 +197,17 @@ impl StackFrame {
 
     /// A frame around the unit normal `n` (any direction).
     pub fn around(n: [f64; 3]) -> StackFrame {
-        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-        let n = [n[0] / len, n[1] / len, n[2] / len];
+        // Unit vectors by dividing by the length (not glam's normalize,
+        // which multiplies by the reciprocal and rounds differently).
+        let n = DVec3::from(n);
+        let n = n / n.length();
         let k = (0..3).min_by(|&a, &b| n[a].abs().total_cmp(&n[b].abs())).unwrap();
-        let mut e = [0.0; 3];
+        let mut e = DVec3::ZERO;
         e[k] = 1.0;
-        let u = normalize(cross(n, e));
-        let v = cross(n, u);
-        StackFrame { u, v, n, axes: None }
+        let u = n.cross(e);
+        let u = u / u.length();
+        let v = n.cross(u);
+        StackFrame { u: u.to_array(), v: v.to_array(), n: n.to_array(), axes: None }
     }
 
     /// The same planes with the normal reversed: `(v, u, -n)`.
@@ -211,7 +215,7 @@ impl StackFrame {
         StackFrame {
             u: self.v,
             v: self.u,
-            n: [-self.n[0], -self.n[1], -self.n[2]],
+            n: (-DVec3::from(self.n)).to_array(),
             axes: self.axes.map(|(iu, iv, d, s)| (iv, iu, d, -s)),
         }
     }
@@ -221,7 +225,10 @@ impl StackFrame {
     pub fn project(&self, p: [f64; 3]) -> (P2, f64) {
         match self.axes {
             Some((iu, iv, d, s)) => ([p[iu], p[iv]], if s > 0.0 { p[d] } else { -p[d] }),
-            None => ([dot(p, self.u), dot(p, self.v)], dot(p, self.n)),
+            None => {
+                let p = DVec3::from(p);
+                ([p.dot(self.u.into()), p.dot(self.v.into())], p.dot(self.n.into()))
+            }
         }
     }
 
@@ -236,38 +243,18 @@ impl StackFrame {
                 p[d] = if sg > 0.0 { s } else { -s };
                 p
             }
-            None => {
-                let mut p = [0.0; 3];
-                for k in 0..3 {
-                    p[k] = uv[0] * self.u[k] + uv[1] * self.v[k] + s * self.n[k];
-                }
-                p
-            }
+            None => (uv[0] * DVec3::from(self.u) + uv[1] * DVec3::from(self.v) + s * DVec3::from(self.n)).to_array(),
         }
     }
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
-fn normalize(a: [f64; 3]) -> [f64; 3] {
-    let l = dot(a, a).sqrt();
-    [a[0] / l, a[1] / l, a[2] / l]
 }
 
 /// Newell's normal of a closed polygon (twice its vector area).
 pub fn newell(points: &[[f64; 3]]) -> [f64; 3] {
     let n = points.len();
     let mut s = [0.0; 3];
-    let o = points[0];
+    let o = DVec3::from(points[0]);
     for i in 0..n {
-        let (p, q) = (points[i], points[(i + 1) % n]);
-        let (p, q) = ([p[0] - o[0], p[1] - o[1], p[2] - o[2]], [q[0] - o[0], q[1] - o[1], q[2] - o[2]]);
+        let (p, q) = (DVec3::from(points[i]) - o, DVec3::from(points[(i + 1) % n]) - o);
         s[0] += (p[1] - q[1]) * (p[2] + q[2]);
         s[1] += (p[2] - q[2]) * (p[0] + q[0]);
         s[2] += (p[0] - q[0]) * (p[1] + q[1]);
@@ -591,9 +578,9 @@ impl<R: BufRead> ProfileReader<R> {
                         let n = contours
                             .iter()
                             .map(|c| newell(&c.points))
-                            .max_by(|a, b| dot(*a, *a).total_cmp(&dot(*b, *b)))
+                            .max_by(|&a, &b| DVec3::from(a).length_squared().total_cmp(&DVec3::from(b).length_squared()))
                             .unwrap();
-                        if !(dot(n, n) > 0.0) {
+                        if !(DVec3::from(n).length_squared() > 0.0) {
                             return Err(self
                                 .err(K::NonPlanar, contours[0].line, "the first section's contours have no area (their vertices are collinear)")
                                 .into());
@@ -646,14 +633,12 @@ impl<R: BufRead> ProfileReader<R> {
                 if cmax - cmin <= 2.0 * tol {
                     continue;
                 }
-                let own = newell(&c.points);
-                let ln = dot(own, own).sqrt();
-                let centre = c.points.iter().fold([0.0; 3], |s, p| [s[0] + p[0], s[1] + p[1], s[2] + p[2]]);
-                let centre = centre.map(|x| x / c.points.len() as f64);
-                let own_planar = ln > 0.0
-                    && c.points.iter().all(|p| (dot([p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]], own) / ln).abs() <= tol);
+                let own = DVec3::from(newell(&c.points));
+                let ln = own.length();
+                let centre = c.points.iter().fold(DVec3::ZERO, |s, &p| s + DVec3::from(p)) / c.points.len() as f64;
+                let own_planar = ln > 0.0 && c.points.iter().all(|&p| ((DVec3::from(p) - centre).dot(own) / ln).abs() <= tol);
                 if own_planar && index > 0 {
-                    let cosang = (dot(own, frame.n) / ln).abs().min(1.0);
+                    let cosang = (own.dot(DVec3::from(frame.n)) / ln).abs().min(1.0);
                     return Err(self
                         .err(
                             K::NotParallel,
@@ -842,7 +827,7 @@ mod tests {
     fn decreasing_sections_flip_the_frame_and_keep_handedness() {
         let (f, s) = read_all(b"pro\nsection 0 0 5 1 0 5 0 1 5\nsection 0 0 2 1 0 2 0 1 2\nsection 0 0 -1 1 0 -1 0 1 -1", Path::new("t.pro"), ProfileOptions::default()).unwrap();
         assert_eq!(f.n, [0.0, 0.0, -1.0]);
-        assert_eq!(cross(f.u, f.v), f.n);
+        assert_eq!(DVec3::from(f.u).cross(DVec3::from(f.v)).to_array(), f.n);
         assert_eq!(s.iter().map(|s| s.offset).collect::<Vec<_>>(), vec![-5.0, -2.0, 1.0]);
         assert_eq!(s[0].contours[0].uv[1], [0.0, 1.0]);
         assert_eq!(f.unproject(s[0].contours[0].uv[1], s[0].offset), [1.0, 0.0, 5.0]);

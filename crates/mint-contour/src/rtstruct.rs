@@ -77,6 +77,7 @@ use crate::profile::{newell, Contour, Section, StackFrame};
 use dicom_object::file::ReadPreamble;
 use dicom_object::mem::InMemElement;
 use dicom_object::{InMemDicomObject, OpenFileOptions};
+use glam::DVec3;
 use std::path::{Path, PathBuf};
 
 /// The attributes read (names as in the DICOM dictionary, PS3.6).
@@ -493,10 +494,6 @@ fn chain(e: &dyn std::error::Error) -> String {
     s.replace(['\n', '\r'], " ")
 }
 
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
 /// Points without consecutive repeats and without a closing repeat.
 fn distinct(points: &[[f64; 3]]) -> Vec<[f64; 3]> {
     let mut v: Vec<[f64; 3]> = Vec::with_capacity(points.len());
@@ -514,26 +511,24 @@ fn distinct(points: &[[f64; 3]]) -> Vec<[f64; 3]> {
 /// The stack normal of contours (step 3 of the module docs), `None` if
 /// they have no area.
 fn stack_normal(contours: &[Vec<[f64; 3]>]) -> Option<[f64; 3]> {
-    let normals: Vec<[f64; 3]> = contours.iter().map(|c| newell(c)).collect();
-    let big = normals.iter().copied().max_by(|a, b| dot(*a, *a).total_cmp(&dot(*b, *b)))?;
-    if !(dot(big, big) > 0.0) {
+    let normals: Vec<DVec3> = contours.iter().map(|c| DVec3::from(newell(c))).collect();
+    let big = normals.iter().copied().max_by(|a, b| a.length_squared().total_cmp(&b.length_squared()))?;
+    if !(big.length_squared() > 0.0) {
         return None;
     }
     // Contours tilted against the largest one do not pull the normal
     // (they are refused, by name, when their points are projected).
     let cos_max = 5f64.to_radians().cos();
-    let mut n = [0.0; 3];
-    for m in &normals {
-        let d = dot(*m, big);
-        if d.abs() < cos_max * (dot(*m, *m) * dot(big, big)).sqrt() {
+    let mut n = DVec3::ZERO;
+    for &m in &normals {
+        let d = m.dot(big);
+        if d.abs() < cos_max * (m.length_squared() * big.length_squared()).sqrt() {
             continue;
         }
         let s = if d < 0.0 { -1.0 } else { 1.0 };
-        for k in 0..3 {
-            n[k] += s * m[k];
-        }
+        n += s * m;
     }
-    Some(n)
+    Some(n.to_array())
 }
 
 /// The frame of step 4, `None` if the contours have no area.
@@ -700,12 +695,12 @@ fn place(frame: &StackFrame, offset: f64) -> String {
 
 /// Why a contour is not in a plane across `n`: tilted, or not planar.
 fn off_plane(p: &[[f64; 3]], n: [f64; 3], spread: f64, tol: f64, item: usize) -> String {
-    let own = newell(p);
-    let len = dot(own, own).sqrt();
-    let c = p.iter().fold([0.0; 3], |s, q| [s[0] + q[0], s[1] + q[1], s[2] + q[2]]).map(|x| x / p.len() as f64);
-    let planar = len > 0.0 && p.iter().all(|q| (dot([q[0] - c[0], q[1] - c[1], q[2] - c[2]], own) / len).abs() <= tol);
+    let own = DVec3::from(newell(p));
+    let len = own.length();
+    let c = p.iter().fold(DVec3::ZERO, |s, &q| s + DVec3::from(q)) / p.len() as f64;
+    let planar = len > 0.0 && p.iter().all(|&q| ((DVec3::from(q) - c).dot(own) / len).abs() <= tol);
     if planar {
-        let deg = (dot(own, n).abs() / len).min(1.0).acos().to_degrees();
+        let deg = (own.dot(DVec3::from(n)).abs() / len).min(1.0).acos().to_degrees();
         format!("contour {item} is planar but tilted by {deg:.3} degrees from the stack's planes: contours must lie in parallel planes")
     } else {
         format!("contour {item} is not planar: its points spread {spread:.4} mm along the stack normal (tolerance {tol} mm either side)")

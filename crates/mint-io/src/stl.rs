@@ -15,6 +15,7 @@
 //! of its indices; it computes facet normals from the corners and patches
 //! the binary facet count at `finish`.
 
+use glam::DVec3;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -316,14 +317,15 @@ impl StlWriter {
 }
 
 /// The unit normal of triangle (a, b, c) by the right-hand rule, or zero
-/// for a degenerate triangle.
+/// for a degenerate triangle. It divides by the length: glam's `normalize`
+/// multiplies by the reciprocal, which rounds differently and would change
+/// the normals written.
 fn normal(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> [f64; 3] {
-    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-    let n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
-    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let [a, b, c] = [a, b, c].map(DVec3::from);
+    let n = (b - a).cross(c - a);
+    let len = n.length();
     if len > 0.0 && len.is_finite() {
-        [n[0] / len, n[1] / len, n[2] / len]
+        (n / len).to_array()
     } else {
         [0.0; 3]
     }

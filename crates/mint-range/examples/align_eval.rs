@@ -13,7 +13,8 @@
 //! PLANT_Y=1 turns the planted scan about the world's y axis.
 #![allow(clippy::needless_range_loop)]
 
-use mint_range::geom::{add, dist, scale, sub, Rigid, V3};
+use glam::DVec3;
+use mint_range::geom::Rigid;
 use mint_range::align::align;
 use mint_range::icp::AlignOptions;
 
@@ -69,8 +70,9 @@ fn main() {
     eprintln!("loaded {} scans in {:.2}s", scans.len(), t.elapsed().as_secs_f64());
     let truth: Vec<Rigid> = set.entries.iter().map(|e| e.pose).collect();
     let (lo, hi) = mint_range::scan_mesh::bbox(scans.iter().zip(&truth).flat_map(|(s, p)| s.bbox_corners().into_iter().map(move |c| p.apply(c))));
-    let center = scale(add(lo, hi), 0.5);
-    eprintln!("centre {center:?}, diagonal {:.4}", dist(lo, hi));
+    let (lo, hi) = (DVec3::from(lo), DVec3::from(hi));
+    let center = (lo + hi) * 0.5;
+    eprintln!("centre {:?}, diagonal {:.4}", center.to_array(), lo.distance(hi));
     let mut worst_all = (0.0f64, 0.0f64);
     for seed in 0..seeds {
         let mut rng = mint_mesh::SplitMix64::new(1000 + seed);
@@ -82,8 +84,8 @@ fn main() {
         let mut initial = initial;
         if let Some((kp, deg)) = plant {
             initial[kp] = if std::env::var_os("PLANT_Y").is_some() {
-                let rot = Rigid::from_axis_angle([0.0, 1.0, 0.0], deg.to_radians());
-                Rigid { r: rot.r, t: sub(center, rot.rotate(center)) }.after(&truth[kp])
+                let rot = Rigid::from_axis_angle(DVec3::Y, deg.to_radians());
+                Rigid { r: rot.r, t: (center - rot.rotate(center)).to_array() }.after(&truth[kp])
             } else {
                 exact_perturb(&truth[kp], center, deg, 0.0, &mut rng)
             };
@@ -108,7 +110,7 @@ fn main() {
                 let rep = &r.reports[i];
                 let dd = truth[i].inverse().after(&r.poses[i]);
                 let q = dd.quat();
-                let ax = truth[i].rotate(mint_range::geom::normalize([q[0], q[1], q[2]]));
+                let ax = truth[i].rotate(DVec3::new(q[0], q[1], q[2]).normalize_or_zero());
                 eprintln!("  axis (world) [{:.2} {:.2} {:.2}]", ax[0], ax[1], ax[2]);
                 eprintln!("  {:<24} {:?} rms/s {:.3} it {} conv {} partners {} -> {d:.3}° {:.3} mm", rep.name, rep.status, rep.rms_rel, rep.iterations, rep.converged, rep.partners.len(), s * 1e3);
             }
@@ -178,9 +180,9 @@ fn main() {
                     let q = dlt.quat();
                     let s = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
                     let ang = 2.0 * s.atan2(q[3]);
-                    let w = if s > 0.0 { scale([q[0], q[1], q[2]], ang / s) } else { [0.0; 3] };
+                    let w = if s > 0.0 { DVec3::new(q[0], q[1], q[2]) * (ang / s) } else { DVec3::ZERO };
                     let rot = Rigid::from_rotation_vector(w, [0.0; 3]);
-                    let t = sub(dlt.apply(center), center);
+                    let t = dlt.apply(center) - center;
                     let _ = rot;
                     [w[0], w[1], w[2], t[0], t[1], t[2]]
                 })
@@ -202,8 +204,8 @@ fn main() {
             for alpha in [0.25, 0.5, 1.0] {
                 let moved: Vec<Rigid> = r.poses.iter().enumerate().map(|(k, p)| {
                     let v = smooth[k];
-                    let rot = Rigid::from_rotation_vector([alpha * v[0], alpha * v[1], alpha * v[2]], [0.0; 3]);
-                    Rigid { r: rot.r, t: add(sub(center, rot.rotate(center)), [alpha * v[3], alpha * v[4], alpha * v[5]]) }.after(p)
+                    let rot = Rigid::from_rotation_vector(DVec3::new(alpha * v[0], alpha * v[1], alpha * v[2]), [0.0; 3]);
+                    Rigid { r: rot.r, t: (center - rot.rotate(center) + DVec3::new(alpha * v[3], alpha * v[4], alpha * v[5])).to_array() }.after(p)
                 }).collect();
                 let worst = (0..n).map(|k| truth[k].inverse().after(&moved[k]).angle().to_degrees()).fold(0.0, f64::max);
                 eprintln!("  smooth mode x{alpha}: energy {:.5e}, worst vs truth {worst:.3}°", energy(&moved));
@@ -217,12 +219,12 @@ fn main() {
                         let q = dlt.quat();
                         let s = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
                         let ang = 2.0 * s.atan2(q[3]);
-                        let w = if s > 0.0 { scale([q[0], q[1], q[2]], lam * ang / s) } else { [0.0; 3] };
+                        let w = if s > 0.0 { DVec3::new(q[0], q[1], q[2]) * (lam * ang / s) } else { DVec3::ZERO };
                         let rot = Rigid::from_rotation_vector(w, [0.0; 3]);
                         // translation part: interpolate the motion of the centre
                         let c2 = dlt.apply(center);
-                        let t = add(sub(center, rot.rotate(center)), scale(sub(c2, center), lam));
-                        Rigid { r: rot.r, t }.after(a)
+                        let t = center - rot.rotate(center) + (c2 - center) * lam;
+                        Rigid { r: rot.r, t: t.to_array() }.after(a)
                     })
                     .collect();
                 eprintln!("  energy at {lam}: {:.5e}", energy(&interp));
@@ -237,27 +239,27 @@ fn main() {
 
 /// Error of scan i relative to scan 0, against the truth: the rotation
 /// angle and the displacement of the centre.
-fn errors(t0: &Rigid, ti: &Rigid, p0: &Rigid, pi: &Rigid, center: V3) -> (f64, f64) {
+fn errors(t0: &Rigid, ti: &Rigid, p0: &Rigid, pi: &Rigid, center: DVec3) -> (f64, f64) {
     let rel_t = t0.inverse().after(ti);
     let rel_p = p0.inverse().after(pi);
     let d = rel_t.inverse().after(&rel_p);
     let c = rel_t.inverse().apply(t0.inverse().apply(center));
-    (d.angle().to_degrees(), dist(rel_t.apply(c), rel_p.apply(c)))
+    (d.angle().to_degrees(), rel_t.apply(c).distance(rel_p.apply(c)))
 }
 
-fn exact_perturb(pose: &Rigid, center: V3, deg: f64, shift: f64, rng: &mut mint_mesh::SplitMix64) -> Rigid {
+fn exact_perturb(pose: &Rigid, center: DVec3, deg: f64, shift: f64, rng: &mut mint_mesh::SplitMix64) -> Rigid {
     let axis = unit(rng);
     let rot = Rigid::from_axis_angle(axis, deg.to_radians());
-    let s = scale(unit(rng), shift);
-    Rigid { r: rot.r, t: add(sub(center, rot.rotate(center)), s) }.after(pose)
+    let s = unit(rng) * shift;
+    Rigid { r: rot.r, t: (center - rot.rotate(center) + s).to_array() }.after(pose)
 }
 
-fn unit(rng: &mut mint_mesh::SplitMix64) -> V3 {
+fn unit(rng: &mut mint_mesh::SplitMix64) -> DVec3 {
     loop {
-        let v = [2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0];
-        let n = mint_range::geom::norm(v);
+        let v = DVec3::new(2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0);
+        let n = v.length();
         if n > 1e-3 && n <= 1.0 {
-            return scale(v, 1.0 / n);
+            return v * (1.0 / n);
         }
     }
 }

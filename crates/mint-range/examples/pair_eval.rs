@@ -1,7 +1,8 @@
 //! Exploration: pairwise ICP between ring neighbours of a set (i, i+k),
 //! the second moved by an exact perturbation; prints the relative error.
 //! cargo run --release -p mint-range --example pair_eval -- SET.conf DEG MM SEEDS K [start_distance]
-use mint_range::geom::{add, dist, scale, sub, Rigid, V3};
+use glam::DVec3;
+use mint_range::geom::Rigid;
 use mint_range::align::align;
 use mint_range::icp::{AlignOptions, Strategy};
 
@@ -17,7 +18,7 @@ fn main() {
     let scans = mint_range::load_set(&set, &set_path, &mint_range::MeshOptions::default()).unwrap();
     let truth: Vec<Rigid> = set.entries.iter().map(|e| e.pose).collect();
     let (lo, hi) = mint_range::scan_mesh::bbox(scans.iter().zip(&truth).flat_map(|(s, p)| s.bbox_corners().into_iter().map(move |c| p.apply(c))));
-    let center = scale(add(lo, hi), 0.5);
+    let center = (DVec3::from(lo) + DVec3::from(hi)) * 0.5;
     let n = scans.len();
     for s in &scans { eprint!("{:.2e} ", s.sampling); }
     eprintln!();
@@ -32,25 +33,25 @@ fn main() {
             let r = align(&pair, &[truth[i], init], &AlignOptions { strategy: Strategy::Anchor, start_distance: sd, ..Default::default() }).unwrap();
             let d = truth[j].inverse().after(&r.poses[1]);
             let c = truth[j].inverse().apply(center);
-            line += &format!(" | {:.2}° {:.1}mm rms {:.2} it {} {:.1}s", d.angle().to_degrees(), dist(truth[j].apply(c), r.poses[1].apply(c)) * 1e3, r.reports[1].rms / scans[j].sampling, r.reports[1].iterations, t.elapsed().as_secs_f64());
+            line += &format!(" | {:.2}° {:.1}mm rms {:.2} it {} {:.1}s", d.angle().to_degrees(), truth[j].apply(c).distance(r.poses[1].apply(c)) * 1e3, r.reports[1].rms / scans[j].sampling, r.reports[1].iterations, t.elapsed().as_secs_f64());
         }
         println!("{line}");
     }
 }
 
-fn exact_perturb(pose: &Rigid, center: V3, deg: f64, shift: f64, rng: &mut mint_mesh::SplitMix64) -> Rigid {
+fn exact_perturb(pose: &Rigid, center: DVec3, deg: f64, shift: f64, rng: &mut mint_mesh::SplitMix64) -> Rigid {
     let axis = unit(rng);
     let rot = Rigid::from_axis_angle(axis, deg.to_radians());
-    let s = scale(unit(rng), shift);
-    Rigid { r: rot.r, t: add(sub(center, rot.rotate(center)), s) }.after(pose)
+    let s = unit(rng) * shift;
+    Rigid { r: rot.r, t: (center - rot.rotate(center) + s).to_array() }.after(pose)
 }
 
-fn unit(rng: &mut mint_mesh::SplitMix64) -> V3 {
+fn unit(rng: &mut mint_mesh::SplitMix64) -> DVec3 {
     loop {
-        let v = [2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0];
-        let n = mint_range::geom::norm(v);
+        let v = DVec3::new(2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0);
+        let n = v.length();
         if n > 1e-3 && n <= 1.0 {
-            return scale(v, 1.0 / n);
+            return v * (1.0 / n);
         }
     }
 }

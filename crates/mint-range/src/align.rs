@@ -7,14 +7,15 @@
 //! the pairwise ICP of [`crate::icp`]; this module sits above them.
 
 use crate::error::RangeError;
-use crate::geom::{add, normalize, tri_normal, Rigid, V3};
+use crate::geom::Rigid;
 use crate::icp::{distance_levels, register_sequential, AlignOptions, ScanReport, Status, Targets};
 use crate::multiview::{register, PairReport};
-use crate::scan_mesh::{load_set, MeshOptions, ScanMesh};
+use crate::scan_mesh::{face_normal, load_set, MeshOptions, ScanMesh};
 use crate::scanset::{ScanEntry, ScanSet, SetFormat};
 use std::path::Path;
 use mint_core::progress::{NoProgress, Progress};
 use mint_mesh::TriangleBvh;
+use glam::DVec3;
 
 /// The result of [`align`]: a pose per scan (failed scans keep their
 /// initial pose) and a report per scan.
@@ -59,7 +60,7 @@ pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, pr
         .iter()
         .map(|s| TriangleBvh::new(&s.positions, &s.faces).map_err(|e| RangeError::Mesh { what: s.name.clone(), source: e }))
         .collect::<Result<_, _>>()?;
-    let face_normals: Vec<Vec<V3>> = scans
+    let face_normals: Vec<Vec<DVec3>> = scans
         .iter()
         .map(|s| {
             if opts.global {
@@ -69,9 +70,9 @@ pub fn align_with(scans: &[ScanMesh], initial: &[Rigid], opts: &AlignOptions, pr
                 // scene (noise 4% of the sample spacing) it biased the
                 // point-to-plane minimum of a pair by 0.1–0.3°, and the
                 // point-to-point finish, flat there, does not undo it.
-                s.faces.iter().map(|f| normalize(add(add(s.normals[f[0] as usize], s.normals[f[1] as usize]), s.normals[f[2] as usize]))).collect()
+                s.faces.iter().map(|f| (s.normals[f[0] as usize] + s.normals[f[1] as usize] + s.normals[f[2] as usize]).normalize_or_zero()).collect()
             } else {
-                s.faces.iter().map(|f| normalize(tri_normal(s.positions[f[0] as usize], s.positions[f[1] as usize], s.positions[f[2] as usize]))).collect()
+                s.faces.iter().map(|&f| face_normal(&s.positions, f).normalize_or_zero()).collect()
             }
         })
         .collect();

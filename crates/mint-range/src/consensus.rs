@@ -18,10 +18,11 @@
 //! ray tree are in memory with the mesh.
 
 use crate::error::RangeError;
-use crate::geom::{add, dot, normalize, scale, Rigid, V3};
+use crate::geom::Rigid;
 use crate::raycast::RayBvh;
 use crate::scan_mesh::vertex_normals;
 use crate::source::ScanSource;
+use glam::DVec3;
 use mint_core::progress::{NoProgress, Progress};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -59,14 +60,14 @@ pub struct ConsensusReport {
 /// Moves `positions` (a mesh with `faces`) to the consensus of the scans at
 /// their poses; see the module docs. The scans are visited one at a time,
 /// twice (normals, then intersections).
-pub fn consensus<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u32; 3]], scans: &S, poses: &[Rigid], opts: &ConsensusOptions) -> Result<ConsensusReport, RangeError> {
+pub fn consensus<S: ScanSource + ?Sized>(positions: &mut [[f64; 3]], faces: &[[u32; 3]], scans: &S, poses: &[Rigid], opts: &ConsensusOptions) -> Result<ConsensusReport, RangeError> {
     consensus_with(positions, faces, scans, poses, opts, &NoProgress)
 }
 
 /// [`consensus`], reporting each scan visited ([`crate::phases::CONSENSUS`], two
 /// passes) and stopping with [`RangeError::Cancelled`] when asked (the
 /// positions are then unchanged).
-pub fn consensus_with<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u32; 3]], scans: &S, poses: &[Rigid], opts: &ConsensusOptions, progress: &dyn Progress) -> Result<ConsensusReport, RangeError> {
+pub fn consensus_with<S: ScanSource + ?Sized>(positions: &mut [[f64; 3]], faces: &[[u32; 3]], scans: &S, poses: &[Rigid], opts: &ConsensusOptions, progress: &dyn Progress) -> Result<ConsensusReport, RangeError> {
     if !(opts.radius > 0.0 && opts.reach > 0.0 && opts.radius.is_finite() && opts.reach.is_finite()) {
         return Err(RangeError::option("consensus", "radius and reach must be positive"));
     }
@@ -80,12 +81,12 @@ pub fn consensus_with<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u3
     // 1. Normals: every scan vertex adds its weighted normal to the merged
     // mesh's vertices within `radius` (found through a hash grid of the
     // merged vertices, cells of `radius`), scan after scan.
-    let ckey = |p: V3| [0, 1, 2].map(|k| (p[k] / radius).floor() as i64);
+    let ckey = |p: [f64; 3]| [0, 1, 2].map(|k| (p[k] / radius).floor() as i64);
     let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::default();
     for (i, &p) in positions.iter().enumerate() {
         grid.entry(ckey(p)).or_default().push(i as u32);
     }
-    let mut normal_sum = vec![[0.0; 3]; positions.len()];
+    let mut normal_sum = vec![DVec3::ZERO; positions.len()];
     progress.start(crate::phases::CONSENSUS, 2 * poses.len() as u64);
     let step = || crate::error::advance(progress);
     for (k, pose) in poses.iter().enumerate() {
@@ -96,15 +97,15 @@ pub fn consensus_with<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u3
                 continue;
             }
             let p = pose.apply(m.positions[i]);
-            let wn = scale(pose.rotate(m.normals[i]), m.confidence[i]);
+            let wn = pose.rotate(m.normals[i]) * m.confidence[i];
             let c = ckey(p);
             for dx in -1..=1 {
                 for dy in -1..=1 {
                     for dz in -1..=1 {
                         if let Some(list) = grid.get(&[c[0] + dx, c[1] + dy, c[2] + dz]) {
                             for &v in list {
-                                if crate::geom::dist(p, positions[v as usize]) <= radius {
-                                    normal_sum[v as usize] = add(normal_sum[v as usize], wn);
+                                if DVec3::from(p).distance(DVec3::from(positions[v as usize])) <= radius {
+                                    normal_sum[v as usize] += wn;
                                 }
                             }
                         }
@@ -114,12 +115,12 @@ pub fn consensus_with<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u3
         }
     }
     drop(grid);
-    let normals: Vec<V3> = normal_sum
+    let normals: Vec<DVec3> = normal_sum
         .iter()
         .zip(&own)
         .map(|(&ns, &o)| {
-            let n = normalize(ns);
-            if n == [0.0; 3] || dot(n, o) < 0.0 && o != [0.0; 3] {
+            let n = ns.normalize_or_zero();
+            if n == DVec3::ZERO || n.dot(o) < 0.0 && o != DVec3::ZERO {
                 o
             } else {
                 n
@@ -136,14 +137,14 @@ pub fn consensus_with<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u3
         let m = scans.scan(k)?;
         let tree = RayBvh::new(&m.positions, &m.faces);
         let inv = pose.inverse();
-        let pos: &[V3] = positions;
+        let pos: &[[f64; 3]] = positions;
         acc.par_iter_mut().enumerate().for_each(|(i, a)| {
             let n = normals[i];
-            if n == [0.0; 3] {
+            if n == DVec3::ZERO {
                 return;
             }
             let mut best: Option<(f64, f64)> = None;
-            tree.segment_hits(inv.apply(pos[i]), inv.rotate(n), -reach, reach, |h| {
+            tree.segment_hits(inv.apply(DVec3::from(pos[i])), inv.rotate(n), -reach, reach, |h| {
                 let f = m.faces[h.face as usize];
                 let w: f64 = (0..3).map(|c| h.bary[c] * m.confidence[f[c] as usize]).sum();
                 if best.is_none_or(|b| h.t.abs() < b.0.abs()) {
@@ -167,7 +168,7 @@ pub fn consensus_with<S: ScanSource + ?Sized>(positions: &mut [V3], faces: &[[u3
             continue;
         }
         let t = tw / ws;
-        *p = add(*p, scale(n, t));
+        *p = (DVec3::from(*p) + n * t).to_array();
         r.moved += 1;
         r.mean_move += t.abs();
         r.max_move = r.max_move.max(t.abs());

@@ -41,7 +41,6 @@
 
 use crate::error::RangeError;
 use crate::range_image::RangeImage;
-use crate::geom::V3;
 use std::io::Write;
 use std::path::Path;
 
@@ -53,7 +52,7 @@ pub enum Projection {
 }
 
 impl Projection {
-    fn point(&self, col: u32, row: u32, d: f64) -> V3 {
+    fn point(&self, col: u32, row: u32, d: f64) -> [f64; 3] {
         let (c, r) = (col as f64, row as f64);
         match *self {
             Projection::Orthographic { x0, y0, dx, dy } => [x0 + c * dx, y0 + r * dy, d],

@@ -1,62 +1,21 @@
-//! Small 3D helpers: vector arithmetic on `[f64; 3]`, and [`Rigid`], a
-//! rigid motion `p ↦ R·p + t` with conversions to and from unit
-//! quaternions (Shepperd's method for matrix → quaternion) and 4×4
-//! matrices. Every pose in mint-range is a [`Rigid`] that maps a scan's own
-//! coordinates to world coordinates; the set-file readers translate their
-//! conventions into it (see [`crate::scanset`]).
+//! [`Rigid`], a rigid motion `p ↦ R·p + t`, with conversions to and from
+//! unit quaternions (Shepperd's method for matrix → quaternion) and 4×4
+//! matrices; the 3×3 matrix helpers it rests on ([`transpose`],
+//! [`mat_vec`], [`mat_mul`]); and [`pose_error`]. Vector arithmetic is
+//! glam's `DVec3` throughout mint-range; stored positions stay `[f64; 3]`
+//! (they are shared with mint-core, mint-mesh and mint-io), and
+//! [`Rigid::apply`] and [`Rigid::rotate`] take either. Every pose in
+//! mint-range is a [`Rigid`] that maps a scan's own coordinates to world
+//! coordinates; the set-file readers translate their conventions into it
+//! (see [`crate::scanset`]).
 
-/// A point or vector.
-pub type V3 = [f64; 3];
-
-#[inline]
-pub fn add(a: V3, b: V3) -> V3 {
-    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
-}
-#[inline]
-pub fn sub(a: V3, b: V3) -> V3 {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-#[inline]
-pub fn scale(a: V3, s: f64) -> V3 {
-    [a[0] * s, a[1] * s, a[2] * s]
-}
-#[inline]
-pub fn dot(a: V3, b: V3) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-#[inline]
-pub fn cross(a: V3, b: V3) -> V3 {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-#[inline]
-pub fn norm(a: V3) -> f64 {
-    dot(a, a).sqrt()
-}
-#[inline]
-pub fn dist(a: V3, b: V3) -> f64 {
-    norm(sub(a, b))
-}
-/// `a / |a|`, or `[0, 0, 0]` for the zero vector.
-#[inline]
-pub fn normalize(a: V3) -> V3 {
-    let n = norm(a);
-    if n > 0.0 {
-        scale(a, 1.0 / n)
-    } else {
-        [0.0; 3]
-    }
-}
-/// Twice the area vector of triangle `abc` (right-hand normal, length = 2·area).
-#[inline]
-pub fn tri_normal(a: V3, b: V3, c: V3) -> V3 {
-    cross(sub(b, a), sub(c, a))
-}
+use glam::DVec3;
 
 /// A rigid motion `p ↦ r·p + t` (`r` row-major, a rotation).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rigid {
     pub r: [[f64; 3]; 3],
-    pub t: V3,
+    pub t: [f64; 3],
 }
 
 impl Default for Rigid {
@@ -68,21 +27,22 @@ impl Default for Rigid {
 impl Rigid {
     pub const IDENTITY: Rigid = Rigid { r: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], t: [0.0; 3] };
 
-    /// Applies the motion to a point.
+    /// Applies the motion to a point: a stored `[f64; 3]` position or a
+    /// `DVec3`, and gives the same type back.
     #[inline]
-    pub fn apply(&self, p: V3) -> V3 {
-        add(self.rotate(p), self.t)
+    pub fn apply<P: Into<DVec3> + From<DVec3>>(&self, p: P) -> P {
+        P::from(mat_vec(self.r, p.into()) + DVec3::from(self.t))
     }
-    /// Applies the rotation only (to a direction).
+    /// Applies the rotation only (to a direction); `[f64; 3]` or `DVec3`.
     #[inline]
-    pub fn rotate(&self, v: V3) -> V3 {
-        [dot(self.r[0], v), dot(self.r[1], v), dot(self.r[2], v)]
+    pub fn rotate<P: Into<DVec3> + From<DVec3>>(&self, v: P) -> P {
+        P::from(mat_vec(self.r, v.into()))
     }
     /// The inverse motion.
     pub fn inverse(&self) -> Rigid {
         let rt = transpose(self.r);
-        let t = mat_vec(rt, self.t);
-        Rigid { r: rt, t: scale(t, -1.0) }
+        let t = mat_vec(rt, DVec3::from(self.t));
+        Rigid { r: rt, t: (-t).to_array() }
     }
     /// `self ∘ other`: first `other`, then `self`.
     pub fn after(&self, other: &Rigid) -> Rigid {
@@ -90,7 +50,7 @@ impl Rigid {
     }
     /// The rotation of the unit quaternion `q = [x, y, z, w]` (normalized
     /// here), with translation `t`.
-    pub fn from_quat(q: [f64; 4], t: V3) -> Rigid {
+    pub fn from_quat(q: [f64; 4], t: [f64; 3]) -> Rigid {
         let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
         let [x, y, z, w] = q.map(|c| c / n);
         let r = [
@@ -123,14 +83,14 @@ impl Rigid {
         q.map(|c| sgn * c / n)
     }
     /// Rotation by `angle` radians about the unit `axis`, no translation.
-    pub fn from_axis_angle(axis: V3, angle: f64) -> Rigid {
-        let a = normalize(axis);
+    pub fn from_axis_angle(axis: DVec3, angle: f64) -> Rigid {
+        let a = axis.normalize_or_zero();
         let (s, c) = (0.5 * angle).sin_cos();
         Rigid::from_quat([a[0] * s, a[1] * s, a[2] * s, c], [0.0; 3])
     }
     /// Rotation by the vector `w` (axis `w/|w|`, angle `|w|`).
-    pub fn from_rotation_vector(w: V3, t: V3) -> Rigid {
-        let a = norm(w);
+    pub fn from_rotation_vector(w: DVec3, t: [f64; 3]) -> Rigid {
+        let a = w.length();
         if a == 0.0 {
             return Rigid { t, ..Rigid::IDENTITY };
         }
@@ -173,8 +133,10 @@ impl Rigid {
 pub fn transpose(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
     [[m[0][0], m[1][0], m[2][0]], [m[0][1], m[1][1], m[2][1]], [m[0][2], m[1][2], m[2][2]]]
 }
-pub fn mat_vec(m: [[f64; 3]; 3], v: V3) -> V3 {
-    [dot(m[0], v), dot(m[1], v), dot(m[2], v)]
+/// `m·v` for a row-major `m`: each row dotted with `v`.
+pub fn mat_vec(m: [[f64; 3]; 3], v: DVec3) -> DVec3 {
+    let [r0, r1, r2] = m.map(DVec3::from);
+    DVec3::new(r0.dot(v), r1.dot(v), r2.dot(v))
 }
 pub fn mat_mul(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
     let mut m = [[0.0; 3]; 3];
@@ -190,9 +152,9 @@ pub fn mat_mul(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
 /// registration: the angle of `a⁻¹∘b` in degrees, and the largest
 /// displacement of the given points (e.g. the scan's bounding-box corners)
 /// between the two poses.
-pub fn pose_error(a: &Rigid, b: &Rigid, points: &[V3]) -> (f64, f64) {
+pub fn pose_error(a: &Rigid, b: &Rigid, points: &[[f64; 3]]) -> (f64, f64) {
     let d = a.inverse().after(b);
-    let shift = points.iter().map(|&p| dist(a.apply(p), b.apply(p))).fold(0.0, f64::max);
+    let shift = points.iter().map(|&p| a.apply(DVec3::from(p)).distance(b.apply(DVec3::from(p)))).fold(0.0, f64::max);
     (d.angle().to_degrees(), shift)
 }
 
@@ -211,10 +173,10 @@ mod tests {
                 assert!((back[k] - s * q[k]).abs() < 1e-6, "{back:?} vs {q:?}");
             }
             let i = m.inverse().after(&m);
-            assert!(i.angle() < 1e-7 && norm(i.t) < 1e-12);
+            assert!(i.angle() < 1e-7 && DVec3::from(i.t).length() < 1e-12);
         }
         // 90° about z maps x to y.
-        let r = Rigid::from_axis_angle([0.0, 0.0, 1.0], std::f64::consts::FRAC_PI_2);
+        let r = Rigid::from_axis_angle(DVec3::Z, std::f64::consts::FRAC_PI_2);
         let p = r.apply([1.0, 0.0, 0.0]);
         assert!((p[0]).abs() < 1e-15 && (p[1] - 1.0).abs() < 1e-15);
         assert!((r.angle() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);

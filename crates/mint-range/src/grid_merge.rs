@@ -54,12 +54,13 @@
 //! by [`GridMergeOptions::max_nodes`].
 
 use crate::error::RangeError;
-use crate::geom::{normalize, tri_normal, Rigid};
+use crate::geom::Rigid;
 use crate::source::ScanSource;
 use mint_core::progress::{NoProgress, Progress};
 use mint_core::signs::SignRule;
 use mint_core::{discretize_triangle, Crossing, Grid, GridSize, Intercept, MARGIN};
 use serde::Serialize;
+use glam::DVec3;
 
 /// Options of [`grid_merge`]; every field has a documented default.
 #[derive(Debug, Clone, PartialEq)]
@@ -284,7 +285,8 @@ pub fn grid_merge_with<S: ScanSource + ?Sized>(scans: &S, poses: &[Rigid], opts:
                 continue;
             }
             let local = f.map(|v| grid.to_local(pose.apply(s.positions[v as usize])));
-            let n = normalize(tri_normal(local[0], local[1], local[2]));
+            let [a, b, c] = local.map(DVec3::from);
+            let n = (b - a).cross(c - a).normalize_or_zero();
             discretize_triangle(&local, |c: Crossing| {
                 let fam = c.family as usize;
                 let cos = n[fam].abs();

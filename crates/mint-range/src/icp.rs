@@ -60,7 +60,8 @@
 //! failed and left out; the run continues.
 
 use crate::error::RangeError;
-use crate::geom::{add, cross, dist, dot, scale, sub, Rigid, V3};
+use crate::geom::Rigid;
+use glam::DVec3;
 
 use crate::scan_mesh::ScanMesh;
 use mint_core::progress::Progress;
@@ -254,11 +255,11 @@ impl ScanReport {
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Pair {
     /// On the source scan's surface or a source sample.
-    pub(crate) src: V3,
+    pub(crate) src: DVec3,
     /// On a target's surface or a target sample.
-    pub(crate) dst: V3,
+    pub(crate) dst: DVec3,
     /// The unit normal of the triangle the closest point lies on, world.
-    pub(crate) normal: V3,
+    pub(crate) normal: DVec3,
     pub(crate) w: f64,
 }
 
@@ -271,12 +272,12 @@ pub(crate) struct Targets<'a> {
     /// [`AlignOptions::max_samples`].
     max_samples: usize,
     bvhs: &'a [TriangleBvh],
-    face_normals: &'a [Vec<V3>],
+    face_normals: &'a [Vec<DVec3>],
 }
 
 impl<'a> Targets<'a> {
     /// Scans with their BVHs and face normals (built by the caller).
-    pub(crate) fn new(scans: &'a [ScanMesh], symmetric: bool, max_samples: usize, bvhs: &'a [TriangleBvh], face_normals: &'a [Vec<V3>]) -> Targets<'a> {
+    pub(crate) fn new(scans: &'a [ScanMesh], symmetric: bool, max_samples: usize, bvhs: &'a [TriangleBvh], face_normals: &'a [Vec<DVec3>]) -> Targets<'a> {
         Targets { scans, symmetric, max_samples, bvhs, face_normals }
     }
 
@@ -398,8 +399,9 @@ pub(crate) fn register_one(t: &Targets, i: usize, targets_idx: &[usize], poses: 
     let k = dists.len();
     let mut iterations = 0;
     let (lo, hi) = crate::scan_mesh::bbox(corners.iter().copied());
-    let centre_local = scale(add(lo, hi), 0.5);
-    let radius = 0.5 * dist(lo, hi);
+    let (lo, hi) = (DVec3::from(lo), DVec3::from(hi));
+    let centre_local = (lo + hi) * 0.5;
+    let radius = 0.5 * lo.distance(hi);
     let mut converged = true;
     for (j, &d) in dists.iter().enumerate() {
         let level = (nl + j).saturating_sub(k).min(nl - 1);
@@ -452,7 +454,7 @@ pub(crate) fn register_one(t: &Targets, i: usize, targets_idx: &[usize], poses: 
                 break;
             };
             let plain = delta.after(&poses[i]).orthonormalized();
-            let moved = corners.iter().map(|&cn| dist(poses[i].apply(cn), plain.apply(cn))).fold(0.0, f64::max);
+            let moved = corners.iter().map(|&cn| poses[i].apply(DVec3::from(cn)).distance(plain.apply(DVec3::from(cn)))).fold(0.0, f64::max);
             if moved < opts.tolerance * scan.sampling {
                 poses[i] = plain;
                 settled = true;
@@ -482,7 +484,7 @@ pub(crate) fn register_one(t: &Targets, i: usize, targets_idx: &[usize], poses: 
     }
     report.status = Status::Registered;
     report.pairs = p.len();
-    report.rms = (p.iter().map(|q| dot(sub(q.src, q.dst), sub(q.src, q.dst))).sum::<f64>() / p.len() as f64).sqrt();
+    report.rms = (p.iter().map(|q| q.src.distance_squared(q.dst)).sum::<f64>() / p.len() as f64).sqrt();
     report.rms_rel = report.rms / scan.sampling;
     report.iterations = iterations;
     true
@@ -584,23 +586,23 @@ impl Anderson {
 /// Σ w·|src − dst|² / Σ w: the energy point-to-point ICP lowers.
 fn weighted_mean_square(p: &[Pair]) -> f64 {
     let w: f64 = p.iter().map(|q| q.w).sum();
-    p.iter().map(|q| q.w * dot(sub(q.src, q.dst), sub(q.src, q.dst))).sum::<f64>() / w.max(f64::MIN_POSITIVE)
+    p.iter().map(|q| q.w * q.src.distance_squared(q.dst)).sum::<f64>() / w.max(f64::MIN_POSITIVE)
 }
 
 /// A motion as `[ω·radius, t]` about the point `c`: `p ↦ R(ω)(p − c) + c + t`.
-fn motion_vector(m: &Rigid, c: V3, radius: f64) -> [f64; 6] {
+fn motion_vector(m: &Rigid, c: DVec3, radius: f64) -> [f64; 6] {
     let q = m.quat();
     let s = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
     let angle = 2.0 * s.atan2(q[3]);
-    let w = if s > 0.0 { scale([q[0], q[1], q[2]], angle / s) } else { [0.0; 3] };
-    let t = sub(m.apply(c), c);
+    let w = if s > 0.0 { DVec3::new(q[0], q[1], q[2]) * (angle / s) } else { DVec3::ZERO };
+    let t = m.apply(c) - c;
     [w[0] * radius, w[1] * radius, w[2] * radius, t[0], t[1], t[2]]
 }
 
 /// The inverse of [`motion_vector`].
-fn motion_from_vector(v: [f64; 6], c: V3, radius: f64) -> Rigid {
-    let rot = Rigid::from_rotation_vector([v[0] / radius, v[1] / radius, v[2] / radius], [0.0; 3]);
-    Rigid { r: rot.r, t: add(sub(c, rot.rotate(c)), [v[3], v[4], v[5]]) }
+fn motion_from_vector(v: [f64; 6], c: DVec3, radius: f64) -> Rigid {
+    let rot = Rigid::from_rotation_vector(DVec3::new(v[0] / radius, v[1] / radius, v[2] / radius), [0.0; 3]);
+    Rigid { r: rot.r, t: (c - rot.rotate(c) + DVec3::new(v[3], v[4], v[5])).to_array() }
 }
 
 /// The pairs as [`Kernel`] weighs them, with `c = reject` × the median
@@ -612,11 +614,11 @@ pub(crate) fn weighed(p: Vec<Pair>, reject: f64, kernel: Kernel) -> Vec<Pair> {
             if !reject.is_finite() || p.is_empty() {
                 return p;
             }
-            let mut d: Vec<f64> = p.iter().map(|q| dist(q.src, q.dst)).collect();
+            let mut d: Vec<f64> = p.iter().map(|q| q.src.distance(q.dst)).collect();
             let c = reject * crate::range_image::median(&mut d);
             p.into_iter()
                 .filter_map(|mut q| {
-                    let u = dist(q.src, q.dst) / c;
+                    let u = q.src.distance(q.dst) / c;
                     if u >= 1.0 {
                         return None;
                     }
@@ -633,9 +635,9 @@ pub(crate) fn trimmed(mut p: Vec<Pair>, reject: f64) -> Vec<Pair> {
     if !reject.is_finite() || p.is_empty() {
         return p;
     }
-    let mut d: Vec<f64> = p.iter().map(|q| dist(q.src, q.dst)).collect();
+    let mut d: Vec<f64> = p.iter().map(|q| q.src.distance(q.dst)).collect();
     let limit = reject * crate::range_image::median(&mut d);
-    p.retain(|q| dist(q.src, q.dst) <= limit);
+    p.retain(|q| q.src.distance(q.dst) <= limit);
     p
 }
 
@@ -654,7 +656,7 @@ const CHUNK: usize = 64;
 pub(crate) fn pairs_with(t: &Targets, i: usize, level: usize, targets_idx: &[usize], poses: &[Rigid], d: f64, symmetric: bool) -> Vec<Pair> {
     let scan = &t.scans[i];
     let pose = poses[i];
-    let tinfo: Vec<(usize, Rigid, V3, V3)> = targets_idx
+    let tinfo: Vec<(usize, Rigid, [f64; 3], [f64; 3])> = targets_idx
         .iter()
         .map(|&j| {
             let (wlo, whi) = world_bounds(&t.bvhs[j], &poses[j]);
@@ -669,7 +671,7 @@ pub(crate) fn pairs_with(t: &Targets, i: usize, level: usize, targets_idx: &[usi
                 return None;
             }
             let w = pose.apply(scan.positions[v]);
-            let mut best: Option<(f64, usize, V3, u32)> = None;
+            let mut best: Option<(f64, usize, [f64; 3], u32)> = None;
             for (k_t, &(j, inv, lo, hi)) in tinfo.iter().enumerate() {
                 if (0..3).any(|k| w[k] < lo[k] - d || w[k] > hi[k] + d) {
                     continue;
@@ -688,7 +690,7 @@ pub(crate) fn pairs_with(t: &Targets, i: usize, level: usize, targets_idx: &[usi
             if wt <= 0.0 {
                 return None;
             }
-            Some(Pair { src: w, dst: poses[j].apply(cp), normal: t.face_normals[j].get(f as usize).map_or([0.0; 3], |&n| poses[j].rotate(n)), w: wt })
+            Some(Pair { src: DVec3::from(w), dst: poses[j].apply(DVec3::from(cp)), normal: t.face_normals[j].get(f as usize).map_or(DVec3::ZERO, |&n| poses[j].rotate(n)), w: wt })
         });
     if !symmetric {
         return forward;
@@ -732,7 +734,7 @@ pub(crate) fn pairs_with(t: &Targets, i: usize, level: usize, targets_idx: &[usi
         if wt <= 0.0 {
             return None;
         }
-        Some(Pair { src: pose.apply(cp), dst: w, normal: t.face_normals[i].get(f as usize).map_or([0.0; 3], |&n| pose.rotate(n)), w: wt })
+        Some(Pair { src: pose.apply(DVec3::from(cp)), dst: DVec3::from(w), normal: t.face_normals[i].get(f as usize).map_or(DVec3::ZERO, |&n| pose.rotate(n)), w: wt })
     });
     let mut all = forward;
     all.extend(reverse);
@@ -766,7 +768,7 @@ where
 }
 
 /// The world box around a scan's BVH box moved by `pose`.
-fn world_bounds(bvh: &TriangleBvh, pose: &Rigid) -> (V3, V3) {
+fn world_bounds(bvh: &TriangleBvh, pose: &Rigid) -> ([f64; 3], [f64; 3]) {
     let (lo, hi) = bvh.bounds();
     crate::scan_mesh::bbox((0..8).map(|k| pose.apply([if k & 1 == 0 { lo[0] } else { hi[0] }, if k & 2 == 0 { lo[1] } else { hi[1] }, if k & 4 == 0 { lo[2] } else { hi[2] }])))
 }
@@ -777,12 +779,12 @@ fn horn(p: &[Pair]) -> Option<Rigid> {
     if wsum <= 0.0 {
         return None;
     }
-    let cs = scale(p.iter().fold([0.0; 3], |a, q| add(a, scale(q.src, q.w))), 1.0 / wsum);
-    let cd = scale(p.iter().fold([0.0; 3], |a, q| add(a, scale(q.dst, q.w))), 1.0 / wsum);
+    let cs = p.iter().fold(DVec3::ZERO, |a, q| a + q.src * q.w) * (1.0 / wsum);
+    let cd = p.iter().fold(DVec3::ZERO, |a, q| a + q.dst * q.w) * (1.0 / wsum);
     let mut s = [[0.0; 3]; 3];
     for q in p {
-        let b = sub(q.src, cs);
-        let a = sub(q.dst, cd);
+        let b = q.src - cs;
+        let a = q.dst - cd;
         for r in 0..3 {
             for c in 0..3 {
                 s[r][c] += q.w * b[r] * a[c];
@@ -803,8 +805,8 @@ fn horn(p: &[Pair]) -> Option<Rigid> {
     let v = eig.eigenvectors.column(k);
     // Horn's quaternion is (w, x, y, z).
     let rot = Rigid::from_quat([v[1], v[2], v[3], v[0]], [0.0; 3]);
-    let t = sub(cd, rot.rotate(cs));
-    Some(Rigid { r: rot.r, t })
+    let t = cd - rot.rotate(cs);
+    Some(Rigid { r: rot.r, t: t.to_array() })
 }
 
 /// Point-to-plane, linearized: solve for a small rotation vector ω and a
@@ -814,23 +816,23 @@ fn point_to_plane(p: &[Pair]) -> Option<Rigid> {
     if wsum <= 0.0 {
         return None;
     }
-    let c = scale(p.iter().fold([0.0; 3], |a, q| add(a, scale(q.src, q.w))), 1.0 / wsum);
+    let c = p.iter().fold(DVec3::ZERO, |a, q| a + q.src * q.w) * (1.0 / wsum);
     let mut ata = nalgebra::Matrix6::<f64>::zeros();
     let mut atb = nalgebra::Vector6::<f64>::zeros();
     for q in p {
-        let b = sub(q.src, c);
+        let b = q.src - c;
         let n = q.normal;
-        let j = cross(b, n);
-        let row = nalgebra::Vector6::new(j[0], j[1], j[2], n[0], n[1], n[2]);
-        let r = dot(sub(q.src, q.dst), n);
+        let j = b.cross(n);
+        let row = nalgebra::Vector6::new(j.x, j.y, j.z, n.x, n.y, n.z);
+        let r = (q.src - q.dst).dot(n);
         ata += q.w * row * row.transpose();
         atb -= q.w * r * row;
     }
     let x = ata.cholesky()?.solve(&atb);
-    let rot = Rigid::from_rotation_vector([x[0], x[1], x[2]], [0.0; 3]);
+    let rot = Rigid::from_rotation_vector(DVec3::new(x[0], x[1], x[2]), [0.0; 3]);
     // p ↦ R(p − c) + c + t
-    let t = add(sub(c, rot.rotate(c)), [x[3], x[4], x[5]]);
-    Some(Rigid { r: rot.r, t })
+    let t = c - rot.rotate(c) + DVec3::new(x[3], x[4], x[5]);
+    Some(Rigid { r: rot.r, t: t.to_array() })
 }
 
 #[cfg(test)]
@@ -840,8 +842,8 @@ mod tests {
     #[test]
     fn horn_recovers_a_known_motion_exactly() {
         let truth = Rigid::from_quat([0.1, -0.3, 0.2, 0.9], [0.5, -1.0, 2.0]);
-        let pts: Vec<V3> = (0..20).map(|i| [(i as f64 * 0.7).sin(), (i as f64 * 1.3).cos(), i as f64 * 0.1]).collect();
-        let pairs: Vec<Pair> = pts.iter().enumerate().map(|(i, &p)| Pair { src: p, dst: truth.apply(p), normal: [0.0, 0.0, 1.0], w: 1.0 + i as f64 }).collect();
+        let pts: Vec<[f64; 3]> = (0..20).map(|i| [(i as f64 * 0.7).sin(), (i as f64 * 1.3).cos(), i as f64 * 0.1]).collect();
+        let pairs: Vec<Pair> = pts.iter().enumerate().map(|(i, &p)| Pair { src: DVec3::from(p), dst: truth.apply(DVec3::from(p)), normal: DVec3::Z, w: 1.0 + i as f64 }).collect();
         let m = horn(&pairs).unwrap();
         let (deg, shift) = crate::geom::pose_error(&m, &truth, &pts);
         assert!(deg < 1e-9 && shift < 1e-12, "{deg} {shift}");

@@ -54,7 +54,7 @@ pub use error::RangeError;
 pub use merge_file::{merge_file, MergeFileOptions, MergeMethod, MergeReport, MergeSummary};
 
 /// A merged mesh: world positions, faces, and the method's report.
-pub type Merged<R> = (Vec<geom::V3>, Vec<[u32; 3]>, R);
+pub type Merged<R> = (Vec<[f64; 3]>, Vec<[u32; 3]>, R);
 pub use geom::Rigid;
 pub use range_image::RangeImage;
 pub use scan_mesh::{load_scan, load_set, range_image_as_mesh, MeshOptions, ScanMesh};

@@ -9,11 +9,12 @@
 //! Faces are oriented consistently throughout: a new face always takes the
 //! reverse of the half-edges it closes.
 
-use crate::geom::{dist, dot, normalize, tri_normal, V3};
+use crate::scan_mesh::face_normal;
+use glam::DVec3;
 use rustc_hash::FxHashMap as HashMap;
 
 /// Drops unused vertices; returns the old → new map (`u32::MAX` for dropped).
-pub fn compact(positions: &mut Vec<V3>, faces: &mut [[u32; 3]]) -> Vec<u32> {
+pub fn compact(positions: &mut Vec<[f64; 3]>, faces: &mut [[u32; 3]]) -> Vec<u32> {
     let mut map = vec![u32::MAX; positions.len()];
     let mut out = Vec::new();
     for f in faces.iter_mut() {
@@ -35,7 +36,7 @@ pub fn compact(positions: &mut Vec<V3>, faces: &mut [[u32; 3]]) -> Vec<u32> {
 /// then splits every vertex whose faces form more than one fan into one
 /// vertex per fan (new vertices are appended, copies of the position).
 /// Returns `(faces dropped, vertices split off)`.
-pub fn make_manifold(positions: &mut Vec<V3>, faces: &mut Vec<[u32; 3]>) -> (usize, usize) {
+pub fn make_manifold(positions: &mut Vec<[f64; 3]>, faces: &mut Vec<[u32; 3]>) -> (usize, usize) {
     let before = faces.len();
     let mut half: HashMap<(u32, u32), u32> = HashMap::with_capacity_and_hasher(faces.len() * 3, Default::default());
     let mut undirected: HashMap<(u32, u32), u8> = HashMap::with_capacity_and_hasher(faces.len() * 3, Default::default());
@@ -202,13 +203,14 @@ pub fn boundary_loops(faces: &[[u32; 3]]) -> Vec<Vec<u32>> {
 /// Fills every boundary loop of at most `max_edges` edges by ear cutting:
 /// repeatedly the ear whose new edge is shortest among those that do not
 /// already exist. Returns the number of loops filled.
-pub fn fill_small_holes(positions: &[V3], faces: &mut Vec<[u32; 3]>, max_edges: usize) -> usize {
+pub fn fill_small_holes(positions: &[[f64; 3]], faces: &mut Vec<[u32; 3]>, max_edges: usize) -> usize {
     let mut undirected: HashMap<(u32, u32), u8> = HashMap::with_capacity_and_hasher(faces.len() * 3, Default::default());
     for f in faces.iter() {
         for k in 0..3 {
             *undirected.entry(key(f[k], f[(k + 1) % 3])).or_insert(0) += 1;
         }
     }
+    let edge_len = |a: u32, b: u32| DVec3::from(positions[a as usize]).distance(DVec3::from(positions[b as usize]));
     let mut filled = 0;
     for mut l in boundary_loops(faces) {
         if l.len() < 3 || l.len() > max_edges {
@@ -224,8 +226,8 @@ pub fn fill_small_holes(positions: &[V3], faces: &mut Vec<[u32; 3]>, max_edges: 
                     !undirected.contains_key(&key(p, q))
                 })
                 .min_by(|&i, &j| {
-                    let li = dist(positions[l[(i + n - 1) % n] as usize], positions[l[(i + 1) % n] as usize]);
-                    let lj = dist(positions[l[(j + n - 1) % n] as usize], positions[l[(j + 1) % n] as usize]);
+                    let li = edge_len(l[(i + n - 1) % n], l[(i + 1) % n]);
+                    let lj = edge_len(l[(j + n - 1) % n], l[(j + 1) % n]);
                     li.total_cmp(&lj)
                 });
             let Some(i) = best else {
@@ -259,7 +261,8 @@ pub fn fill_small_holes(positions: &[V3], faces: &mut Vec<[u32; 3]>, max_edges: 
 /// 2-manifold) and no remaining face turns by more than 60°. Boundary
 /// vertices are kept. Returns the number of vertices deleted (their
 /// positions stay, unused, until [`compact`]).
-pub fn remove_small_triangles(positions: &[V3], faces: &mut Vec<[u32; 3]>, min_altitude: f64) -> usize {
+pub fn remove_small_triangles(positions: &[[f64; 3]], faces: &mut Vec<[u32; 3]>, min_altitude: f64) -> usize {
+    let dist = |a: u32, b: u32| DVec3::from(positions[a as usize]).distance(DVec3::from(positions[b as usize]));
     let mut removed = 0;
     for _round in 0..4 {
         let mut vf: Vec<Vec<u32>> = vec![Vec::new(); positions.len()];
@@ -288,9 +291,8 @@ pub fn remove_small_triangles(positions: &[V3], faces: &mut Vec<[u32; 3]>, min_a
                 continue;
             }
             let f = faces[fi];
-            let p = f.map(|i| positions[i as usize]);
-            let area2 = crate::geom::norm(tri_normal(p[0], p[1], p[2]));
-            let lens = [dist(p[1], p[2]), dist(p[2], p[0]), dist(p[0], p[1])];
+            let area2 = face_normal(positions, f).length();
+            let lens = [dist(f[1], f[2]), dist(f[2], f[0]), dist(f[0], f[1])];
             let (k, &longest) = lens.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).unwrap();
             if longest == 0.0 || area2 / longest >= min_altitude {
                 continue;
@@ -307,7 +309,7 @@ pub fn remove_small_triangles(positions: &[V3], faces: &mut Vec<[u32; 3]>, min_a
             link.sort_unstable();
             link.dedup();
             let mut cands = link.clone();
-            cands.sort_by(|&a, &b| dist(positions[a as usize], positions[v as usize]).total_cmp(&dist(positions[b as usize], positions[v as usize])));
+            cands.sort_by(|&a, &b| dist(a, v).total_cmp(&dist(b, v)));
             'cand: for u in cands {
                 // Link condition: common neighbours of u and v are exactly the
                 // two vertices opposite the edge uv.
@@ -324,12 +326,12 @@ pub fn remove_small_triangles(positions: &[V3], faces: &mut Vec<[u32; 3]>, min_a
                     if gf.contains(&u) {
                         continue;
                     }
-                    let old = normalize(tri_normal(positions[gf[0] as usize], positions[gf[1] as usize], positions[gf[2] as usize]));
+                    let old = face_normal(positions, gf).normalize_or_zero();
                     let nf = gf.map(|w| if w == v { u } else { w });
-                    let new = normalize(tri_normal(positions[nf[0] as usize], positions[nf[1] as usize], positions[nf[2] as usize]));
+                    let new = face_normal(positions, nf).normalize_or_zero();
                     // No fold-over; a face with no normal (zero area)
                     // cannot fold and must not block its own removal.
-                    if old != [0.0; 3] && dot(old, new) < 0.5 {
+                    if old != DVec3::ZERO && old.dot(new) < 0.5 {
                         continue 'cand;
                     }
                 }
@@ -363,9 +365,10 @@ pub fn remove_small_triangles(positions: &[V3], faces: &mut Vec<[u32; 3]>, min_a
 }
 
 /// The smallest altitude of a triangle.
-pub fn min_altitude(p: [V3; 3]) -> f64 {
-    let area2 = crate::geom::norm(tri_normal(p[0], p[1], p[2]));
-    let longest = dist(p[0], p[1]).max(dist(p[1], p[2])).max(dist(p[2], p[0]));
+pub fn min_altitude(p: [[f64; 3]; 3]) -> f64 {
+    let p = p.map(DVec3::from);
+    let area2 = (p[1] - p[0]).cross(p[2] - p[0]).length();
+    let longest = p[0].distance(p[1]).max(p[1].distance(p[2])).max(p[2].distance(p[0]));
     if longest == 0.0 {
         0.0
     } else {

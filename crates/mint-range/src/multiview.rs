@@ -47,7 +47,8 @@
 //! gathered in a fixed order.
 
 use crate::error::RangeError;
-use crate::geom::{add, cross, dist, dot, sub, Rigid, V3};
+use crate::geom::Rigid;
+use glam::DVec3;
 use crate::icp::{coverage, distance_levels, pairs, register_one, weighed, AlignOptions, Kernel, ScanReport, Status, Targets};
 use mint_core::progress::Progress;
 use rayon::prelude::*;
@@ -116,9 +117,9 @@ struct Fit {
 struct Mates {
     a: usize,
     b: usize,
-    x: Vec<V3>,
-    y: Vec<V3>,
-    n: Vec<V3>,
+    x: Vec<DVec3>,
+    y: Vec<DVec3>,
+    n: Vec<DVec3>,
     w: Vec<f64>,
 }
 
@@ -359,7 +360,7 @@ pub(crate) fn register(t: &Targets, initial: &[Rigid], dists: &[f64], opts: &Ali
             }
             let partners: Vec<usize> = reports[k].partners.iter().filter_map(|p| names.iter().position(|q| q == p)).collect();
             let p = weighed(pairs(t, k, scans[k].levels.len() - 1, &partners, &poses, d), opts.reject, opts.kernel);
-            let rms = (p.iter().map(|q| dot(sub(q.src, q.dst), sub(q.src, q.dst))).sum::<f64>() / p.len().max(1) as f64).sqrt();
+            let rms = (p.iter().map(|q| q.src.distance_squared(q.dst)).sum::<f64>() / p.len().max(1) as f64).sqrt();
             Some((p.len(), rms))
         })
         .collect();
@@ -463,7 +464,7 @@ fn virtual_mates(t: &Targets, a: usize, b: usize, poses: &[Rigid], d: f64, opts:
     let mut m = Mates { a, b, x: Vec::new(), y: Vec::new(), n: Vec::new(), w: Vec::new() };
     for q in p.iter().step_by(step) {
         // The midpoint of the pair: the same world point in both frames.
-        let w = crate::geom::scale(add(q.src, q.dst), 0.5);
+        let w = (q.src + q.dst) * 0.5;
         m.x.push(ib.apply(w));
         m.y.push(ia.apply(w));
         m.n.push(ia.rotate(q.normal));
@@ -477,9 +478,9 @@ fn virtual_mates(t: &Targets, a: usize, b: usize, poses: &[Rigid], d: f64, opts:
 fn residual(poses: &[Rigid], m: &Mates, tangential: f64) -> f64 {
     let (mut s, mut w) = (0.0, 0.0);
     for k in 0..m.x.len() {
-        let r = sub(poses[m.a].apply(m.y[k]), poses[m.b].apply(m.x[k]));
-        let across = dot(r, poses[m.a].rotate(m.n[k]));
-        s += m.w[k] * ((1.0 - tangential) * across * across + tangential * dot(r, r));
+        let r = poses[m.a].apply(m.y[k]) - poses[m.b].apply(m.x[k]);
+        let across = r.dot(poses[m.a].rotate(m.n[k]));
+        s += m.w[k] * ((1.0 - tangential) * across * across + tangential * r.dot(r));
         w += m.w[k];
     }
     (s / w.max(f64::MIN_POSITIVE)).sqrt()
@@ -505,9 +506,9 @@ fn reachable(n: usize, anchor: usize, mates: &[Mates], index: &[usize]) -> Vec<b
 
 /// The centre of the placed scans' world boxes (the global solve rotates
 /// about it, which keeps its normal equations well scaled).
-fn model_center(scans: &[crate::ScanMesh], poses: &[Rigid], placed: &[bool]) -> V3 {
+fn model_center(scans: &[crate::ScanMesh], poses: &[Rigid], placed: &[bool]) -> DVec3 {
     let (lo, hi) = crate::scan_mesh::bbox(scans.iter().zip(poses).zip(placed).filter(|(_, &p)| p).flat_map(|((s, p), _)| s.bbox_corners().into_iter().map(move |c| p.apply(c))));
-    crate::geom::scale(add(lo, hi), 0.5)
+    (DVec3::from(lo) + DVec3::from(hi)) * 0.5
 }
 
 /// The global solve: Gauss–Newton on
@@ -522,7 +523,7 @@ fn model_center(scans: &[crate::ScanMesh], poses: &[Rigid], placed: &[bool]) -> 
 /// `p ↦ R(ω)(p − c) + c + t` on the left.
 /// Stops when no mate moves by more than `tol` in an iteration.
 #[allow(clippy::too_many_arguments)]
-fn solve(poses: &mut [Rigid], mates: &[Mates], index: &[usize], anchor: usize, placed: &[bool], c: V3, tol: f64, tangential: f64) {
+fn solve(poses: &mut [Rigid], mates: &[Mates], index: &[usize], anchor: usize, placed: &[bool], c: DVec3, tol: f64, tangential: f64) {
     let n = poses.len();
     let mut var = vec![usize::MAX; n];
     let mut nv = 0;
@@ -540,7 +541,7 @@ fn solve(poses: &mut [Rigid], mates: &[Mates], index: &[usize], anchor: usize, p
     let mut radius: f64 = 0.0;
     for &e in index {
         let pa = poses[mates[e].a];
-        radius = mates[e].y.iter().fold(radius, |r, &y| r.max(dist(pa.apply(y), c)));
+        radius = mates[e].y.iter().fold(radius, |r, &y| r.max(pa.apply(y).distance(c)));
     }
     for _ in 0..20 {
         let mut h = nalgebra::DMatrix::<f64>::zeros(m, m);
@@ -551,18 +552,18 @@ fn solve(poses: &mut [Rigid], mates: &[Mates], index: &[usize], anchor: usize, p
             let mut hb = nalgebra::SMatrix::<f64, 12, 12>::zeros();
             let mut gb = nalgebra::SVector::<f64, 12>::zeros();
             for k in 0..mt.x.len() {
-                let pa = sub(poses[mt.a].apply(mt.y[k]), c);
-                let pb = sub(poses[mt.b].apply(mt.x[k]), c);
-                let r = sub(pa, pb);
+                let pa = poses[mt.a].apply(mt.y[k]) - c;
+                let pb = poses[mt.b].apply(mt.x[k]) - c;
+                let r = pa - pb;
                 let n = poses[mt.a].rotate(mt.n[k]);
                 // d r / d(ω_a, t_a, ω_b, t_b), one row per coordinate, and
                 // the row of the distance across the surface, n · r (n
                 // held fixed within the iteration).
                 let mut jn = nalgebra::SVector::<f64, 12>::zeros();
-                for (row, e_axis) in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].iter().enumerate() {
+                for (row, e_axis) in [DVec3::X, DVec3::Y, DVec3::Z].into_iter().enumerate() {
                     // ∂(ω × p)_row / ∂ω = p × e_row.
-                    let ja = cross(pa, *e_axis);
-                    let jb = cross(pb, *e_axis);
+                    let ja = pa.cross(e_axis);
+                    let jb = pb.cross(e_axis);
                     let mut j = nalgebra::SVector::<f64, 12>::zeros();
                     for q in 0..3 {
                         j[q] = ja[q];
@@ -576,7 +577,7 @@ fn solve(poses: &mut [Rigid], mates: &[Mates], index: &[usize], anchor: usize, p
                 }
                 let w = (1.0 - tangential) * mt.w[k];
                 hb += w * jn * jn.transpose();
-                gb += (w * dot(n, r)) * jn;
+                gb += (w * n.dot(r)) * jn;
             }
             for (bi, vi) in [(0, va), (6, vb)] {
                 if vi == usize::MAX {
@@ -610,12 +611,12 @@ fn solve(poses: &mut [Rigid], mates: &[Mates], index: &[usize], anchor: usize, p
             if v == usize::MAX {
                 continue;
             }
-            let w = [x[6 * v], x[6 * v + 1], x[6 * v + 2]];
-            let tr = [x[6 * v + 3], x[6 * v + 4], x[6 * v + 5]];
+            let w = DVec3::new(x[6 * v], x[6 * v + 1], x[6 * v + 2]);
+            let tr = DVec3::new(x[6 * v + 3], x[6 * v + 4], x[6 * v + 5]);
             let rot = Rigid::from_rotation_vector(w, [0.0; 3]);
-            let delta = Rigid { r: rot.r, t: add(sub(c, rot.rotate(c)), tr) };
+            let delta = Rigid { r: rot.r, t: (c - rot.rotate(c) + tr).to_array() };
             poses[k] = delta.after(&poses[k]).orthonormalized();
-            step = step.max(crate::geom::norm(tr) + crate::geom::norm(w) * radius);
+            step = step.max(tr.length() + w.length() * radius);
         }
         if step < tol {
             break;
@@ -634,8 +635,8 @@ mod tests {
         for i in 0..200 {
             let u = (i as f64 * 0.37 + seed).sin();
             let v = (i as f64 * 0.73 + seed).cos();
-            let w = [u, v, 0.3 * (u * u - v * v) + 0.5 * u * v];
-            let normal = crate::geom::normalize([-0.6 * u - 0.5 * v, 0.6 * v - 0.5 * u, 1.0]);
+            let w = DVec3::new(u, v, 0.3 * (u * u - v * v) + 0.5 * u * v);
+            let normal = DVec3::new(-0.6 * u - 0.5 * v, 0.6 * v - 0.5 * u, 1.0).normalize_or_zero();
             m.x.push(pb.inverse().apply(w));
             m.y.push(pa.inverse().apply(w));
             m.n.push(pa.inverse().rotate(normal));
@@ -651,9 +652,9 @@ mod tests {
         let truth = [Rigid::IDENTITY, Rigid::from_quat([0.1, 0.2, -0.1, 0.97], [0.3, -0.2, 0.1]), Rigid::from_quat([-0.2, 0.05, 0.1, 0.97], [-0.1, 0.4, 0.2])];
         let all = vec![mates(0, 1, &truth[0], &truth[1], 0.0), mates(1, 2, &truth[1], &truth[2], 1.0), mates(0, 2, &truth[0], &truth[2], 2.0)];
         let mut poses = truth;
-        poses[1] = Rigid::from_axis_angle([1.0, 1.0, 0.0], 0.05).after(&poses[1]);
-        poses[2] = Rigid { t: add(poses[2].t, [0.02, -0.01, 0.03]), ..Rigid::from_axis_angle([0.0, 1.0, 1.0], -0.04).after(&poses[2]) };
-        solve(&mut poses, &all, &[0, 1, 2], 0, &[true; 3], [0.0; 3], 1e-12, TANGENTIAL);
+        poses[1] = Rigid::from_axis_angle(DVec3::new(1.0, 1.0, 0.0), 0.05).after(&poses[1]);
+        poses[2] = Rigid { t: (DVec3::from(poses[2].t) + DVec3::new(0.02, -0.01, 0.03)).to_array(), ..Rigid::from_axis_angle(DVec3::new(0.0, 1.0, 1.0), -0.04).after(&poses[2]) };
+        solve(&mut poses, &all, &[0, 1, 2], 0, &[true; 3], DVec3::ZERO, 1e-12, TANGENTIAL);
         assert_eq!(poses[0], Rigid::IDENTITY);
         for k in 1..3 {
             let (deg, shift) = crate::geom::pose_error(&truth[k], &poses[k], &[[1.0, 1.0, 1.0], [-1.0, 0.0, 0.5]]);

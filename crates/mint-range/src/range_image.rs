@@ -22,7 +22,7 @@
 //! Images", SIGGRAPH 1994, §3.3.
 
 use crate::error::RangeError;
-use crate::geom::{dist, dot, scale, sub, V3};
+use glam::DVec3;
 use std::io::Write;
 use std::path::Path;
 
@@ -36,7 +36,7 @@ pub struct RangeImage {
     /// `cols × rows` cells, row-major: index into `points`, if sampled.
     pub cells: Vec<Option<u32>>,
     /// Sample points, in the scan's own frame.
-    pub points: Vec<V3>,
+    pub points: Vec<[f64; 3]>,
 }
 
 impl RangeImage {
@@ -54,7 +54,7 @@ impl RangeImage {
         let grid = reader
             .range_grid()
             .ok_or_else(|| RangeError::empty(path, "not a range image (no range_grid element)"))?;
-        let points: Vec<V3> = (0..reader.vertex_count()).map(|i| reader.vertex(i)).collect();
+        let points: Vec<[f64; 3]> = (0..reader.vertex_count()).map(|i| reader.vertex(i)).collect();
         if let Some(i) = points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
             return Err(RangeError::empty(path, format!("vertex {i} has a non-finite coordinate")));
         }
@@ -118,11 +118,11 @@ element range_grid {}\nproperty list uchar int vertex_indices\nend_header\n",
     /// over horizontal neighbours and over vertical neighbours, and the
     /// larger of the two, so that a few pairs across silhouettes do not
     /// decide it. 0 if no two neighbouring cells are sampled.
-    pub fn sampling_distance(&self, toward_scanner: V3) -> f64 {
+    pub fn sampling_distance(&self, toward_scanner: DVec3) -> f64 {
         let flat = |a: u32, b: u32| {
-            let d = sub(self.points[b as usize], self.points[a as usize]);
-            let d = sub(d, scale(toward_scanner, dot(d, toward_scanner)));
-            dot(d, d).sqrt()
+            let d = DVec3::from(self.points[b as usize]) - DVec3::from(self.points[a as usize]);
+            let d = d - toward_scanner * d.dot(toward_scanner);
+            d.length()
         };
         let mut h = Vec::new();
         let mut v = Vec::new();
@@ -150,19 +150,19 @@ element range_grid {}\nproperty list uchar int vertex_indices\nend_header\n",
     pub fn triangulate(&self, max_edge: f64) -> Vec<[u32; 3]> {
         let mut out = Vec::new();
         let ok = |t: [u32; 3]| {
-            let p = t.map(|i| self.points[i as usize]);
-            dist(p[0], p[1]) < max_edge && dist(p[1], p[2]) < max_edge && dist(p[2], p[0]) < max_edge
+            let p = t.map(|i| DVec3::from(self.points[i as usize]));
+            p[0].distance(p[1]) < max_edge && p[1].distance(p[2]) < max_edge && p[2].distance(p[0]) < max_edge
         };
         for r in 0..self.rows.saturating_sub(1) {
             for c in 0..self.cols.saturating_sub(1) {
                 let (a, b, cc, d) = (self.at(c, r), self.at(c + 1, r), self.at(c, r + 1), self.at(c + 1, r + 1));
                 let tris: [Option<[u32; 3]>; 2] = match (a, b, cc, d) {
                     (Some(a), Some(b), Some(cc), Some(d)) => {
-                        let pa = self.points[a as usize];
-                        let pb = self.points[b as usize];
-                        let pc = self.points[cc as usize];
-                        let pd = self.points[d as usize];
-                        if dist(pa, pd) <= dist(pb, pc) {
+                        let pa = DVec3::from(self.points[a as usize]);
+                        let pb = DVec3::from(self.points[b as usize]);
+                        let pc = DVec3::from(self.points[cc as usize]);
+                        let pd = DVec3::from(self.points[d as usize]);
+                        if pa.distance(pd) <= pb.distance(pc) {
                             [Some([a, b, d]), Some([a, d, cc])]
                         } else {
                             [Some([a, b, cc]), Some([b, d, cc])]
@@ -239,7 +239,7 @@ mod tests {
     #[test]
     fn a_full_grid_gives_two_triangles_per_block() {
         let im = image(&[], None);
-        assert_eq!(im.sampling_distance([0.0, 0.0, 1.0]), 1.0);
+        assert_eq!(im.sampling_distance(DVec3::Z), 1.0);
         let t = im.triangulate(4.0);
         // 3 × 2 blocks, two triangles each.
         assert_eq!(t.len(), 12);
@@ -249,8 +249,8 @@ mod tests {
         // Counter-clockwise in (col, row) means clockwise seen from +z here
         // (rows go down in y): every normal points to -z.
         for f in &t {
-            let n = crate::geom::tri_normal(im.points[f[0] as usize], im.points[f[1] as usize], im.points[f[2] as usize]);
-            assert!(n[2] < 0.0);
+            let [a, b, c] = f.map(|i| DVec3::from(im.points[i as usize]));
+            assert!((b - a).cross(c - a).z < 0.0);
         }
     }
 
@@ -267,7 +267,7 @@ mod tests {
         // Columns 2..4 sit 10 units behind: the blocks between columns 1 and
         // 2 have edges of length ≥ 10 > 4s and are dropped.
         let im = image(&[], Some(2));
-        let t = im.triangulate(4.0 * im.sampling_distance([0.0, 0.0, 1.0]));
+        let t = im.triangulate(4.0 * im.sampling_distance(DVec3::Z));
         assert_eq!(t.len(), 8);
         for f in &t {
             let zs: Vec<f64> = f.iter().map(|&i| im.points[i as usize][2]).collect();

@@ -11,14 +11,14 @@
 //! most 4 triangles, nodes in depth-first order; queries use an explicit
 //! stack. Contract: finite coordinates; degenerate triangles are never hit.
 
-use crate::geom::{cross, dot, sub, V3};
+use glam::DVec3;
 
 const LEAF: usize = 4;
 
 #[derive(Debug, Clone, Copy)]
 struct Node {
-    lo: V3,
-    hi: V3,
+    lo: [f64; 3],
+    hi: [f64; 3],
     /// Leaf: first triangle (in `order`) and count > 0; inner: right child
     /// index and count 0 (the left child follows the node).
     first: u32,
@@ -28,7 +28,7 @@ struct Node {
 /// A ray-query tree over borrowed-then-copied triangles; see the module docs.
 #[derive(Debug, Clone)]
 pub struct RayBvh {
-    tris: Vec<[V3; 3]>,
+    tris: Vec<[DVec3; 3]>,
     ids: Vec<u32>,
     nodes: Vec<Node>,
 }
@@ -45,10 +45,10 @@ pub struct Hit {
 
 impl RayBvh {
     /// Builds the tree. An empty face list gives a tree that never hits.
-    pub fn new(positions: &[V3], faces: &[[u32; 3]]) -> RayBvh {
-        let tris: Vec<[V3; 3]> = faces.iter().map(|f| f.map(|i| positions[i as usize])).collect();
+    pub fn new(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> RayBvh {
+        let tris: Vec<[DVec3; 3]> = faces.iter().map(|f| f.map(|i| DVec3::from(positions[i as usize]))).collect();
         let mut ids: Vec<u32> = (0..faces.len() as u32).collect();
-        let cent: Vec<V3> = tris.iter().map(|t| [0, 1, 2].map(|k| (t[0][k] + t[1][k] + t[2][k]) / 3.0)).collect();
+        let cent: Vec<DVec3> = tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
         let mut nodes = Vec::with_capacity(2 * faces.len() / LEAF + 1);
         if !tris.is_empty() {
             build(&tris, &cent, &mut ids, 0, &mut nodes);
@@ -59,7 +59,7 @@ impl RayBvh {
 
     /// Calls `f` for every hit with `t` in `[t0, t1]` of the line
     /// `o + t·d` (in no particular order).
-    pub fn segment_hits(&self, o: V3, d: V3, t0: f64, t1: f64, mut f: impl FnMut(Hit)) {
+    pub fn segment_hits(&self, o: DVec3, d: DVec3, t0: f64, t1: f64, mut f: impl FnMut(Hit)) {
         self.walk(o, d, t0, t1, |h| {
             f(h);
             t1
@@ -67,7 +67,7 @@ impl RayBvh {
     }
 
     /// The hit with the smallest `t` in `[t0, t1]`, if any.
-    pub fn first_hit(&self, o: V3, d: V3, t0: f64, t1: f64) -> Option<Hit> {
+    pub fn first_hit(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         self.walk(o, d, t0, t1, |h| {
             if best.is_none_or(|b| h.t < b.t) {
@@ -80,11 +80,11 @@ impl RayBvh {
 
     /// Visits the hits with `t` in `[t0, t1]`, where `visit` returns the
     /// new upper end of the interval (the nodes beyond it are skipped).
-    fn walk(&self, o: V3, d: V3, t0: f64, mut t1: f64, mut visit: impl FnMut(Hit) -> f64) {
+    fn walk(&self, o: DVec3, d: DVec3, t0: f64, mut t1: f64, mut visit: impl FnMut(Hit) -> f64) {
         if self.nodes.is_empty() {
             return;
         }
-        let inv = d.map(|c| 1.0 / c);
+        let inv = d.recip();
         let mut stack = [0u32; 64];
         let mut sp = 1;
         while sp > 0 {
@@ -112,7 +112,7 @@ impl RayBvh {
     }
 }
 
-fn build(tris: &[[V3; 3]], cent: &[V3], ids: &mut [u32], base: u32, nodes: &mut Vec<Node>) -> usize {
+fn build(tris: &[[DVec3; 3]], cent: &[DVec3], ids: &mut [u32], base: u32, nodes: &mut Vec<Node>) -> usize {
     let me = nodes.len();
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
@@ -147,7 +147,7 @@ fn build(tris: &[[V3; 3]], cent: &[V3], ids: &mut [u32], base: u32, nodes: &mut 
 }
 
 #[inline]
-fn slab(n: &Node, o: V3, inv: V3, t0: f64, t1: f64) -> bool {
+fn slab(n: &Node, o: DVec3, inv: DVec3, t0: f64, t1: f64) -> bool {
     let (mut a, mut b) = (t0, t1);
     for k in 0..3 {
         let mut ta = (n.lo[k] - o[k]) * inv[k];
@@ -168,33 +168,33 @@ fn slab(n: &Node, o: V3, inv: V3, t0: f64, t1: f64) -> bool {
 
 /// Möller–Trumbore, two-sided: `(t, barycentrics)` or `None`.
 #[inline]
-pub fn intersect(t: &[V3; 3], o: V3, d: V3) -> Option<(f64, [f64; 3])> {
-    let e1 = sub(t[1], t[0]);
-    let e2 = sub(t[2], t[0]);
-    let p = cross(d, e2);
-    let det = dot(e1, p);
+pub fn intersect(t: &[DVec3; 3], o: DVec3, d: DVec3) -> Option<(f64, [f64; 3])> {
+    let e1 = t[1] - t[0];
+    let e2 = t[2] - t[0];
+    let p = d.cross(e2);
+    let det = e1.dot(p);
     if det == 0.0 || !det.is_finite() {
         return None;
     }
     let inv = 1.0 / det;
-    let s = sub(o, t[0]);
-    let u = dot(s, p) * inv;
+    let s = o - t[0];
+    let u = s.dot(p) * inv;
     if !(0.0..=1.0).contains(&u) {
         return None;
     }
-    let q = cross(s, e1);
-    let v = dot(d, q) * inv;
+    let q = s.cross(e1);
+    let v = d.dot(q) * inv;
     if v < 0.0 || u + v > 1.0 {
         return None;
     }
-    Some((dot(e2, q) * inv, [1.0 - u - v, u, v]))
+    Some((e2.dot(q) * inv, [1.0 - u - v, u, v]))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn grid(n: usize) -> (Vec<V3>, Vec<[u32; 3]>) {
+    fn grid(n: usize) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
         let mut p = Vec::new();
         let mut f = Vec::new();
         for j in 0..=n {
@@ -217,13 +217,13 @@ mod tests {
         let (p, f) = grid(20);
         let b = RayBvh::new(&p, &f);
         for (x, y) in [(0.3, 0.7), (10.5, 3.25), (19.9, 19.9), (7.0, 7.0)] {
-            let h = b.first_hit([x, y, 100.0], [0.0, 0.0, -1.0], 0.0, f64::INFINITY).unwrap();
+            let h = b.first_hit(DVec3::new(x, y, 100.0), DVec3::NEG_Z, 0.0, f64::INFINITY).unwrap();
             assert!((h.t - (100.0 - 0.5 * x)).abs() < 1e-9, "{x} {y}: {h:?}");
             let tri = f[h.face as usize];
-            let q: V3 = [0, 1, 2].map(|k| (0..3).map(|c| h.bary[c] * p[tri[c] as usize][k]).sum());
+            let q: [f64; 3] = [0, 1, 2].map(|k| (0..3).map(|c| h.bary[c] * p[tri[c] as usize][k]).sum());
             assert!((q[0] - x).abs() < 1e-9 && (q[1] - y).abs() < 1e-9);
         }
-        assert!(b.first_hit([-1.0, 5.0, 100.0], [0.0, 0.0, -1.0], 0.0, f64::INFINITY).is_none());
+        assert!(b.first_hit(DVec3::new(-1.0, 5.0, 100.0), DVec3::NEG_Z, 0.0, f64::INFINITY).is_none());
         // Segment hits: a line through two stacked copies.
         let mut p2 = p.clone();
         p2.extend(p.iter().map(|q| [q[0], q[1], q[2] + 1.0]));
@@ -232,7 +232,7 @@ mod tests {
         f2.extend(f.iter().map(|t| t.map(|i| i + nv)));
         let b2 = RayBvh::new(&p2, &f2);
         let mut ts = Vec::new();
-        b2.segment_hits([4.5, 4.5, 2.25], [0.0, 0.0, 1.0], -5.0, 5.0, |h| ts.push(h.t));
+        b2.segment_hits(DVec3::new(4.5, 4.5, 2.25), DVec3::Z, -5.0, 5.0, |h| ts.push(h.t));
         ts.sort_by(f64::total_cmp);
         // A point on a shared diagonal can be reported by both triangles.
         ts.dedup_by(|a, b| (*a - *b).abs() < 1e-12);

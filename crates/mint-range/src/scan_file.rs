@@ -10,6 +10,7 @@ use crate::error::RangeError;
 use crate::scan_mesh::{MeshOptions, ScanMesh};
 use crate::scanset::{ScanEntry, ScanSet, SetFormat};
 use crate::synth::{perturb, synthesize, SynthOptions, SyntheticScan};
+use glam::DVec3;
 use std::path::{Path, PathBuf};
 
 /// How each range image is written.
@@ -109,8 +110,9 @@ pub fn scan_file(
     let perturbed = opts.perturb_deg > 0.0 || opts.perturb_frac > 0.0;
     if perturbed {
         let (lo, hi) = crate::scan_mesh::bbox(faces.iter().flatten().map(|&i| positions[i as usize]));
-        let c = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
-        let diag = crate::geom::dist(lo, hi);
+        let (lo, hi) = (DVec3::from(lo), DVec3::from(hi));
+        let c = 0.5 * (lo + hi);
+        let diag = lo.distance(hi);
         let mut rng = mint_mesh::SplitMix64::new(opts.synth.seed ^ 0x5eed);
         let mut p = set.clone();
         for e in p.entries.iter_mut().skip(1) {

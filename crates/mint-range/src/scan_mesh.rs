@@ -21,7 +21,7 @@
 //! outside of an object, so its mesh faces outward.
 
 use crate::error::RangeError;
-use crate::geom::{add, dot, normalize, tri_normal, V3};
+use glam::DVec3;
 use crate::range_image::{median, RangeImage};
 use std::path::Path;
 
@@ -35,7 +35,7 @@ pub struct MeshOptions {
     /// Default `[0, 0, 1]`: the Cyberware convention of the Stanford scans
     /// (depth along z, the scanner on the +z side), which `mint scan` writes
     /// too.
-    pub toward_scanner: V3,
+    pub toward_scanner: DVec3,
     /// Edges over which confidence ramps up from the boundary. Default 4.
     pub boundary_ramp: u32,
     /// Levels of the registration hierarchy (each level has a quarter of the
@@ -45,7 +45,7 @@ pub struct MeshOptions {
 
 impl Default for MeshOptions {
     fn default() -> Self {
-        MeshOptions { edge_factor: 4.0, toward_scanner: [0.0, 0.0, 1.0], boundary_ramp: 4, levels: 4 }
+        MeshOptions { edge_factor: 4.0, toward_scanner: DVec3::Z, boundary_ramp: 4, levels: 4 }
     }
 }
 
@@ -55,11 +55,11 @@ pub struct ScanMesh {
     /// A name for reports (the file name).
     pub name: String,
     /// Positions in the scan's own frame.
-    pub positions: Vec<V3>,
+    pub positions: Vec<[f64; 3]>,
     /// Triangles, facing the scanner.
     pub faces: Vec<[u32; 3]>,
     /// Unit vertex normals (zero for unused vertices).
-    pub normals: Vec<V3>,
+    pub normals: Vec<DVec3>,
     /// Per-vertex confidence in `[0, 1]`.
     pub confidence: Vec<f64>,
     /// Vertex lies on a boundary edge (an edge of one triangle).
@@ -69,7 +69,7 @@ pub struct ScanMesh {
     /// Per-face mean confidence of the corners.
     pub face_confidence: Vec<f64>,
     /// Direction to the scanner, own frame.
-    pub toward_scanner: V3,
+    pub toward_scanner: DVec3,
     /// The sampling distance s.
     pub sampling: f64,
     /// Longest edge allowed in the triangulation (`edge_factor · s`).
@@ -94,7 +94,7 @@ pub fn load_scan(path: &Path, opts: &MeshOptions) -> Result<ScanMesh, RangeError
         let im = RangeImage::read(path)?;
         return ScanMesh::from_range_image(&name, &im, opts).map_err(|e| with_path(e, path));
     }
-    let positions: Vec<V3> = (0..reader.vertex_count()).map(|i| reader.vertex(i)).collect();
+    let positions: Vec<[f64; 3]> = (0..reader.vertex_count()).map(|i| reader.vertex(i)).collect();
     let mut faces = Vec::new();
     let mut chunk = mint_io::TriangleChunk::new();
     while reader.next_chunk(&mut chunk)? {
@@ -131,7 +131,7 @@ impl ScanMesh {
     /// and column).
     pub fn from_range_image(name: &str, im: &RangeImage, opts: &MeshOptions) -> Result<ScanMesh, RangeError> {
         check_options(opts)?;
-        let toward = normalize(opts.toward_scanner);
+        let toward = opts.toward_scanner.normalize_or_zero();
         let s = im.sampling_distance(toward);
         if s <= 0.0 {
             return Err(RangeError::empty(Path::new(name), "no two neighbouring cells are sampled"));
@@ -150,7 +150,7 @@ impl ScanMesh {
                     }
                 }
             }
-            v.retain(|&i| m.normals[i as usize] != [0.0; 3]);
+            v.retain(|&i| m.normals[i as usize] != DVec3::ZERO);
             levels.push(v);
         }
         m.levels = levels;
@@ -159,31 +159,31 @@ impl ScanMesh {
 
     /// A mesh of one view: s is the median edge length, and the hierarchy
     /// takes every `4^k`-th used vertex.
-    pub fn from_triangles(name: &str, positions: Vec<V3>, faces: Vec<[u32; 3]>, opts: &MeshOptions) -> Result<ScanMesh, RangeError> {
+    pub fn from_triangles(name: &str, positions: Vec<[f64; 3]>, faces: Vec<[u32; 3]>, opts: &MeshOptions) -> Result<ScanMesh, RangeError> {
         check_options(opts)?;
         let n = positions.len() as u32;
         if let Some(f) = faces.iter().find(|f| f.iter().any(|&i| i >= n)) {
             return Err(RangeError::empty(Path::new(name), format!("face {f:?} refers past the {n} vertices")));
         }
-        let mut lens: Vec<f64> = faces.iter().map(|f| crate::geom::dist(positions[f[0] as usize], positions[f[1] as usize])).collect();
+        let mut lens: Vec<f64> = faces.iter().map(|f| DVec3::from(positions[f[0] as usize]).distance(DVec3::from(positions[f[1] as usize]))).collect();
         let s = median(&mut lens);
-        let toward = normalize(opts.toward_scanner);
+        let toward = opts.toward_scanner.normalize_or_zero();
         let mut m = ScanMesh::assemble(name, positions, faces, toward, s, f64::INFINITY, opts)?;
-        let used: Vec<u32> = (0..n).filter(|&i| m.normals[i as usize] != [0.0; 3]).collect();
+        let used: Vec<u32> = (0..n).filter(|&i| m.normals[i as usize] != DVec3::ZERO).collect();
         m.levels = (0..opts.levels).rev().map(|l| used.iter().copied().step_by(1 << (2 * l)).collect()).collect();
         Ok(m)
     }
 
-    fn assemble(name: &str, positions: Vec<V3>, mut faces: Vec<[u32; 3]>, toward: V3, s: f64, max_edge: f64, opts: &MeshOptions) -> Result<ScanMesh, RangeError> {
+    fn assemble(name: &str, positions: Vec<[f64; 3]>, mut faces: Vec<[u32; 3]>, toward: DVec3, s: f64, max_edge: f64, opts: &MeshOptions) -> Result<ScanMesh, RangeError> {
         if faces.is_empty() {
             return Err(RangeError::empty(Path::new(name), "no triangle survives the edge-length cutoff"));
         }
         // Face the scanner.
-        let mut sum = [0.0; 3];
+        let mut sum = DVec3::ZERO;
         for f in &faces {
-            sum = add(sum, tri_normal(positions[f[0] as usize], positions[f[1] as usize], positions[f[2] as usize]));
+            sum += face_normal(&positions, *f);
         }
-        if dot(sum, toward) < 0.0 {
+        if sum.dot(toward) < 0.0 {
             for f in &mut faces {
                 f.swap(1, 2);
             }
@@ -194,7 +194,7 @@ impl ScanMesh {
         let ramp = opts.boundary_ramp as f64;
         let confidence: Vec<f64> = (0..positions.len())
             .map(|i| {
-                let c = dot(normals[i], toward).max(0.0);
+                let c = normals[i].dot(toward).max(0.0);
                 c * ((hops[i] as f64 + 1.0) / (ramp + 1.0)).min(1.0)
             })
             .collect();
@@ -218,7 +218,7 @@ impl ScanMesh {
 
     /// The corners of the bounding box of the used vertices (for pose
     /// error reports).
-    pub fn bbox_corners(&self) -> Vec<V3> {
+    pub fn bbox_corners(&self) -> Vec<[f64; 3]> {
         let (lo, hi) = bbox(self.faces.iter().flatten().map(|&i| self.positions[i as usize]));
         (0..8).map(|k| [if k & 1 == 0 { lo[0] } else { hi[0] }, if k & 2 == 0 { lo[1] } else { hi[1] }, if k & 4 == 0 { lo[2] } else { hi[2] }]).collect()
     }
@@ -228,7 +228,7 @@ fn check_options(opts: &MeshOptions) -> Result<(), RangeError> {
     if !(opts.edge_factor.is_finite() && opts.edge_factor > 0.0) {
         return Err(RangeError::option("edge_factor", format!("{} is not a positive number", opts.edge_factor)));
     }
-    if crate::geom::norm(opts.toward_scanner) == 0.0 || !opts.toward_scanner.iter().all(|c| c.is_finite()) {
+    if opts.toward_scanner.length() == 0.0 || !opts.toward_scanner.is_finite() {
         return Err(RangeError::option("toward_scanner", "must be a non-zero finite vector"));
     }
     if opts.levels == 0 || opts.levels > 8 {
@@ -238,7 +238,7 @@ fn check_options(opts: &MeshOptions) -> Result<(), RangeError> {
 }
 
 /// The bounding box of some points.
-pub fn bbox(points: impl IntoIterator<Item = V3>) -> (V3, V3) {
+pub fn bbox(points: impl IntoIterator<Item = [f64; 3]>) -> ([f64; 3], [f64; 3]) {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for p in points {
@@ -250,16 +250,23 @@ pub fn bbox(points: impl IntoIterator<Item = V3>) -> (V3, V3) {
     (lo, hi)
 }
 
+/// Twice the area vector of face `f` (right-hand normal, length = 2·area).
+#[inline]
+pub fn face_normal(positions: &[[f64; 3]], f: [u32; 3]) -> DVec3 {
+    let [a, b, c] = f.map(|i| DVec3::from(positions[i as usize]));
+    (b - a).cross(c - a)
+}
+
 /// Unit area-weighted vertex normals (zero for unused vertices).
-pub fn vertex_normals(positions: &[V3], faces: &[[u32; 3]]) -> Vec<V3> {
-    let mut n = vec![[0.0; 3]; positions.len()];
+pub fn vertex_normals(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<DVec3> {
+    let mut n = vec![DVec3::ZERO; positions.len()];
     for f in faces {
-        let fnrm = tri_normal(positions[f[0] as usize], positions[f[1] as usize], positions[f[2] as usize]);
+        let fnrm = face_normal(positions, *f);
         for &i in f {
-            n[i as usize] = add(n[i as usize], fnrm);
+            n[i as usize] += fnrm;
         }
     }
-    n.into_iter().map(normalize).collect()
+    n.into_iter().map(DVec3::normalize_or_zero).collect()
 }
 
 /// Vertices on an edge used by exactly one face (or by more than two).
@@ -334,8 +341,7 @@ mod tests {
         assert_eq!(m.sampling, 1.0);
         assert_eq!(m.max_edge, 4.0);
         for f in &m.faces {
-            let n = tri_normal(m.positions[f[0] as usize], m.positions[f[1] as usize], m.positions[f[2] as usize]);
-            assert!(n[2] > 0.0);
+            assert!(face_normal(&m.positions, *f).z > 0.0);
         }
         // Row 0 is the boundary (0.2), row k keeps (k+1)/5 up to 1.
         let at = |c: usize, r: usize| m.confidence[r * 12 + c];

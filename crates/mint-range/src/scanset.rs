@@ -242,7 +242,7 @@ mod tests {
         let q = [0.00548449, -0.294635, -0.0038555, 0.955586];
         let r = Rigid::from_quat(q, [0.0; 3]);
         let p0 = [1.0, 2.0, 3.0];
-        let want = crate::geom::add(crate::geom::mat_vec(crate::geom::transpose(r.r), p0), [0.1, 0.2, 0.3]);
+        let want = crate::geom::mat_vec(crate::geom::transpose(r.r), glam::DVec3::from(p0)) + glam::DVec3::new(0.1, 0.2, 0.3);
         let got = s.entries[0].pose.apply(p0);
         for k in 0..3 {
             assert!((got[k] - want[k]).abs() < 1e-12);

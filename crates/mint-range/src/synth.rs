@@ -24,9 +24,11 @@
 //! gives the same scans on every machine.
 
 use crate::error::RangeError;
-use crate::geom::{add, cross, dot, norm, normalize, scale, sub, tri_normal, Rigid, V3};
+use crate::geom::Rigid;
 use crate::range_image::RangeImage;
 use crate::raycast::RayBvh;
+use crate::scan_mesh::face_normal;
+use glam::DVec3;
 use mint_mesh::SplitMix64;
 
 /// Options of [`synthesize`]; every field has a documented default.
@@ -62,30 +64,30 @@ pub struct SyntheticScan {
     /// The true pose (view frame → world).
     pub pose: Rigid,
     /// Unit direction from the centre to the viewpoint (world).
-    pub direction: V3,
+    pub direction: DVec3,
 }
 
 /// `n` unit directions spread evenly over the sphere (Fibonacci lattice).
-pub fn view_directions(n: usize) -> Vec<V3> {
+pub fn view_directions(n: usize) -> Vec<DVec3> {
     let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     (0..n)
         .map(|i| {
             let z = 1.0 - (2 * i + 1) as f64 / n as f64;
             let r = (1.0 - z * z).max(0.0).sqrt();
             let phi = golden * i as f64;
-            [r * phi.cos(), r * phi.sin(), z]
+            DVec3::new(r * phi.cos(), r * phi.sin(), z)
         })
         .collect()
 }
 
 /// The frame of a view from unit direction `u` at centre `c`.
-pub fn view_pose(u: V3, c: V3) -> Rigid {
-    let z = normalize(u);
-    let helper = if z[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
-    let x = normalize(sub(helper, scale(z, dot(helper, z))));
-    let y = cross(z, x);
+pub fn view_pose(u: DVec3, c: DVec3) -> Rigid {
+    let z = u.normalize_or_zero();
+    let helper = if z.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
+    let x = (helper - z * helper.dot(z)).normalize_or_zero();
+    let y = z.cross(x);
     // Columns are the local axes in world coordinates.
-    Rigid { r: [[x[0], y[0], z[0]], [x[1], y[1], z[1]], [x[2], y[2], z[2]]], t: c }
+    Rigid { r: [[x.x, y.x, z.x], [x.y, y.y, z.y], [x.z, y.z, z.z]], t: c.to_array() }
 }
 
 /// A standard normal deviate (Box–Muller).
@@ -98,7 +100,7 @@ pub fn gaussian(rng: &mut SplitMix64) -> f64 {
 /// Casts the views; see the module docs. Errors: an empty mesh or options
 /// out of range (`views` in 1..=1000, `resolution` in 2..=4096, finite
 /// non-negative `noise`, `max_angle_deg` in (0, 90]).
-pub fn synthesize(positions: &[V3], faces: &[[u32; 3]], opts: &SynthOptions) -> Result<Vec<SyntheticScan>, RangeError> {
+pub fn synthesize(positions: &[[f64; 3]], faces: &[[u32; 3]], opts: &SynthOptions) -> Result<Vec<SyntheticScan>, RangeError> {
     if !(1..=1000).contains(&opts.views) {
         return Err(RangeError::option("views", format!("{} is not in 1..=1000", opts.views)));
     }
@@ -115,8 +117,9 @@ pub fn synthesize(positions: &[V3], faces: &[[u32; 3]], opts: &SynthOptions) -> 
         return Err(RangeError::option("mesh", "the mesh has no faces"));
     }
     let (lo, hi) = crate::scan_mesh::bbox(faces.iter().flatten().map(|&i| positions[i as usize]));
-    let c = scale(add(lo, hi), 0.5);
-    let diag = norm(sub(hi, lo));
+    let (lo, hi) = (DVec3::from(lo), DVec3::from(hi));
+    let c = (lo + hi) * 0.5;
+    let diag = (hi - lo).length();
     let n = opts.resolution;
     let s = 1.05 * diag / n as f64;
     let far = diag;
@@ -125,7 +128,7 @@ pub fn synthesize(positions: &[V3], faces: &[[u32; 3]], opts: &SynthOptions) -> 
     let mut out = Vec::with_capacity(opts.views);
     for (k, u) in view_directions(opts.views).into_iter().enumerate() {
         let pose = view_pose(u, c);
-        let dir = scale(u, -1.0);
+        let dir = -u;
         let mut rng = SplitMix64::for_stream(opts.seed, k as u64);
         let mut cells = Vec::with_capacity((n * n) as usize);
         let mut points = Vec::new();
@@ -134,11 +137,11 @@ pub fn synthesize(positions: &[V3], faces: &[[u32; 3]], opts: &SynthOptions) -> 
             for col in 0..n {
                 let x = (col as f64 - half) * s;
                 let y = (half - row as f64) * s;
-                let o = pose.apply([x, y, far]);
+                let o = pose.apply(DVec3::new(x, y, far));
                 let hit = bvh.first_hit(o, dir, 0.0, 2.0 * far).filter(|h| {
                     let f = faces[h.face as usize];
-                    let nrm = normalize(tri_normal(positions[f[0] as usize], positions[f[1] as usize], positions[f[2] as usize]));
-                    dot(nrm, u) >= cos_max
+                    let nrm = face_normal(positions, f).normalize_or_zero();
+                    nrm.dot(u) >= cos_max
                 });
                 match hit {
                     Some(h) => {
@@ -159,22 +162,22 @@ pub fn synthesize(positions: &[V3], faces: &[[u32; 3]], opts: &SynthOptions) -> 
 /// angle uniform in `[0, max_deg]` about a uniformly random axis through
 /// `center`, then a translation of length uniform in `[0, max_shift]` in a
 /// uniformly random direction.
-pub fn perturb(pose: &Rigid, center: V3, max_deg: f64, max_shift: f64, rng: &mut SplitMix64) -> Rigid {
+pub fn perturb(pose: &Rigid, center: DVec3, max_deg: f64, max_shift: f64, rng: &mut SplitMix64) -> Rigid {
     let axis = random_unit(rng);
     let angle = max_deg.to_radians() * rng.next_f64();
     let rot = Rigid::from_axis_angle(axis, angle);
-    let shift = scale(random_unit(rng), max_shift * rng.next_f64());
+    let shift = random_unit(rng) * (max_shift * rng.next_f64());
     // p ↦ R(p − c) + c + shift
-    let delta = Rigid { r: rot.r, t: add(sub(center, rot.rotate(center)), shift) };
+    let delta = Rigid { r: rot.r, t: (center - rot.rotate(center) + shift).to_array() };
     delta.after(pose)
 }
 
-fn random_unit(rng: &mut SplitMix64) -> V3 {
+fn random_unit(rng: &mut SplitMix64) -> DVec3 {
     loop {
-        let v = [2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0];
-        let n = norm(v);
+        let v = DVec3::new(2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0);
+        let n = v.length();
         if n > 1e-3 && n <= 1.0 {
-            return scale(v, 1.0 / n);
+            return v * (1.0 / n);
         }
     }
 }
@@ -193,7 +196,7 @@ mod tests {
             let mut n = 0;
             for p in &sc.image.points {
                 let w = sc.pose.apply(*p);
-                let r = norm(sub(w, [0.5, -0.25, 1.0]));
+                let r = (DVec3::from(w) - DVec3::new(0.5, -0.25, 1.0)).length();
                 // Flat facets of a 20k-face sphere are within 2e-3 of it.
                 assert!((r - 1.0).abs() < 2e-3, "{r}");
                 n += 1;
@@ -205,19 +208,19 @@ mod tests {
         }
         let dirs = view_directions(8);
         for d in &dirs {
-            assert!((norm(*d) - 1.0).abs() < 1e-12);
+            assert!((d.length() - 1.0).abs() < 1e-12);
         }
     }
 
     #[test]
     fn perturbations_stay_within_bounds() {
         let mut rng = SplitMix64::new(7);
-        let c = [1.0, 2.0, 3.0];
+        let c = DVec3::new(1.0, 2.0, 3.0);
         for _ in 0..100 {
             let p = perturb(&Rigid::IDENTITY, c, 5.0, 0.1, &mut rng);
             assert!(p.angle().to_degrees() <= 5.0 + 1e-9);
             // The centre moves by the translation only.
-            assert!(norm(sub(p.apply(c), c)) <= 0.1 + 1e-12);
+            assert!((p.apply(c) - c).length() <= 0.1 + 1e-12);
         }
     }
 }

@@ -50,11 +50,12 @@
 use crate::consensus::{consensus_with, ConsensusOptions, ConsensusReport};
 use mint_core::progress::{NoProgress, Progress};
 use crate::error::RangeError;
-use crate::geom::{add, dist, scale, Rigid, V3};
+use crate::geom::Rigid;
 use crate::mesh_ops::{compact, fill_small_holes, key, make_manifold, remove_small_components, remove_small_triangles};
 use crate::scan_mesh::ScanMesh;
 use crate::source::ScanSource;
 use mint_mesh::TriangleBvh;
+use glam::DVec3;
 use serde::Serialize;
 use rustc_hash::FxHashMap as HashMap;
 
@@ -122,7 +123,7 @@ pub struct ZipperReport {
 /// with a liveness flag.
 #[derive(Debug, Clone, Default)]
 struct Work {
-    pos: Vec<V3>,
+    pos: Vec<[f64; 3]>,
     conf: Vec<f64>,
     /// The scan each vertex came from.
     origin: Vec<u32>,
@@ -335,7 +336,8 @@ fn zip_pair(m: &mut Work, s: &mut Work, d: f64, stitch_r: f64, report: &mut Zipp
                     if !sr.alive[fi as usize] || !f.iter().any(|&v| tsr.on_boundary(v)) {
                         return false;
                     }
-                    let c = scale(add(add(sr.pos[f[0] as usize], sr.pos[f[1] as usize]), sr.pos[f[2] as usize]), 1.0 / 3.0);
+                    let [a, b, c] = f.map(|v| DVec3::from(sr.pos[v as usize]));
+                    let c = ((a + b + c) * (1.0 / 3.0)).to_array();
                     bm.nearest_within(c, d).is_some_and(|(_, cp, mf)| mr.alive[mf as usize] && strictly_inside(cp, mr.faces[mf as usize].map(|v| mr.pos[v as usize])))
                 })
                 .collect()
@@ -362,14 +364,14 @@ fn zip_pair(m: &mut Work, s: &mut Work, d: f64, stitch_r: f64, report: &mut Zipp
 
 /// True when `p` (a point of triangle `t`'s plane) has all barycentric
 /// coordinates above 1e-9: it is not on an edge of `t`.
-fn strictly_inside(p: V3, t: [V3; 3]) -> bool {
-    use crate::geom::{cross, dot, sub};
-    let n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
-    let nn = dot(n, n);
+fn strictly_inside(p: [f64; 3], t: [[f64; 3]; 3]) -> bool {
+    let (p, t) = (DVec3::from(p), t.map(DVec3::from));
+    let n = (t[1] - t[0]).cross(t[2] - t[0]);
+    let nn = n.dot(n);
     if nn == 0.0 {
         return false;
     }
-    (0..3).all(|k| dot(cross(sub(t[(k + 2) % 3], t[(k + 1) % 3]), sub(p, t[(k + 1) % 3])), n) / nn > 1e-9)
+    (0..3).all(|k| (t[(k + 2) % 3] - t[(k + 1) % 3]).cross(p - t[(k + 1) % 3]).dot(n) / nn > 1e-9)
 }
 
 /// Moves `s`'s live faces and vertices into `m`.
@@ -551,15 +553,15 @@ fn stitch(w: &mut Work, r: f64, boundary: Option<&[bool]>) -> usize {
     }
     // Nearest boundary vertex of the other part within r, through a hash grid.
     let cell = r.max(f64::MIN_POSITIVE);
-    let ckey = |p: V3| [0, 1, 2].map(|k| (p[k] / cell).floor() as i64);
+    let ckey = |p: [f64; 3]| [0, 1, 2].map(|k| (p[k] / cell).floor() as i64);
+    let dist = |a: u32, b: u32| DVec3::from(w.pos[a as usize]).distance(DVec3::from(w.pos[b as usize]));
     let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::default();
     for &v in next.keys() {
         grid.entry(ckey(w.pos[v as usize])).or_default().push(v);
     }
     let side = |v: u32| w.origin[v as usize];
     let partner = |v: u32| -> Option<u32> {
-        let p = w.pos[v as usize];
-        let c = ckey(p);
+        let c = ckey(w.pos[v as usize]);
         let mut best: Option<(f64, u32)> = None;
         for dx in -1..=1 {
             for dy in -1..=1 {
@@ -569,7 +571,7 @@ fn stitch(w: &mut Work, r: f64, boundary: Option<&[bool]>) -> usize {
                             if side(u) == side(v) {
                                 continue;
                             }
-                            let dd = dist(p, w.pos[u as usize]);
+                            let dd = dist(v, u);
                             if dd <= r && best.is_none_or(|b| dd < b.0 || (dd == b.0 && u < b.1)) {
                                 best = Some((dd, u));
                             }
@@ -620,12 +622,12 @@ fn stitch(w: &mut Work, r: f64, boundary: Option<&[bool]>) -> usize {
             };
             // ... and its new edge across the seam stays within r: a walk
             // never drifts along one boundary while the other lags behind.
-            let fa = can_a.map(|a2| [a2, a, b]).filter(|f| ok(*f, &half, &undirected) && dist(w.pos[f[0] as usize], w.pos[b as usize]) <= r);
-            let fb = can_b.map(|b2| [b, b2, a]).filter(|f| ok(*f, &half, &undirected) && dist(w.pos[f[1] as usize], w.pos[a as usize]) <= r);
+            let fa = can_a.map(|a2| [a2, a, b]).filter(|f| ok(*f, &half, &undirected) && dist(f[0], b) <= r);
+            let fb = can_b.map(|b2| [b, b2, a]).filter(|f| ok(*f, &half, &undirected) && dist(f[1], a) <= r);
             let take_a = match (fa, fb) {
                 (Some(_), Some(_)) => {
-                    let la = dist(w.pos[can_a.unwrap() as usize], w.pos[b as usize]);
-                    let lb = dist(w.pos[a as usize], w.pos[can_b.unwrap() as usize]);
+                    let la = dist(can_a.unwrap(), b);
+                    let lb = dist(a, can_b.unwrap());
                     la <= lb
                 }
                 (Some(_), None) => true,

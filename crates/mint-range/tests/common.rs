@@ -2,7 +2,7 @@
 //! (mint-gen's scan-like surface without defects: star-shaped, no symmetry,
 //! so registration is well posed), scanned from 8 views with depth noise.
 
-use mint_range::geom::{sub, V3};
+use glam::DVec3;
 use mint_range::synth::{perturb, synthesize, SynthOptions, SyntheticScan};
 use mint_range::{MeshOptions, Rigid, ScanMesh};
 
@@ -10,7 +10,7 @@ pub struct Scene {
     pub truth: mint_core::TriMesh,
     pub scans: Vec<SyntheticScan>,
     pub meshes: Vec<ScanMesh>,
-    pub center: V3,
+    pub center: DVec3,
     pub diag: f64,
     pub sigma: f64,
 }
@@ -28,8 +28,9 @@ pub fn scene_with(faces: u64, amplitude: f64, resolution: u32) -> Scene {
     let scans = synthesize(&truth.positions, &truth.faces, &SynthOptions { views: 8, resolution, noise: SIGMA, seed: 5, ..Default::default() }).unwrap();
     let meshes = scans.iter().map(|s| ScanMesh::from_range_image(&s.name, &s.image, &MeshOptions::default()).unwrap()).collect();
     let (lo, hi) = mint_range::scan_mesh::bbox(truth.positions.iter().copied());
-    let center = [0, 1, 2].map(|k| 0.5 * (lo[k] + hi[k]));
-    let diag = mint_range::geom::norm(sub(hi, lo));
+    let (lo, hi) = (DVec3::from(lo), DVec3::from(hi));
+    let center = 0.5 * (lo + hi);
+    let diag = (hi - lo).length();
     Scene { truth, scans, meshes, center, diag, sigma: SIGMA }
 }
 
@@ -45,8 +46,8 @@ pub fn perturbed(s: &Scene, deg: f64, frac: f64, seed: u64) -> Vec<Rigid> {
 }
 
 /// Rotation error in degrees and the displacement of the scene centre.
-pub fn pose_errors(truth: &Rigid, got: &Rigid, center: V3) -> (f64, f64) {
+pub fn pose_errors(truth: &Rigid, got: &Rigid, center: DVec3) -> (f64, f64) {
     let d = truth.inverse().after(got);
     let c_local = truth.inverse().apply(center);
-    (d.angle().to_degrees(), mint_range::geom::dist(truth.apply(c_local), got.apply(c_local)))
+    (d.angle().to_degrees(), truth.apply(c_local).distance(got.apply(c_local)))
 }

@@ -23,7 +23,8 @@
 #[allow(dead_code)] // the scene's truth mesh and noise are for the other tests
 mod common;
 
-use mint_range::geom::{add, dist, scale, sub, Rigid, V3};
+use glam::DVec3;
+use mint_range::geom::Rigid;
 use mint_range::align::align;
 use mint_range::icp::{AlignOptions, Status};
 use mint_range::multiview::PairStatus;
@@ -32,7 +33,7 @@ use mint_range::ScanMesh;
 struct Dragon {
     scans: Vec<ScanMesh>,
     conf: Vec<Rigid>,
-    center: V3,
+    center: DVec3,
 }
 
 fn dragon() -> Option<Dragon> {
@@ -41,34 +42,34 @@ fn dragon() -> Option<Dragon> {
     let scans = mint_range::load_set(&set, &set_path, &mint_range::MeshOptions::default()).unwrap();
     let conf: Vec<Rigid> = set.entries.iter().map(|e| e.pose).collect();
     let (lo, hi) = mint_range::scan_mesh::bbox(scans.iter().zip(&conf).flat_map(|(s, p)| s.bbox_corners().into_iter().map(move |c| p.apply(c))));
-    Some(Dragon { scans, conf, center: scale(add(lo, hi), 0.5) })
+    Some(Dragon { scans, conf, center: (DVec3::from(lo) + DVec3::from(hi)) * 0.5 })
 }
 
 /// `pose` moved by exactly `deg` about a random axis through `center` and
 /// by exactly `shift` in a random direction.
-fn moved(pose: &Rigid, center: V3, deg: f64, shift: f64, rng: &mut mint_mesh::SplitMix64) -> Rigid {
+fn moved(pose: &Rigid, center: DVec3, deg: f64, shift: f64, rng: &mut mint_mesh::SplitMix64) -> Rigid {
     let rot = Rigid::from_axis_angle(unit(rng), deg.to_radians());
-    let s = scale(unit(rng), shift);
-    Rigid { r: rot.r, t: add(sub(center, rot.rotate(center)), s) }.after(pose)
+    let s = unit(rng) * shift;
+    Rigid { r: rot.r, t: (center - rot.rotate(center) + s).to_array() }.after(pose)
 }
 
-fn unit(rng: &mut mint_mesh::SplitMix64) -> V3 {
+fn unit(rng: &mut mint_mesh::SplitMix64) -> DVec3 {
     loop {
-        let v = [2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0];
-        let n = mint_range::geom::norm(v);
+        let v = DVec3::new(2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0);
+        let n = v.length();
         if n > 1e-3 && n <= 1.0 {
-            return scale(v, 1.0 / n);
+            return v * (1.0 / n);
         }
     }
 }
 
 /// Scan `i` relative to scan 0, against the same in `truth`: rotation in
 /// degrees and displacement of `center`.
-fn relative_error(truth: &[Rigid], got: &[Rigid], i: usize, center: V3) -> (f64, f64) {
+fn relative_error(truth: &[Rigid], got: &[Rigid], i: usize, center: DVec3) -> (f64, f64) {
     let rel_t = truth[0].inverse().after(&truth[i]);
     let rel_g = got[0].inverse().after(&got[i]);
     let c = rel_t.inverse().apply(truth[0].inverse().apply(center));
-    (rel_t.inverse().after(&rel_g).angle().to_degrees(), dist(rel_t.apply(c), rel_g.apply(c)))
+    (rel_t.inverse().after(&rel_g).angle().to_degrees(), rel_t.apply(c).distance(rel_g.apply(c)))
 }
 
 /// Registers the dragon stand from `starts` perturbations of `deg`/`mm`
@@ -160,8 +161,8 @@ fn dragon_stand_planted_failure_is_reported_and_spoils_nothing() {
     let mut rng = mint_mesh::SplitMix64::new(1000);
     let mut initial: Vec<Rigid> = d.conf.iter().enumerate().map(|(i, p)| if i == 0 { *p } else { moved(p, d.center, 3.0, 3e-3, &mut rng) }).collect();
     let bad = 3;
-    let turn = Rigid::from_axis_angle([0.0, 1.0, 0.0], 30f64.to_radians());
-    initial[bad] = Rigid { r: turn.r, t: sub(d.center, turn.rotate(d.center)) }.after(&d.conf[bad]);
+    let turn = Rigid::from_axis_angle(DVec3::Y, 30f64.to_radians());
+    initial[bad] = Rigid { r: turn.r, t: (d.center - turn.rotate(d.center)).to_array() }.after(&d.conf[bad]);
     let r = align(&d.scans, &initial, &AlignOptions::default()).unwrap();
     eprintln!("{}: {:?}", r.reports[bad].name, r.reports[bad].status);
     assert!(matches!(r.reports[bad].status, Status::Failed(_)), "{:?}", r.reports[bad]);

@@ -80,7 +80,7 @@ fn zippering_leaves_boundary_only_where_no_view_saw() {
     let truth_pts: Vec<[f64; 3]> = s.truth.faces.iter().map(|f| [0, 1, 2].map(|k| f.iter().map(|&v| s.truth.positions[v as usize][k]).sum::<f64>() / 3.0)).chain(s.truth.positions.iter().copied()).collect();
     let unseen: Vec<[f64; 3]> = truth_pts.iter().copied().filter(|&p| scans_bvh.nearest_within(p, 2.0 * sampling).is_none()).collect();
     let boundary = mint_range::scan_mesh::boundary_vertices(pos.len(), &faces);
-    let bad = boundary.iter().enumerate().filter(|&(v, &b)| b && !unseen.iter().any(|&u| mint_range::geom::dist(u, pos[v]) <= 3.0 * sampling)).count();
+    let bad = boundary.iter().enumerate().filter(|&(v, &b)| b && !unseen.iter().any(|&u| glam::DVec3::from(u).distance(glam::DVec3::from(pos[v])) <= 3.0 * sampling)).count();
     for l in mint_range::mesh_ops::boundary_loops(&faces) {
         eprintln!("loop of {} edges at {:?}", l.len(), pos[l[0] as usize]);
     }
@@ -145,7 +145,7 @@ fn bunny_perturbed_scans_register_then_zipper_and_grid_merge() {
     use mint_range::grid_merge::{grid_merge, GridMergeOptions};
     let Some((d, set, scans)) = bunny() else { return };
     let truth: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
-    let center = [-0.017, 0.11, 0.0];
+    let center = glam::DVec3::new(-0.017, 0.11, 0.0);
     let mut rng = mint_mesh::SplitMix64::new(3);
     let initial: Vec<_> = truth.iter().enumerate().map(|(i, p)| if i == 0 { *p } else { mint_range::synth::perturb(p, center, 3.0, 0.003, &mut rng) }).collect();
     let t = std::time::Instant::now();
