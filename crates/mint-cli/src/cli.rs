@@ -52,7 +52,7 @@ mint resample huge.ply out.ply --cell-size 0.5 --mem 1G --tmp /scratch --json")]
 Two stages. Out of core: Marching Intersections resampling to an intermediate mesh of about \
 --intermediate M faces (default 8 N, at least 200,000, at most the input's), with the cell size chosen from the input's surface area (one \
 streaming pass); this drops detail smaller than a cell and closes holes, within --mem. In core: \
-meshoptimizer's quadric edge-collapse simplifier to N faces. The result is checked: when the \
+quadric edge collapse (Garland-Heckbert, in f64, each kept vertex placed where its error is least) to N faces. The result is checked: when the \
 resampling is closed and 2-manifold, so is the output (the simplifier's target is relaxed rather than \
 hand over a worse mesh, and the summary says so).\n\n\
 Examples:\n  mint decimate scan.ply small.ply --faces 1000000\n  mint decimate huge.ply lod.ply --faces 50000 --intermediate 400000 --mem 2G --json")]

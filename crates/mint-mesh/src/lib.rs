@@ -27,6 +27,7 @@ pub mod bvh;
 pub mod check;
 pub mod distance;
 pub mod error;
+pub mod qem;
 pub mod rng;
 pub mod selfx;
 pub mod simplify;

@@ -1,18 +1,16 @@
 //! [`simplify`]: in-core decimation of a triangle mesh to a face target by
-//! meshoptimizer's quadric edge collapse (the `meshopt` crate, the C++
-//! library games and graphics tools use; `simplifyWithUpdate`, which moves
-//! each kept vertex to where the quadric error is least, in f32), followed by a judgement of the
-//! result with [`crate::check`]: a closed, 2-manifold, consistently oriented
-//! input must give one too. When a collapse sequence breaks that (rare: the
-//! collapses are topology-checked, but not for every global configuration),
-//! the target is relaxed step by step towards the input size until the
-//! result is clean, and the report says so; a mesh worse than the input is
-//! never handed over silently.
+//! quadric edge collapse in f64 ([`crate::qem`]: each kept vertex moves to
+//! where the error of the planes it gathers is least), followed by a
+//! judgement of the result with [`crate::check`]: a closed, 2-manifold,
+//! consistently oriented input must give one too. The collapses keep the
+//! link condition and refuse faces that turn over, so a defect is rare; if
+//! one appears anyway, the target is relaxed step by step towards the input
+//! size until the result is clean, and the report says so. A mesh worse
+//! than the input is never handed over silently.
 //!
-//! Memory: the input (positions as f32 for the simplifier: 12 bytes per
-//! vertex, and 12 bytes per face), the simplifier's own tables (about 60
-//! bytes per vertex and 24 per face, measured in docs/PERFORMANCE.md), and
-//! the result.
+//! Memory: the input, the collapse's tables (per vertex a quadric of 88
+//! bytes, a position and a face list; per face 12 bytes; a heap of at most
+//! two candidates of 16 bytes per face), and the result.
 
 use crate::check::{try_check, CheckReport};
 use crate::error::MeshError;
@@ -58,28 +56,15 @@ pub struct SimplifyReport {
 pub fn simplify(positions: &[[f64; 3]], faces: &[[u32; 3]], o: &SimplifyOptions) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>, SimplifyReport), MeshError> {
     let before = try_check(positions, faces)?;
     let input_watertight = before.watertight;
-    let indices: Vec<u32> = faces.iter().flatten().copied().collect();
     let mut target = o.target_faces.min(faces.len() as u64);
     let mut relaxed = 0;
     loop {
-        let mut error = 0.0f32;
-        // Edge collapses with the vertex placed where the quadric error is
-        // least (meshoptimizer's simplifyWithUpdate), not at an endpoint;
-        // on the second try at the asked target, at an endpoint (plain
-        // simplify: another collapse sequence, often clean where the first
-        // was not).
-        let endpoint = relaxed == 1;
-        let mut moved: Vec<[f32; 3]> = positions.iter().map(|p| p.map(|c| c as f32)).collect();
-        let mut out = indices.clone();
-        if endpoint {
-            let flat: Vec<f32> = moved.iter().flatten().copied().collect();
-            let adapter = meshopt::VertexDataAdapter::new(as_bytes(&flat), 12, 0).expect("12-byte f32 positions");
-            out = meshopt::simplify(&indices, &adapter, (target * 3) as usize, o.max_error, meshopt::SimplifyOptions::None, Some(&mut error));
-        } else {
-            let n = meshopt::simplify_with_update(&mut out, &mut moved, &mut [], &[], 0, None, (target * 3) as usize, o.max_error, meshopt::SimplifyOptions::None, Some(&mut error));
-            out.truncate(n);
+        let (moved, out, collapse) = crate::qem::collapse(positions, faces, target, o.max_error as f64);
+        if std::env::var_os("MINT_QEM_TRACE").is_some() {
+            eprintln!("qem: {collapse:?}");
         }
-        let moved: Vec<[f64; 3]> = if endpoint { positions.to_vec() } else { moved.iter().map(|p| p.map(f64::from)).collect() };
+        let error = if collapse.extent > 0.0 { (collapse.max_error / collapse.extent) as f32 } else { 0.0 };
+        let mut out: Vec<u32> = out.iter().flatten().copied().collect();
         let positions = &moved[..];
         let mut removed = 0;
         if input_watertight {
@@ -107,9 +92,8 @@ pub fn simplify(positions: &[[f64; 3]], faces: &[[u32; 3]], o: &SimplifyOptions)
         relaxed += 1;
         let asked = o.target_faces.min(faces.len() as u64) as f64;
         target = match relaxed {
-            1 => asked as u64,
-            r @ 2..=7 => {
-                let step = [0.995, 1.005, 0.99, 1.01, 0.985, 1.015][r as usize - 2];
+            r @ 1..=6 => {
+                let step = [0.995, 1.005, 0.99, 1.01, 0.985, 1.015][r as usize - 1];
                 ((asked * step).round() as u64).max(4)
             }
             _ => target + target / 8 + 1,
@@ -159,13 +143,6 @@ fn drop_folded_pairs(indices: &mut Vec<u32>) -> u64 {
         *indices = kept;
     }
     pairs
-}
-
-/// The f32 array as bytes, for meshoptimizer's vertex adapter.
-fn as_bytes(v: &[f32]) -> &[u8] {
-    // SAFETY: u8 has alignment 1 and no invalid values; the length covers
-    // exactly the f32 elements, which have no padding.
-    unsafe { std::slice::from_raw_parts(v.as_ptr() as *const u8, std::mem::size_of_val(v)) }
 }
 
 /// The faces of `indices` with only their vertices, renumbered in order.

@@ -8,7 +8,7 @@
 //!    (`K` = [`FACES_PER_AREA_CELL`], measured), so `h = √(K·A/M)`. Overlapping
 //!    or noisy scans have more triangle area than surface, so `M` then
 //!    comes out smaller than asked; the summary reports both.
-//! 2. **In core.** meshoptimizer's quadric simplifier to `N` faces
+//! 2. **In core.** quadric edge collapse in f64 to `N` faces
 //!    (`mint_mesh::simplify`), which judges its result with `check` and
 //!    relaxes the target rather than hand over a mesh less clean than the
 //!    resampling (which is closed and 2-manifold by construction).
@@ -69,7 +69,8 @@ pub struct DecimateSummary {
     pub output_faces: u64,
     pub output_vertices: u64,
     pub target_faces: u64,
-    /// meshoptimizer's error estimate, relative to the mesh extent.
+    /// The simplifier's largest collapse error (an area-weighted RMS
+    /// distance), relative to the mesh extent.
     pub simplify_error: f32,
     pub intermediate_watertight: bool,
     pub output_watertight: bool,

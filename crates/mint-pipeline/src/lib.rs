@@ -19,7 +19,7 @@
 //! - [`check`](mod@check): `mint check` within a memory budget (the
 //!   in-core report, from corners bucketed on disk);
 //! - [`decimate`](mod@decimate): resampling to an intermediate size, then
-//!   meshoptimizer's simplifier to a face target.
+//!   quadric edge collapse (f64) to a face target.
 
 pub mod check;
 pub mod decimate;

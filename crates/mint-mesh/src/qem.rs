@@ -1,0 +1,432 @@
+//! Quadric edge collapse in f64: M. Garland and P. Heckbert, "Surface
+//! simplification using quadric error metrics", SIGGRAPH 1997.
+//!
+//! Every vertex carries the sum of the squared-distance quadrics of the
+//! planes of its faces, weighted by their areas. The edge whose collapse
+//! costs least (the merged quadric at its best position: the quadric's
+//! minimum when it is well conditioned, else the better endpoint or the
+//! midpoint) is collapsed first, until the face target is reached. A
+//! collapse is refused when it would break the surface: the two vertices
+//! must share exactly the opposite vertices of their edge's faces (the link
+//! condition, which keeps a 2-manifold a 2-manifold), no inner vertex may
+//! be left with two faces (a fold), and no face around them may turn over
+//! or become degenerate. Border vertices (on one simple boundary loop)
+//! move only along their boundary edges, held there by a strongly
+//! weighted plane through each boundary edge perpendicular to its face;
+//! vertices on non-manifold edges, on faces with a repeated index or on
+//! several boundary loops never move. So a closed surface stays closed
+//! and keeps its genus, and an open one keeps its boundary loops.
+//!
+//! Why not meshoptimizer alone: its quadrics are f32, and their error
+//! `pᵀAp + 2b·p + c` cancels terms of order one, so errors below about
+//! 2.4e-4 of the mesh's extent are noise. A fine target on a smooth surface
+//! needs far less (a 220k-face sphere: about 1e-5), and collapses ordered by
+//! noise leave an uneven surface (docs/PERFORMANCE.md). In f64 the floor is
+//! about 1e-8 of the extent.
+//!
+//! Deterministic: one thread, a heap ordered by (cost, edge), no hashing.
+
+use glam::DVec3;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// A symmetric quadric `pᵀAp + 2b·p + c`, and the area it gathers.
+#[derive(Debug, Clone, Copy, Default)]
+struct Quadric {
+    /// A: xx, xy, xz, yy, yz, zz.
+    a: [f64; 6],
+    b: [f64; 3],
+    c: f64,
+    /// Total face area (for errors as distances).
+    w: f64,
+}
+
+impl Quadric {
+    /// `w · (n·p + d)²` for the plane `n·p + d = 0` (`n` of unit length).
+    fn plane(n: DVec3, d: f64, w: f64) -> Quadric {
+        Quadric {
+            a: [w * n.x * n.x, w * n.x * n.y, w * n.x * n.z, w * n.y * n.y, w * n.y * n.z, w * n.z * n.z],
+            b: [w * n.x * d, w * n.y * d, w * n.z * d],
+            c: w * d * d,
+            w,
+        }
+    }
+    fn add(&mut self, o: &Quadric) {
+        for k in 0..6 {
+            self.a[k] += o.a[k];
+        }
+        for k in 0..3 {
+            self.b[k] += o.b[k];
+        }
+        self.c += o.c;
+        self.w += o.w;
+    }
+    fn sum(&self, o: &Quadric) -> Quadric {
+        let mut q = *self;
+        q.add(o);
+        q
+    }
+    /// The quadric's value at `p` (never below zero).
+    fn eval(&self, p: DVec3) -> f64 {
+        let [xx, xy, xz, yy, yz, zz] = self.a;
+        let v = xx * p.x * p.x + yy * p.y * p.y + zz * p.z * p.z + 2.0 * (xy * p.x * p.y + xz * p.x * p.z + yz * p.y * p.z)
+            + 2.0 * (self.b[0] * p.x + self.b[1] * p.y + self.b[2] * p.z)
+            + self.c;
+        v.max(0.0)
+    }
+    /// Where the quadric is least, when `A` is well conditioned.
+    fn minimum(&self) -> Option<DVec3> {
+        let [xx, xy, xz, yy, yz, zz] = self.a;
+        let c00 = yy * zz - yz * yz;
+        let c01 = xz * yz - xy * zz;
+        let c02 = xy * yz - xz * yy;
+        let det = xx * c00 + xy * c01 + xz * c02;
+        let scale = (xx + yy + zz) / 3.0;
+        if !(det.abs() > 1e-9 * scale * scale * scale) {
+            return None;
+        }
+        let c11 = xx * zz - xz * xz;
+        let c12 = xy * xz - xx * yz;
+        let c22 = xx * yy - xy * xy;
+        let [b0, b1, b2] = self.b;
+        let p = DVec3::new(c00 * b0 + c01 * b1 + c02 * b2, c01 * b0 + c11 * b1 + c12 * b2, c02 * b0 + c12 * b1 + c22 * b2) / -det;
+        p.is_finite().then_some(p)
+    }
+}
+
+/// What [`collapse`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CollapseStats {
+    /// Collapses done.
+    pub collapses: u64,
+    /// The largest collapse error, as an area-weighted RMS distance.
+    pub max_error: f64,
+    /// The largest side of the input's bounding box.
+    pub extent: f64,
+    /// Candidates taken from the heap (stale ones included).
+    pub candidates: u64,
+    /// Collapses refused by the link condition or the face checks.
+    pub refused: u64,
+    /// Rebuilds of the heap from the live edges.
+    pub rebuilds: u64,
+}
+
+/// The weight of a boundary edge's constraint plane, per squared edge length.
+const BORDER_WEIGHT: f64 = 100.0;
+
+/// One candidate collapse: its cost (f64 bits: non-negative, so they
+/// order as the values) and its edge `u < v`. A candidate is stale when
+/// an end has gone or its cost has changed since (a newer one was pushed).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+struct Candidate {
+    cost_bits: u64,
+    u: u32,
+    v: u32,
+}
+
+/// Collapses edges of the mesh until at most `target_faces` faces remain
+/// (or no collapse is allowed, or the next one's error would exceed
+/// `max_error` times the largest side of the bounding box). Returns the new positions (same indexing; removed vertices
+/// keep stale positions), the remaining faces in their original order, and
+/// the statistics.
+pub fn collapse(positions: &[[f64; 3]], faces: &[[u32; 3]], target_faces: u64, max_error: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, CollapseStats) {
+    let nv = positions.len();
+    // Work relative to the bounding box's centre (smaller terms, less
+    // cancellation in the quadrics).
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for p in positions {
+        lo = lo.min(DVec3::from(*p));
+        hi = hi.max(DVec3::from(*p));
+    }
+    let centre = if nv > 0 { (lo + hi) * 0.5 } else { DVec3::ZERO };
+    let extent = if nv > 0 { (hi - lo).max_element() } else { 0.0 };
+    let mut pos: Vec<DVec3> = positions.iter().map(|p| DVec3::from(*p) - centre).collect();
+    let mut tri: Vec<[u32; 3]> = faces.to_vec();
+    let mut alive = vec![true; tri.len()];
+    let mut live = tri.len() as u64;
+
+    // Vertex → faces.
+    let mut vf: Vec<Vec<u32>> = vec![Vec::new(); nv];
+    for (f, t) in tri.iter().enumerate() {
+        for &v in t {
+            vf[v as usize].push(f as u32);
+        }
+    }
+    // Quadrics from area-weighted face planes.
+    let mut quad = vec![Quadric::default(); nv];
+    for t in &tri {
+        let [a, b, c] = t.map(|v| pos[v as usize]);
+        let n2 = (b - a).cross(c - a);
+        let len = n2.length();
+        if !(len > 0.0) {
+            continue;
+        }
+        let n = n2 / len;
+        let q = Quadric::plane(n, -n.dot(a), 0.5 * len);
+        for &v in t {
+            quad[v as usize].add(&q);
+        }
+    }
+    // Edges, with the number of faces on each. A vertex on a boundary edge
+    // is a *border* vertex; one on a non-manifold edge, on a face with a
+    // repeated index, or on other than two boundary edges is *locked*.
+    let mut edges: Vec<(u32, u32)> = Vec::with_capacity(tri.len() * 3);
+    let mut locked = vec![false; nv];
+    let mut border_edges = vec![0u8; nv];
+    for t in &tri {
+        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            for &v in t {
+                locked[v as usize] = true;
+            }
+            continue;
+        }
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            edges.push((a.min(b), a.max(b)));
+        }
+    }
+    edges.sort_unstable();
+    let mut i = 0;
+    let mut unique = Vec::with_capacity(edges.len() / 2);
+    while i < edges.len() {
+        let mut j = i + 1;
+        while j < edges.len() && edges[j] == edges[i] {
+            j += 1;
+        }
+        let (a, b) = edges[i];
+        match j - i {
+            2 => {}
+            1 => {
+                for x in [a, b] {
+                    border_edges[x as usize] = border_edges[x as usize].saturating_add(1);
+                }
+            }
+            _ => {
+                locked[a as usize] = true;
+                locked[b as usize] = true;
+            }
+        }
+        unique.push(edges[i]);
+        i = j;
+    }
+    drop(edges);
+    // Border vertices keep to the border: each boundary edge adds the plane
+    // through it perpendicular to its face, weighted strongly.
+    for t in &tri {
+        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            continue;
+        }
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if border_edges[a as usize] == 0 || border_edges[b as usize] == 0 || faces_on_edge(&vf, &tri, a, b) != 1 {
+                continue;
+            }
+            let [pa, pb, pc] = [a, b, t[(k + 2) % 3]].map(|x| pos[x as usize]);
+            let n = (pb - pa).cross(pc - pa);
+            let m = (pb - pa).cross(n);
+            let len = m.length();
+            if !(len > 0.0) {
+                continue;
+            }
+            let m = m / len;
+            let q = Quadric::plane(m, -m.dot(pa), BORDER_WEIGHT * (pb - pa).length_squared());
+            quad[a as usize].add(&q);
+            quad[b as usize].add(&q);
+        }
+    }
+    for v in 0..nv {
+        if border_edges[v] != 0 && border_edges[v] != 2 {
+            locked[v] = true;
+        }
+    }
+    let border: Vec<bool> = (0..nv).map(|v| border_edges[v] != 0 || locked[v]).collect();
+    drop(border_edges);
+
+    let mut gone_v = vec![false; nv];
+    let mut heap: BinaryHeap<Reverse<Candidate>> = BinaryHeap::with_capacity(unique.len());
+    // The cost and position of collapsing edge (u, v): border and locked
+    // vertices stay where they are, except that two border vertices may
+    // merge along their boundary edge.
+    let cost = |pos: &[DVec3], quad: &[Quadric], vf: &[Vec<u32>], tri: &[[u32; 3]], u: u32, v: u32| -> Option<(f64, DVec3)> {
+        let (bu, bv) = (border[u as usize], border[v as usize]);
+        let along_border = bu && bv && !locked[u as usize] && !locked[v as usize] && faces_on_edge(vf, tri, u, v) == 1;
+        if bu && bv && !along_border {
+            return None;
+        }
+        let q = quad[u as usize].sum(&quad[v as usize]);
+        let (pu, pv) = (pos[u as usize], pos[v as usize]);
+        let p = if along_border || !(bu || bv) {
+            let mid = (pu + pv) * 0.5;
+            match q.minimum() {
+                Some(m) if (m - mid).length() <= 2.0 * (pu - pv).length() => m,
+                _ => [pu, pv, mid].into_iter().min_by(|a, b| q.eval(*a).total_cmp(&q.eval(*b))).unwrap(),
+            }
+        } else if bu {
+            pu
+        } else {
+            pv
+        };
+        Some((q.eval(p), p))
+    };
+    let push = |heap: &mut BinaryHeap<Reverse<Candidate>>, c: f64, u: u32, v: u32| {
+        heap.push(Reverse(Candidate { cost_bits: c.to_bits(), u: u.min(v), v: u.max(v) }));
+    };
+    for &(u, v) in &unique {
+        if let Some((c, _)) = cost(&pos, &quad, &vf, &tri, u, v) {
+            push(&mut heap, c, u, v);
+        }
+    }
+    drop(unique);
+
+    let mut stats = CollapseStats { extent, ..Default::default() };
+    let max_cost_distance = max_error * extent;
+    let mut nu: Vec<u32> = Vec::new();
+    let mut nv_: Vec<u32> = Vec::new();
+    let mut around: Vec<u32> = Vec::new();
+    while live > target_faces {
+        if heap.len() as u64 > 2 * live + 1024 {
+            // Mostly stale entries: rebuild from the live edges (each
+            // interior edge once, as the half-edge that runs up in index;
+            // boundary edges have one half-edge).
+            let mut fresh = Vec::with_capacity(2 * live as usize);
+            for f in (0..tri.len()).filter(|&f| alive[f]) {
+                let t = tri[f];
+                for k in 0..3 {
+                    let (a, b) = (t[k], t[(k + 1) % 3]);
+                    if a < b || faces_on_edge(&vf, &tri, a, b) == 1 {
+                        if let Some((c, _)) = cost(&pos, &quad, &vf, &tri, a, b) {
+                            fresh.push(Reverse(Candidate { cost_bits: c.to_bits(), u: a, v: b }));
+                        }
+                    }
+                }
+            }
+            heap = BinaryHeap::from(fresh);
+            stats.rebuilds += 1;
+        }
+        let Some(Reverse(cand)) = heap.pop() else { break };
+        stats.candidates += 1;
+        let (u, v) = (cand.u, cand.v);
+        if gone_v[u as usize] || gone_v[v as usize] {
+            continue;
+        }
+        let Some((c, p)) = cost(&pos, &quad, &vf, &tri, u, v) else { continue };
+        if c.to_bits() != cand.cost_bits {
+            continue;
+        }
+        let w = quad[u as usize].w + quad[v as usize].w;
+        let distance = if w > 0.0 { (c / w).sqrt() } else { 0.0 };
+        if distance > max_cost_distance {
+            break;
+        }
+        // The faces on the edge, and the neighbours of each end.
+        let mut shared = [u32::MAX; 2];
+        let mut n_shared = 0;
+        for &f in &vf[u as usize] {
+            if tri[f as usize].contains(&v) {
+                if n_shared < 2 {
+                    shared[n_shared] = f;
+                }
+                n_shared += 1;
+            }
+        }
+        if n_shared == 0 || n_shared > 2 {
+            continue;
+        }
+        let shared = &shared[..n_shared];
+        neighbours(&vf[u as usize], &tri, u, &mut nu);
+        neighbours(&vf[v as usize], &tri, v, &mut nv_);
+        // Link condition: the common neighbours are the opposite vertices of
+        // the edge's faces (two inside, one on the border).
+        let mut opposite = [u32::MAX; 2];
+        for (k, &f) in shared.iter().enumerate() {
+            opposite[k] = *tri[f as usize].iter().find(|&&x| x != u && x != v).unwrap();
+        }
+        let opposite = &opposite[..n_shared];
+        let mut n_common = 0;
+        let mut common_ok = true;
+        for &x in &nu {
+            if x != v && nv_.binary_search(&x).is_ok() {
+                n_common += 1;
+                common_ok &= opposite.contains(&x);
+            }
+        }
+        if n_common != n_shared || !common_ok || (n_shared == 2 && opposite[0] == opposite[1]) {
+            stats.refused += 1;
+            continue;
+        }
+        // (An inner vertex left with two faces would be a fold; a border
+        // one may keep a single face.)
+        if opposite.iter().any(|&x| vf[x as usize].len() <= if border[x as usize] { 1 } else { 3 }) {
+            stats.refused += 1;
+            continue;
+        }
+        // No face turns over or degenerates.
+        around.clear();
+        around.extend(vf[u as usize].iter().chain(&vf[v as usize]).copied().filter(|f| !shared.contains(f)));
+        let ok = around.iter().all(|&f| {
+            let t = tri[f as usize];
+            let old = t.map(|x| pos[x as usize]);
+            let new = t.map(|x| if x == u || x == v { p } else { pos[x as usize] });
+            let n0 = (old[1] - old[0]).cross(old[2] - old[0]);
+            let n1 = (new[1] - new[0]).cross(new[2] - new[0]);
+            n1.dot(n0) > 0.2 * n0.length() * n1.length() && n1.length_squared() > 1e-24 * n0.length_squared()
+        });
+        if !ok {
+            stats.refused += 1;
+            continue;
+        }
+        // Collapse `gone` into `keep` (a border end is the one kept).
+        let (keep, gone) = if border[v as usize] && !border[u as usize] { (v, u) } else { (u, v) };
+        for &f in shared {
+            alive[f as usize] = false;
+            live -= 1;
+            for &x in &tri[f as usize] {
+                if x != gone {
+                    vf[x as usize].retain(|&g| g != f);
+                }
+            }
+        }
+        let moved = std::mem::take(&mut vf[gone as usize]);
+        for f in moved {
+            if !alive[f as usize] {
+                continue;
+            }
+            for x in tri[f as usize].iter_mut() {
+                if *x == gone {
+                    *x = keep;
+                }
+            }
+            vf[keep as usize].push(f);
+        }
+        let qg = quad[gone as usize];
+        quad[keep as usize].add(&qg);
+        pos[keep as usize] = p;
+        gone_v[gone as usize] = true;
+        stats.collapses += 1;
+        stats.max_error = stats.max_error.max(distance);
+        neighbours(&vf[keep as usize], &tri, keep, &mut nu);
+        for &x in &nu {
+            if let Some((c, _)) = cost(&pos, &quad, &vf, &tri, keep, x) {
+                push(&mut heap, c, keep, x);
+            }
+        }
+    }
+    let out_faces: Vec<[u32; 3]> = (0..tri.len()).filter(|&f| alive[f]).map(|f| tri[f]).collect();
+    let out_pos: Vec<[f64; 3]> = pos.iter().map(|p| (*p + centre).to_array()).collect();
+    (out_pos, out_faces, stats)
+}
+
+/// The number of faces on edge (u, v).
+fn faces_on_edge(vf: &[Vec<u32>], tri: &[[u32; 3]], u: u32, v: u32) -> usize {
+    vf[u as usize].iter().filter(|&&f| tri[f as usize].contains(&v)).count()
+}
+
+/// The vertices sharing a face with `v` (sorted, without `v`).
+fn neighbours(faces_of_v: &[u32], tri: &[[u32; 3]], v: u32, out: &mut Vec<u32>) {
+    out.clear();
+    for &f in faces_of_v {
+        out.extend(tri[f as usize].iter().copied().filter(|&x| x != v));
+    }
+    out.sort_unstable();
+    out.dedup();
+}

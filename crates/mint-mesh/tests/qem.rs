@@ -1,0 +1,136 @@
+//! The f64 quadric edge collapse (`mint_mesh::qem::collapse`): whatever the
+//! shape and the target, the surface keeps its topology (closed, 2-manifold,
+//! oriented, same components and genera; an open surface keeps its
+//! boundary loops), and the error stays small where the shape is smooth.
+
+mod shapes;
+
+use mint_mesh::qem::collapse;
+use mint_mesh::{check, CheckReport};
+use proptest::prelude::*;
+use shapes::*;
+
+/// Collapses `m` to `target` faces and checks the result with its
+/// unreferenced vertices dropped.
+fn collapsed(m: &Mesh, target: u64) -> (Mesh, CheckReport) {
+    let (p, f, _) = collapse(&m.0, &m.1, target, f64::INFINITY);
+    let mut map = vec![u32::MAX; p.len()];
+    let mut q = Vec::new();
+    let g: Vec<[u32; 3]> = f
+        .iter()
+        .map(|t| {
+            t.map(|v| {
+                if map[v as usize] == u32::MAX {
+                    map[v as usize] = q.len() as u32;
+                    q.push(p[v as usize]);
+                }
+                map[v as usize]
+            })
+        })
+        .collect();
+    let r = check(&q, &g);
+    ((q, g), r)
+}
+
+fn same_topology(before: &CheckReport, after: &CheckReport) -> Result<(), TestCaseError> {
+    prop_assert_eq!(after.watertight, before.watertight);
+    prop_assert_eq!(after.non_manifold_edges, 0);
+    prop_assert_eq!(after.non_manifold_vertices, 0);
+    prop_assert_eq!(after.inconsistently_oriented_edges, 0);
+    prop_assert_eq!(after.degenerate_faces, 0);
+    prop_assert_eq!(after.duplicate_faces, 0);
+    prop_assert_eq!(after.components, before.components);
+    prop_assert_eq!(&after.genera, &before.genera);
+    prop_assert_eq!(after.boundary_loops, before.boundary_loops);
+    Ok(())
+}
+
+/// `m` with every vertex moved by a drawn offset (cycled through
+/// `jitter`), scaled by `amount` (in units of the mesh's spacing).
+fn jittered(mut m: Mesh, jitter: &[[f64; 3]], amount: f64) -> Mesh {
+    for (i, p) in m.0.iter_mut().enumerate() {
+        let j = jitter[i % jitter.len()];
+        for k in 0..3 {
+            p[k] += amount * j[k];
+        }
+    }
+    m
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    #[test]
+    fn closed_shapes_keep_their_topology_at_any_target(
+        shape in 0usize..3,
+        res in 4u32..14,
+        jitter in prop::collection::vec([-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0], 1..8),
+        fraction in 0.0f64..1.0,
+    ) {
+        let m = match shape {
+            0 => uv_sphere(1.0, res, 2 * res),
+            1 => torus(1.0, 0.4, 2 * res, res),
+            _ => polycube(&[[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [2, 1, 0], [0, 2, 0], [1, 2, 0], [2, 2, 0]], |_, _| true),
+        };
+        let m = jittered(m, &jitter, 0.02 / f64::from(res));
+        let before = check(&m.0, &m.1);
+        prop_assume!(before.watertight);
+        let target = (fraction * m.1.len() as f64) as u64;
+        let (out, after) = collapsed(&m, target);
+        same_topology(&before, &after)?;
+        prop_assert!(!out.1.is_empty());
+    }
+
+    #[test]
+    fn open_shapes_keep_their_boundary_loops(
+        res in 5u32..14,
+        cut in 0.0f64..0.8,
+        jitter in prop::collection::vec([-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0], 1..8),
+        fraction in 0.0f64..1.0,
+    ) {
+        // A sphere with the faces above `cut` removed: one boundary loop.
+        let s = jittered(uv_sphere(1.0, res, 2 * res), &jitter, 0.02 / f64::from(res));
+        let faces: Vec<[u32; 3]> = s.1.iter().copied().filter(|f| f.iter().map(|&v| s.0[v as usize][2]).sum::<f64>() / 3.0 < cut).collect();
+        let m = (s.0.clone(), faces);
+        let before = check(&m.0, &m.1);
+        prop_assume!(before.boundary_loops == 1 && before.non_manifold_vertices == 0);
+        let target = (fraction * m.1.len() as f64) as u64;
+        let (_, after) = collapsed(&m, target);
+        same_topology(&before, &after)?;
+    }
+}
+
+#[test]
+fn a_fine_sphere_keeps_close_to_the_sphere() {
+    // 80 x 160 bands, 25,280 faces, to 1,000: every kept vertex stays within
+    // a small fraction of the new edge length of the unit sphere.
+    let m = uv_sphere(1.0, 80, 160);
+    let (out, r) = collapsed(&m, 1000);
+    assert!(r.watertight, "{r:?}");
+    assert!(out.1.len() <= 1000 && out.1.len() >= 990, "{} faces", out.1.len());
+    for p in &out.0 {
+        let d = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        assert!((d - 1.0).abs() < 5e-3, "vertex at radius {d}");
+    }
+}
+
+#[test]
+fn a_flat_square_becomes_two_triangles_with_its_corners_kept() {
+    // A 6 x 6 grid of squares on z = 0: the border vertices slide along the
+    // border only, so the four corners survive and the square stays whole.
+    let n = 6u32;
+    let p: Vec<[f64; 3]> = (0..=n).flat_map(|j| (0..=n).map(move |i| [f64::from(i), f64::from(j), 0.0])).collect();
+    let v = |i: u32, j: u32| j * (n + 1) + i;
+    let mut f = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            f.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+            f.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+        }
+    }
+    let ((q, g), r) = collapsed(&(p, f), 2);
+    assert_eq!((g.len(), r.boundary_loops), (2, 1), "{g:?}");
+    for corner in [[0.0, 0.0, 0.0], [6.0, 0.0, 0.0], [0.0, 6.0, 0.0], [6.0, 6.0, 0.0]] {
+        assert!(q.iter().any(|x| (0..3).all(|k| (x[k] - corner[k]).abs() < 1e-9)), "corner {corner:?} lost: {q:?}");
+    }
+}
