@@ -245,23 +245,19 @@ pub(crate) fn resample_input(input: &std::path::Path, work: Option<&std::path::P
     })
 }
 
-/// Reads a whole mesh into memory (positions as f64).
+/// Reads a whole mesh into memory (`mint_io::read_mesh_with`): positions
+/// as stored (non-finite ones included, for `check` to count), reader
+/// warnings on stderr, Ctrl-C honoured between chunks.
 pub fn load_mesh(path: &std::path::Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>)> {
-    let mut reader = mint_io::MeshReader::open(path, mint_io::ReadOptions { resolve_positions: false, ..Default::default() })?;
-    let n = reader.vertex_count();
-    let positions: Vec<[f64; 3]> = (0..n).map(|i| reader.vertex(i)).collect();
-    let mut faces = Vec::with_capacity(reader.face_capacity_hint());
-    let mut chunk = mint_io::TriangleChunk::default();
-    while reader.next_chunk(&mut chunk)? {
-        faces.extend_from_slice(&chunk.indices);
-        if crate::progress::interrupted() {
-            bail!("interrupted");
-        }
+    let opts = mint_io::ReadOptions { resolve_positions: false, ..Default::default() };
+    let whole = mint_io::read_mesh_with(path, opts, || !crate::progress::interrupted())?;
+    if !whole.complete {
+        bail!("interrupted");
     }
-    for w in reader.warnings() {
+    for w in &whole.warnings {
         eprintln!("mint: warning: {w}");
     }
-    Ok((positions, faces))
+    Ok((whole.positions, whole.faces))
 }
 
 pub(crate) fn grid_options(g: &GridArgs) -> Result<ResampleOptions> {

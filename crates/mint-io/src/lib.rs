@@ -52,7 +52,7 @@ pub use atomic::AtomicFile;
 pub use convert::{convert, convert_cancellable, ConvertSummary};
 pub use error::{Error, ErrorKind, Position};
 pub use format::Format;
-pub use reader::{read_info, read_mesh, ElementInfo, MeshInfo, MeshReader, RangeGrid, ReadOptions, ReadStats, TriangleChunk, VertexPositions};
+pub use reader::{read_info, read_mesh, read_mesh_with, ElementInfo, MeshInfo, MeshReader, RangeGrid, ReadOptions, ReadStats, TriangleChunk, VertexPositions, WholeMesh};
 pub use visit::{TriangleRecords, TriangleVisitor};
 pub use writer::{MeshWriter, WriteOptions, WriteSummary};
 

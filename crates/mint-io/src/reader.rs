@@ -42,14 +42,39 @@ pub fn read_info(path: &Path) -> Result<MeshInfo, Error> {
 /// from the header's counts, so a lying header costs nothing before it is
 /// caught.
 pub fn read_mesh(path: &Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>), Error> {
-    let mut reader = MeshReader::open(path, ReadOptions::default())?;
+    let whole = read_mesh_with(path, ReadOptions::default(), || true)?;
+    Ok((whole.positions, whole.faces))
+}
+
+/// A whole mesh read by [`read_mesh_with`].
+#[derive(Debug, Clone, Default)]
+pub struct WholeMesh {
+    /// Every vertex position, in file order.
+    pub positions: Vec<[f64; 3]>,
+    /// Every triangle (polygons fanned, strips unrolled).
+    pub faces: Vec<[u32; 3]>,
+    /// What the reader noticed (e.g. ignored trailing bytes), one line each.
+    pub warnings: Vec<String>,
+    /// False when `keep_going` asked to stop: the faces are then partial.
+    pub complete: bool,
+}
+
+/// [`read_mesh`] with the reader's options (with `resolve_positions` off,
+/// non-finite positions are read as they are, for tools that count them),
+/// and `keep_going`, asked after every chunk of faces (false stops the
+/// read: for Ctrl-C).
+pub fn read_mesh_with(path: &Path, opts: ReadOptions, mut keep_going: impl FnMut() -> bool) -> Result<WholeMesh, Error> {
+    let mut reader = MeshReader::open(path, opts)?;
     let positions: Vec<[f64; 3]> = (0..reader.vertex_count()).map(|i| reader.vertex(i)).collect();
     let mut faces = Vec::new();
     let mut chunk = TriangleChunk::new();
     while reader.next_chunk(&mut chunk)? {
         faces.extend_from_slice(&chunk.indices);
+        if !keep_going() {
+            return Ok(WholeMesh { positions, faces, warnings: reader.warnings(), complete: false });
+        }
     }
-    Ok((positions, faces))
+    Ok(WholeMesh { positions, faces, warnings: reader.warnings(), complete: true })
 }
 
 /// Options of [`MeshReader::open`].

@@ -88,19 +88,13 @@ pub fn load_scan(path: &Path, opts: &MeshOptions) -> Result<ScanMesh, RangeError
         let im = crate::depth_grid::read_depth_grid(path)?;
         return ScanMesh::from_range_image(&name, &im, opts).map_err(|e| with_path(e, path));
     }
-    let mut reader = mint_io::MeshReader::open(path, mint_io::ReadOptions { resolve_positions: false, ..Default::default() })?;
-    if reader.range_grid().is_some() {
-        drop(reader);
+    let read = mint_io::ReadOptions { resolve_positions: false, ..Default::default() };
+    if mint_io::MeshReader::open(path, read.clone())?.range_grid().is_some() {
         let im = RangeImage::read(path)?;
         return ScanMesh::from_range_image(&name, &im, opts).map_err(|e| with_path(e, path));
     }
-    let positions: Vec<[f64; 3]> = (0..reader.vertex_count()).map(|i| reader.vertex(i)).collect();
-    let mut faces = Vec::new();
-    let mut chunk = mint_io::TriangleChunk::new();
-    while reader.next_chunk(&mut chunk)? {
-        faces.extend_from_slice(&chunk.indices);
-    }
-    ScanMesh::from_triangles(&name, positions, faces, opts).map_err(|e| with_path(e, path))
+    let whole = mint_io::read_mesh_with(path, read, || true)?;
+    ScanMesh::from_triangles(&name, whole.positions, whole.faces, opts).map_err(|e| with_path(e, path))
 }
 
 /// Loads every scan of a set. A scan file that does not exist or cannot
