@@ -100,6 +100,28 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(300))]
+
+    /// Any soup (repeated indices, duplicates, non-manifold edges, flat or
+    /// coincident points): no panic, valid indices, and no more faces.
+    #[test]
+    fn any_soup_collapses_without_panicking(
+        points in prop::collection::vec([0i32..4, 0i32..4, 0i32..2], 3..12),
+        raw in prop::collection::vec((0u32..12, 0u32..12, 0u32..12), 1..30),
+        target in 0u64..30,
+    ) {
+        let p: Vec<[f64; 3]> = points.iter().map(|q| q.map(f64::from)).collect();
+        let n = p.len() as u32;
+        let f: Vec<[u32; 3]> = raw.iter().map(|&(a, b, c)| [a % n, b % n, c % n]).collect();
+        let (q, g, _) = collapse(&p, &f, target, f64::INFINITY);
+        prop_assert_eq!(q.len(), p.len());
+        prop_assert!(g.len() <= f.len());
+        prop_assert!(g.iter().flatten().all(|&v| v < n));
+        prop_assert!(q.iter().flatten().all(|c| c.is_finite()));
+    }
+}
+
 #[test]
 fn a_fine_sphere_keeps_close_to_the_sphere() {
     // 80 x 160 bands, 25,280 faces, to 1,000: every kept vertex stays within
