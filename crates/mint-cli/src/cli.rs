@@ -50,7 +50,7 @@ mint resample huge.ply out.ply --cell-size 0.5 --mem 1G --tmp /scratch --json")]
     /// core, then simplify in core; watertight when the input is closed.
     #[command(long_about = "Decimate a mesh of any size to about --faces N faces.\n\n\
 Two stages. Out of core: Marching Intersections resampling to an intermediate mesh of about \
---intermediate M faces (default 8 N, at least 200,000, at most the input's), with the cell size chosen from the input's surface area (one \
+--intermediate M faces (default 4 N, at least 200,000, at most the input's), with the cell size chosen from the input's surface area (one \
 streaming pass); this drops detail smaller than a cell and closes holes, within --mem. In core: \
 quadric edge collapse (Garland-Heckbert, in f64, each kept vertex placed where its error is least) to N faces. The result is checked: when the \
 resampling is closed and 2-manifold, so is the output (the simplifier's target is relaxed rather than \

@@ -61,6 +61,16 @@ impl Quadric {
         self.c += o.c;
         self.w += o.w;
     }
+    fn subtract(&mut self, o: &Quadric) {
+        for k in 0..6 {
+            self.a[k] -= o.a[k];
+        }
+        for k in 0..3 {
+            self.b[k] -= o.b[k];
+        }
+        self.c -= o.c;
+        self.w -= o.w;
+    }
     fn sum(&self, o: &Quadric) -> Quadric {
         let mut q = *self;
         q.add(o);
@@ -124,12 +134,42 @@ struct Candidate {
     v: u32,
 }
 
+/// Faces above which [`collapse`] works in [`BLOCKS`] spatial blocks first.
+pub const BLOCK_MIN_FACES: usize = 400_000;
+/// The number of blocks of a large mesh (fixed, so that the result does
+/// not depend on the thread count).
+pub const BLOCKS: usize = 8;
+/// Blocks stop at this multiple of their share of the target.
+const BLOCK_SLACK: f64 = 1.1;
+
 /// Collapses edges of the mesh until at most `target_faces` faces remain
 /// (or no collapse is allowed, or the next one's error would exceed
-/// `max_error` times the largest side of the bounding box). Returns the new positions (same indexing; removed vertices
-/// keep stale positions), the remaining faces in their original order, and
-/// the statistics.
-pub fn collapse(positions: &[[f64; 3]], faces: &[[u32; 3]], target_faces: u64, max_error: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, CollapseStats) {
+/// `max_error` times the largest side of the bounding box). Returns the
+/// new positions (same indexing; removed vertices keep stale positions),
+/// the remaining faces in their original order, and the statistics.
+///
+/// A mesh of more than [`BLOCK_MIN_FACES`] faces is first cut into
+/// [`BLOCKS`] slabs of faces along its longest axis, each collapsed to its
+/// share of the target on its own (in parallel on `threads` threads; the
+/// vertices it shares with other slabs, and their edges, are left as they
+/// are), and then the whole
+/// is collapsed to the target from there, quadrics carried over. Working
+/// on a slab at a time keeps the tables in the caches; the result depends
+/// on the face count, never on `threads`.
+pub fn collapse(positions: &[[f64; 3]], faces: &[[u32; 3]], target_faces: u64, max_error: f64, threads: usize) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, CollapseStats) {
+    let blocks = if faces.len() > BLOCK_MIN_FACES { BLOCKS } else { 1 };
+    collapse_in_blocks(positions, faces, target_faces, max_error, blocks, threads)
+}
+
+/// [`collapse`] with an explicit number of blocks (1: the whole at once).
+pub fn collapse_in_blocks(
+    positions: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    target_faces: u64,
+    max_error: f64,
+    blocks: usize,
+    threads: usize,
+) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, CollapseStats) {
     let nv = positions.len();
     // Work relative to the bounding box's centre (smaller terms, less
     // cancellation in the quadrics).
@@ -140,21 +180,166 @@ pub fn collapse(positions: &[[f64; 3]], faces: &[[u32; 3]], target_faces: u64, m
     }
     let centre = if nv > 0 { (lo + hi) * 0.5 } else { DVec3::ZERO };
     let extent = if nv > 0 { (hi - lo).max_element() } else { 0.0 };
+    let max_distance = max_error * extent;
     let mut pos: Vec<DVec3> = positions.iter().map(|p| DVec3::from(*p) - centre).collect();
-    let mut tri: Vec<[u32; 3]> = faces.to_vec();
-    let mut alive = vec![true; tri.len()];
-    let mut live = tri.len() as u64;
+    let mut quad = initial_quadrics(&pos, faces);
+    let mut stats = CollapseStats { extent, ..Default::default() };
+    let mut tri = faces.to_vec();
+    let blocks = blocks.clamp(1, 255);
+    if blocks > 1 && !faces.is_empty() && target_faces < faces.len() as u64 {
+        tri = collapse_blocks(&mut pos, &mut quad, faces, target_faces, max_distance, blocks, threads.max(1), &mut stats);
+    }
+    if std::env::var_os("MINT_QEM_TRACE").is_some() {
+        eprintln!("qem: blocks done: {} faces, {stats:?}", tri.len());
+    }
+    let pinned = vec![false; nv];
+    let (out_pos, out_faces, _) = run(pos, tri, quad, &pinned, target_faces, max_distance, &mut stats);
+    let out_pos: Vec<[f64; 3]> = out_pos.iter().map(|p| (*p + centre).to_array()).collect();
+    (out_pos, out_faces, stats)
+}
 
-    // Vertex → faces.
-    let mut vf: Vec<Vec<u32>> = vec![Vec::new(); nv];
-    for (f, t) in tri.iter().enumerate() {
+/// The block phase of [`collapse_in_blocks`]: returns the faces after it
+/// (global ids, blocks in order), with `pos` and `quad` updated.
+#[allow(clippy::too_many_arguments)]
+fn collapse_blocks(
+    pos: &mut [DVec3],
+    quad: &mut [Quadric],
+    faces: &[[u32; 3]],
+    target_faces: u64,
+    max_distance: f64,
+    blocks: usize,
+    threads: usize,
+    stats: &mut CollapseStats,
+) -> Vec<[u32; 3]> {
+    let nv = pos.len();
+    // Faces to blocks by the centroid along the longest axis, at quantiles.
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for p in pos.iter() {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+    }
+    let d = (hi - lo).max_position();
+    let key: Vec<f64> = faces.iter().map(|t| t.iter().map(|&v| pos[v as usize][d]).sum::<f64>()).collect();
+    let mut sorted = key.clone();
+    let cuts: Vec<f64> = (1..blocks)
+        .map(|k| {
+            let i = k * sorted.len() / blocks;
+            *sorted.select_nth_unstable_by(i, |a, b| a.total_cmp(b)).1
+        })
+        .collect();
+    drop(sorted);
+    let block_of: Vec<u8> = key.iter().map(|k| cuts.iter().filter(|c| k.total_cmp(c).is_gt()).count() as u8).collect();
+    drop(key);
+    // Vertices in more than one block stay still in this phase.
+    const NONE: u8 = u8::MAX;
+    const SHARED: u8 = u8::MAX - 1;
+    let mut vblock = vec![NONE; nv];
+    for (f, t) in faces.iter().enumerate() {
         for &v in t {
-            vf[v as usize].push(f as u32);
+            let b = &mut vblock[v as usize];
+            *b = match *b {
+                NONE => block_of[f],
+                x if x == block_of[f] || x == SHARED => x,
+                _ => SHARED,
+            };
         }
     }
-    // Quadrics from area-weighted face planes.
-    let mut quad = vec![Quadric::default(); nv];
-    for t in &tri {
+    // Each block as its own mesh: local ids in order of first use.
+    let mut local = vec![u32::MAX; nv];
+    let mut parts: Vec<Block> = (0..blocks).map(|_| Block::default()).collect();
+    for (f, t) in faces.iter().enumerate() {
+        let part = &mut parts[block_of[f] as usize];
+        let lt = t.map(|v| {
+            let id = if vblock[v as usize] == SHARED {
+                *part.shared.entry(v).or_insert(part.global.len() as u32)
+            } else {
+                if local[v as usize] == u32::MAX {
+                    local[v as usize] = part.global.len() as u32;
+                }
+                local[v as usize]
+            };
+            if id as usize == part.global.len() {
+                part.global.push(v);
+            }
+            id
+        });
+        part.faces.push(lt);
+    }
+    drop(local);
+    let total = faces.len() as f64;
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let results: Vec<std::sync::Mutex<Option<BlockResult>>> = (0..blocks).map(|_| std::sync::Mutex::new(None)).collect();
+    let (pos_r, quad_r, vblock_r) = (&*pos, &*quad, &vblock);
+    std::thread::scope(|s| {
+        for _ in 0..threads.min(blocks) {
+            s.spawn(|| loop {
+                let b = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                if b >= blocks {
+                    return;
+                }
+                let part = &parts[b];
+                let p: Vec<DVec3> = part.global.iter().map(|&v| pos_r[v as usize]).collect();
+                let q: Vec<Quadric> = part.global.iter().map(|&v| quad_r[v as usize]).collect();
+                let pinned: Vec<bool> = part.global.iter().map(|&v| vblock_r[v as usize] == SHARED).collect();
+                // Its share of the target and a little more: the whole
+                // pass then spends the rest where it costs least, first on
+                // the fine faces along the held vertices.
+                let share = ((BLOCK_SLACK * target_faces as f64) * part.faces.len() as f64 / total).round() as u64;
+                let mut st = CollapseStats::default();
+                let (p, f, q) = run(p, part.faces.clone(), q, &pinned, share, max_distance, &mut st);
+                *results[b].lock().unwrap() = Some(BlockResult { pos: p, faces: f, quad: q, stats: st });
+            });
+        }
+    });
+    // Merge: moved positions and quadrics back; a shared vertex gathers
+    // what each block added to its quadric.
+    let original: Vec<(u32, Quadric)> = (0..nv as u32).filter(|&v| vblock[v as usize] == SHARED).map(|v| (v, quad[v as usize])).collect();
+    let mut out = Vec::new();
+    for (part, r) in parts.iter().zip(results) {
+        let r = r.into_inner().unwrap().expect("every block ran");
+        stats.collapses += r.stats.collapses;
+        stats.candidates += r.stats.candidates;
+        stats.refused += r.stats.refused;
+        stats.rebuilds += r.stats.rebuilds;
+        stats.max_error = stats.max_error.max(r.stats.max_error);
+        for (l, &g) in part.global.iter().enumerate() {
+            if vblock[g as usize] == SHARED {
+                let base = original[original.binary_search_by_key(&g, |e| e.0).unwrap()].1;
+                let mut added = r.quad[l];
+                added.subtract(&base);
+                quad[g as usize].add(&added);
+            } else {
+                pos[g as usize] = r.pos[l];
+                quad[g as usize] = r.quad[l];
+            }
+        }
+        out.extend(r.faces.iter().map(|t| t.map(|l| part.global[l as usize])));
+    }
+    out
+}
+
+/// One block of [`collapse_blocks`]: its faces in local ids, and the
+/// global id of each local vertex.
+#[derive(Default)]
+struct Block {
+    faces: Vec<[u32; 3]>,
+    global: Vec<u32>,
+    shared: std::collections::BTreeMap<u32, u32>,
+}
+
+struct BlockResult {
+    pos: Vec<DVec3>,
+    faces: Vec<[u32; 3]>,
+    quad: Vec<Quadric>,
+    stats: CollapseStats,
+}
+
+/// The quadrics of every vertex: the area-weighted planes of its faces,
+/// and for a vertex on a boundary edge the plane through that edge
+/// perpendicular to its face, weighted by [`BORDER_WEIGHT`].
+fn initial_quadrics(pos: &[DVec3], tri: &[[u32; 3]]) -> Vec<Quadric> {
+    let mut quad = vec![Quadric::default(); pos.len()];
+    for t in tri {
         let [a, b, c] = t.map(|v| pos[v as usize]);
         let n2 = (b - a).cross(c - a);
         let len = n2.length();
@@ -167,58 +352,15 @@ pub fn collapse(positions: &[[f64; 3]], faces: &[[u32; 3]], target_faces: u64, m
             quad[v as usize].add(&q);
         }
     }
-    // Edges, with the number of faces on each. A vertex on a boundary edge
-    // is a *border* vertex; one on a non-manifold edge, on a face with a
-    // repeated index, or on other than two boundary edges is *locked*.
-    let mut edges: Vec<(u32, u32)> = Vec::with_capacity(tri.len() * 3);
-    let mut locked = vec![false; nv];
-    let mut border_edges = vec![0u8; nv];
-    for t in &tri {
-        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
-            for &v in t {
-                locked[v as usize] = true;
-            }
-            continue;
-        }
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            edges.push((a.min(b), a.max(b)));
-        }
-    }
-    edges.sort_unstable();
-    let mut i = 0;
-    let mut unique = Vec::with_capacity(edges.len() / 2);
-    while i < edges.len() {
-        let mut j = i + 1;
-        while j < edges.len() && edges[j] == edges[i] {
-            j += 1;
-        }
-        let (a, b) = edges[i];
-        match j - i {
-            2 => {}
-            1 => {
-                for x in [a, b] {
-                    border_edges[x as usize] = border_edges[x as usize].saturating_add(1);
-                }
-            }
-            _ => {
-                locked[a as usize] = true;
-                locked[b as usize] = true;
-            }
-        }
-        unique.push(edges[i]);
-        i = j;
-    }
-    drop(edges);
-    // Border vertices keep to the border: each boundary edge adds the plane
-    // through it perpendicular to its face, weighted strongly.
-    for t in &tri {
+    let classes = EdgeClasses::of(pos.len(), tri);
+    let vf = vertex_faces(pos.len(), tri);
+    for t in tri {
         if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
             continue;
         }
         for k in 0..3 {
             let (a, b) = (t[k], t[(k + 1) % 3]);
-            if border_edges[a as usize] == 0 || border_edges[b as usize] == 0 || faces_on_edge(&vf, &tri, a, b) != 1 {
+            if classes.border_edges[a as usize] == 0 || classes.border_edges[b as usize] == 0 || faces_on_edge(&vf, tri, a, b) != 1 {
                 continue;
             }
             let [pa, pb, pc] = [a, b, t[(k + 2) % 3]].map(|x| pos[x as usize]);
@@ -234,11 +376,110 @@ pub fn collapse(positions: &[[f64; 3]], faces: &[[u32; 3]], target_faces: u64, m
             quad[b as usize].add(&q);
         }
     }
-    for v in 0..nv {
-        if border_edges[v] != 0 && border_edges[v] != 2 {
-            locked[v] = true;
+    quad
+}
+
+/// Vertex → faces.
+fn vertex_faces(nv: usize, tri: &[[u32; 3]]) -> Vec<Vec<u32>> {
+    let mut count = vec![0u32; nv];
+    for t in tri {
+        for &v in t {
+            count[v as usize] += 1;
         }
     }
+    let mut vf: Vec<Vec<u32>> = count.iter().map(|&c| Vec::with_capacity(c as usize)).collect();
+    for (f, t) in tri.iter().enumerate() {
+        for &v in t {
+            vf[v as usize].push(f as u32);
+        }
+    }
+    vf
+}
+
+/// The edges of a mesh, each once, and what they say of their vertices: a
+/// vertex on a boundary edge is a *border* vertex; one on a non-manifold
+/// edge, on a face with a repeated index, or on other than two boundary
+/// edges is *locked*.
+struct EdgeClasses {
+    edges: Vec<(u32, u32)>,
+    border_edges: Vec<u8>,
+    locked: Vec<bool>,
+}
+
+impl EdgeClasses {
+    fn of(nv: usize, tri: &[[u32; 3]]) -> EdgeClasses {
+        let mut edges: Vec<u64> = Vec::with_capacity(tri.len() * 3);
+        let mut locked = vec![false; nv];
+        let mut border_edges = vec![0u8; nv];
+        for t in tri {
+            if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+                for &v in t {
+                    locked[v as usize] = true;
+                }
+                continue;
+            }
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                edges.push((a.min(b) as u64) << 32 | a.max(b) as u64);
+            }
+        }
+        edges.sort_unstable();
+        let mut i = 0;
+        let mut unique = Vec::with_capacity(edges.len() / 2);
+        while i < edges.len() {
+            let mut j = i + 1;
+            while j < edges.len() && edges[j] == edges[i] {
+                j += 1;
+            }
+            let (a, b) = ((edges[i] >> 32) as u32, edges[i] as u32);
+            match j - i {
+                2 => {}
+                1 => {
+                    for x in [a, b] {
+                        border_edges[x as usize] = border_edges[x as usize].saturating_add(1);
+                    }
+                }
+                _ => {
+                    locked[a as usize] = true;
+                    locked[b as usize] = true;
+                }
+            }
+            unique.push((a, b));
+            i = j;
+        }
+        for v in 0..nv {
+            if border_edges[v] != 0 && border_edges[v] != 2 {
+                locked[v] = true;
+            }
+        }
+        EdgeClasses { edges: unique, border_edges, locked }
+    }
+}
+
+/// The greedy collapse of one mesh (centred positions, quadrics given;
+/// `pinned` vertices never move, and no edge of theirs collapses): returns the positions, the remaining
+/// faces in order, and the quadrics.
+fn run(
+    mut pos: Vec<DVec3>,
+    mut tri: Vec<[u32; 3]>,
+    mut quad: Vec<Quadric>,
+    pinned: &[bool],
+    target_faces: u64,
+    max_distance: f64,
+    stats: &mut CollapseStats,
+) -> (Vec<DVec3>, Vec<[u32; 3]>, Vec<Quadric>) {
+    let nv = pos.len();
+    let mut alive = vec![true; tri.len()];
+    let mut live = tri.len() as u64;
+    let mut vf = vertex_faces(nv, &tri);
+    let EdgeClasses { edges: unique, border_edges, mut locked } = EdgeClasses::of(nv, &tri);
+    // A pinned vertex (shared with another block) takes part in no
+    // collapse: its faces in other blocks are not seen here, so the link
+    // condition could not be judged for its edges.
+    for v in 0..nv {
+        locked[v] |= pinned[v];
+    }
+    let locked = locked;
     let border: Vec<bool> = (0..nv).map(|v| border_edges[v] != 0 || locked[v]).collect();
     drop(border_edges);
 
@@ -248,6 +489,9 @@ pub fn collapse(positions: &[[f64; 3]], faces: &[[u32; 3]], target_faces: u64, m
     // vertices stay where they are, except that two border vertices may
     // merge along their boundary edge.
     let cost = |pos: &[DVec3], quad: &[Quadric], vf: &[Vec<u32>], tri: &[[u32; 3]], u: u32, v: u32| -> Option<(f64, DVec3)> {
+        if pinned[u as usize] || pinned[v as usize] {
+            return None;
+        }
         let (bu, bv) = (border[u as usize], border[v as usize]);
         let along_border = bu && bv && !locked[u as usize] && !locked[v as usize] && faces_on_edge(vf, tri, u, v) == 1;
         if bu && bv && !along_border {
@@ -278,8 +522,7 @@ pub fn collapse(positions: &[[f64; 3]], faces: &[[u32; 3]], target_faces: u64, m
     }
     drop(unique);
 
-    let mut stats = CollapseStats { extent, ..Default::default() };
-    let max_cost_distance = max_error * extent;
+    let max_cost_distance = max_distance;
     let mut nu: Vec<u32> = Vec::new();
     let mut nv_: Vec<u32> = Vec::new();
     let mut around: Vec<u32> = Vec::new();
@@ -412,8 +655,7 @@ pub fn collapse(positions: &[[f64; 3]], faces: &[[u32; 3]], target_faces: u64, m
         }
     }
     let out_faces: Vec<[u32; 3]> = (0..tri.len()).filter(|&f| alive[f]).map(|f| tri[f]).collect();
-    let out_pos: Vec<[f64; 3]> = pos.iter().map(|p| (*p + centre).to_array()).collect();
-    (out_pos, out_faces, stats)
+    (pos, out_faces, quad)
 }
 
 /// The number of faces on edge (u, v).

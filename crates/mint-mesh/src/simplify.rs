@@ -54,14 +54,17 @@ pub struct SimplifyReport {
 /// Simplifies `positions`/`faces` to about `o.target_faces` faces; returns
 /// the new mesh (unreferenced vertices removed, order kept) and a report.
 pub fn simplify(positions: &[[f64; 3]], faces: &[[u32; 3]], o: &SimplifyOptions) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>, SimplifyReport), MeshError> {
+    let trace = std::env::var_os("MINT_QEM_TRACE").is_some();
+    let t = std::time::Instant::now();
     let before = try_check(positions, faces)?;
     let input_watertight = before.watertight;
     let mut target = o.target_faces.min(faces.len() as u64);
     let mut relaxed = 0;
     loop {
-        let (moved, out, collapse) = crate::qem::collapse(positions, faces, target, o.max_error as f64);
-        if std::env::var_os("MINT_QEM_TRACE").is_some() {
-            eprintln!("qem: {collapse:?}");
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let (moved, out, collapse) = crate::qem::collapse(positions, faces, target, o.max_error as f64, threads);
+        if trace {
+            eprintln!("qem: {collapse:?} at {:.2}s", t.elapsed().as_secs_f64());
         }
         let error = if collapse.extent > 0.0 { (collapse.max_error / collapse.extent) as f32 } else { 0.0 };
         let mut out: Vec<u32> = out.iter().flatten().copied().collect();
@@ -72,6 +75,9 @@ pub fn simplify(positions: &[[f64; 3]], faces: &[[u32; 3]], o: &SimplifyOptions)
         }
         let (p, f) = compact(positions, &out);
         let after: CheckReport = try_check(&p, &f)?;
+        if trace {
+            eprintln!("qem: checked at {:.2}s", t.elapsed().as_secs_f64());
+        }
         let clean = !input_watertight || after.watertight;
         if clean || target >= faces.len() as u64 {
             let report = SimplifyReport {

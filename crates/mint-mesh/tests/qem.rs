@@ -5,7 +5,7 @@
 
 mod shapes;
 
-use mint_mesh::qem::collapse;
+use mint_mesh::qem::{collapse, collapse_in_blocks};
 use mint_mesh::{check, CheckReport};
 use proptest::prelude::*;
 use shapes::*;
@@ -13,7 +13,12 @@ use shapes::*;
 /// Collapses `m` to `target` faces and checks the result with its
 /// unreferenced vertices dropped.
 fn collapsed(m: &Mesh, target: u64) -> (Mesh, CheckReport) {
-    let (p, f, _) = collapse(&m.0, &m.1, target, f64::INFINITY);
+    collapsed_in(m, target, 1)
+}
+
+/// The same, in `blocks` blocks first (on two threads).
+fn collapsed_in(m: &Mesh, target: u64, blocks: usize) -> (Mesh, CheckReport) {
+    let (p, f, _) = collapse_in_blocks(&m.0, &m.1, target, f64::INFINITY, blocks, 2);
     let mut map = vec![u32::MAX; p.len()];
     let mut q = Vec::new();
     let g: Vec<[u32; 3]> = f
@@ -66,6 +71,7 @@ proptest! {
         res in 4u32..14,
         jitter in prop::collection::vec([-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0], 1..8),
         fraction in 0.0f64..1.0,
+        blocks in 1usize..5,
     ) {
         let m = match shape {
             0 => uv_sphere(1.0, res, 2 * res),
@@ -76,7 +82,7 @@ proptest! {
         let before = check(&m.0, &m.1);
         prop_assume!(before.watertight);
         let target = (fraction * m.1.len() as f64) as u64;
-        let (out, after) = collapsed(&m, target);
+        let (out, after) = collapsed_in(&m, target, blocks);
         same_topology(&before, &after)?;
         prop_assert!(!out.1.is_empty());
     }
@@ -87,6 +93,7 @@ proptest! {
         cut in 0.0f64..0.8,
         jitter in prop::collection::vec([-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0], 1..8),
         fraction in 0.0f64..1.0,
+        blocks in 1usize..5,
     ) {
         // A sphere with the faces above `cut` removed: one boundary loop.
         let s = jittered(uv_sphere(1.0, res, 2 * res), &jitter, 0.02 / f64::from(res));
@@ -95,7 +102,7 @@ proptest! {
         let before = check(&m.0, &m.1);
         prop_assume!(before.boundary_loops == 1 && before.non_manifold_vertices == 0);
         let target = (fraction * m.1.len() as f64) as u64;
-        let (_, after) = collapsed(&m, target);
+        let (_, after) = collapsed_in(&m, target, blocks);
         same_topology(&before, &after)?;
     }
 }
@@ -114,12 +121,24 @@ proptest! {
         let p: Vec<[f64; 3]> = points.iter().map(|q| q.map(f64::from)).collect();
         let n = p.len() as u32;
         let f: Vec<[u32; 3]> = raw.iter().map(|&(a, b, c)| [a % n, b % n, c % n]).collect();
-        let (q, g, _) = collapse(&p, &f, target, f64::INFINITY);
+        let (q, g, _) = collapse(&p, &f, target, f64::INFINITY, 1);
         prop_assert_eq!(q.len(), p.len());
         prop_assert!(g.len() <= f.len());
         prop_assert!(g.iter().flatten().all(|&v| v < n));
         prop_assert!(q.iter().flatten().all(|c| c.is_finite()));
     }
+}
+
+#[test]
+fn blocks_give_the_same_mesh_on_any_thread_count() {
+    let m = torus(1.0, 0.4, 120, 60);
+    let runs: Vec<_> = [1, 2, 3, 8].iter().map(|&t| collapse_in_blocks(&m.0, &m.1, 2000, f64::INFINITY, 5, t)).collect();
+    for r in &runs[1..] {
+        assert_eq!(r.1, runs[0].1);
+        assert!(r.0.iter().zip(&runs[0].0).all(|(a, b)| a.map(f64::to_bits) == b.map(f64::to_bits)));
+    }
+    let (_, after) = collapsed_in(&m, 2000, 5);
+    assert!(after.watertight && after.genera == vec![1], "{after:?}");
 }
 
 #[test]
@@ -156,3 +175,4 @@ fn a_flat_square_becomes_two_triangles_with_its_corners_kept() {
         assert!(q.iter().any(|x| (0..3).all(|k| (x[k] - corner[k]).abs() < 1e-9)), "corner {corner:?} lost: {q:?}");
     }
 }
+

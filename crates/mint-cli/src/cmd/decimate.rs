@@ -21,7 +21,7 @@ pub struct DecimateArgs {
     /// Faces of the output.
     #[arg(long)]
     pub faces: u64,
-    /// Faces of the intermediate resampling [default: 8 × --faces, at least 200,000 and at most the input's; more costs time, rarely error].
+    /// Faces of the intermediate resampling [default: 4 × --faces, at least 200,000 and at most the input's; more costs time, rarely error].
     #[arg(long, value_name = "M")]
     pub intermediate: Option<u64>,
     /// Largest simplification error, as a fraction of the mesh's extent
