@@ -506,6 +506,24 @@ fn decimate_hits_its_target_keeps_closed_inputs_closed_and_errs_less_with_more_f
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("at least 4"));
 }
 
+/// `mint simplify`: an STL soup is welded, simplified to its target within
+/// 2%, and stays watertight with its genus; without welding nothing can
+/// collapse, and the summary warns.
+#[test]
+fn simplify_welds_hits_its_target_and_keeps_the_genus() {
+    let d = tempfile::tempdir().unwrap();
+    let stl = d.path().join("t.stl");
+    ok(&["gen", "torus", p(&stl), "--faces", "20000"]);
+    let out = d.path().join("t.ply");
+    let j: serde_json::Value = serde_json::from_str(&ok(&["simplify", p(&stl), p(&out), "--faces", "500", "--json"])).unwrap();
+    assert_eq!((j["welded_vertices"].as_u64(), j["output_watertight"].as_bool()), (Some(50_000), Some(true)), "{j}");
+    assert!(j["output_faces"].as_u64().unwrap().abs_diff(500) <= 10, "{j}");
+    let c: serde_json::Value = serde_json::from_str(&ok(&["check", p(&out), "--json", "--no-weld"])).unwrap();
+    assert_eq!((c["watertight"].as_bool(), c["genus_total"].as_i64()), (Some(true), Some(1)));
+    let o = run(&["simplify", p(&stl), p(&d.path().join("n.ply")), "--faces", "500", "--no-weld"]);
+    assert!(o.status.success() && String::from_utf8_lossy(&o.stderr).contains("more than the 500 asked"));
+}
+
 /// `check --self-intersections`: none on mint's outputs and generated
 /// solids, the planted ones found in a file of two interpenetrating boxes.
 #[test]

@@ -5,7 +5,7 @@
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
-use crate::cmd::{align, boolean, check, contours, convert, csg, decimate, demo, distance, gen, info, optimize, render, resample, scan, slice, slurm, stage, validate, zipper};
+use crate::cmd::{align, boolean, check, contours, convert, csg, decimate, demo, distance, gen, info, optimize, render, resample, scan, simplify, slice, slurm, stage, validate, zipper};
 use crate::jobs::{BoolArgs, CsgArgs, ResampleArgs};
 
 #[derive(Parser, Debug)]
@@ -57,6 +57,18 @@ resampling is closed and 2-manifold, so is the output (the simplifier's target i
 hand over a worse mesh, and the summary says so).\n\n\
 Examples:\n  mint decimate scan.ply small.ply --faces 1000000\n  mint decimate huge.ply lod.ply --faces 50000 --intermediate 400000 --mem 2G --json")]
     Decimate(decimate::DecimateArgs),
+    /// Simplify a mesh that fits in memory to a target face count (the
+    /// in-core stage of decimate alone); watertight when the input is.
+    #[command(long_about = "Simplify a mesh that fits in memory to about --faces N faces: the in-core stage of `mint decimate` alone, \
+and its hand-off point for other tools.\n\n\
+Vertices at identical positions are welded first (--no-weld takes the indices as written). Then quadric edge collapse \
+(Garland-Heckbert, in f64): the edge whose collapse moves the surface least goes first, and each kept vertex moves to \
+where the planes it gathers are nearest. A collapse that would break the surface is refused (the link condition, folds, \
+faces turning over); boundary vertices slide only along their boundary. The result is checked: a closed, 2-manifold, \
+oriented input gives one too. For meshes larger than memory, or dirty ones (holes, flipped or overlapping faces), use \
+`mint decimate`, which resamples them out of core first.\n\n\
+Examples:\n  mint simplify part.ply part-10k.ply --faces 10000\n  mint simplify scan.stl small.obj --faces 2000 --json")]
+    Simplify(simplify::SimplifyArgs),
     /// Boolean of two meshes on one grid (union, intersection, difference),
     /// computed on the grid's intersection lists: out of core, watertight.
     #[command(name = "bool")]
@@ -205,6 +217,7 @@ Example:\n  mint slurm resample scan.ply out.ply --cells 100000000 --work /share
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Resample(a) => resample::cmd_resample(a),
+        Command::Simplify(a) => simplify::cmd_simplify(a),
         Command::Bool(a) => boolean::cmd_bool(a),
         Command::Csg(a) => csg::cmd_csg(a),
         Command::Info(a) => info::cmd_info(a),

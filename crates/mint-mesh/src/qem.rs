@@ -523,11 +523,14 @@ fn run(
     drop(unique);
 
     let max_cost_distance = max_distance;
+    let mut rebuilt_len = heap.len() as u64;
     let mut nu: Vec<u32> = Vec::new();
     let mut nv_: Vec<u32> = Vec::new();
     let mut around: Vec<u32> = Vec::new();
     while live > target_faces {
-        if heap.len() as u64 > 2 * live + 1024 {
+        // (Only after the heap has doubled since the last rebuild: pushes
+        // come only with collapses, so rebuilds cannot go on forever.)
+        if heap.len() as u64 > (2 * live).max(2 * rebuilt_len) + 1024 {
             // Mostly stale entries: rebuild from the live edges (each
             // interior edge once, as the half-edge that runs up in index;
             // boundary edges have one half-edge).
@@ -544,6 +547,7 @@ fn run(
                 }
             }
             heap = BinaryHeap::from(fresh);
+            rebuilt_len = heap.len() as u64;
             stats.rebuilds += 1;
         }
         let Some(Reverse(cand)) = heap.pop() else { break };

@@ -176,3 +176,20 @@ fn a_flat_square_becomes_two_triangles_with_its_corners_kept() {
     }
 }
 
+
+#[test]
+fn a_soup_of_separate_triangles_ends_at_once_with_nothing_to_collapse() {
+    // 3,000 triangles sharing no vertex: every edge is a border edge whose
+    // collapse would leave a triangle with two corners, so none is allowed.
+    // (The heap used to be rebuilt forever here: its size stayed above the
+    // rebuild threshold with no collapse to shrink it.)
+    let mut p = Vec::new();
+    let mut f = Vec::new();
+    for k in 0..3000u32 {
+        let x = f64::from(k);
+        p.extend([[x, 0.0, 0.0], [x + 0.5, 0.0, 0.0], [x, 0.5, 0.3]]);
+        f.push([3 * k, 3 * k + 1, 3 * k + 2]);
+    }
+    let (_, g, stats) = collapse(&p, &f, 10, f64::INFINITY, 1);
+    assert_eq!((g.len(), stats.collapses), (3000, 0));
+}

@@ -122,25 +122,14 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
     let ro = ResampleOptions { size: GridSize::CellSize(h), write: WriteOptions { double: true, ..Default::default() }, ..o.resample.clone() };
     let rs = resample(input, mid.path(), &ro, progress)?;
     let seconds_resample = t.elapsed().as_secs_f64();
-    // 3. In core: simplify and judge.
+    // 3. In core: simplify and judge; 4. write.
     let t = Instant::now();
     let (positions, tris) = mint_io::read_mesh(mid.path())?;
     drop(mid);
     let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
-    let (p, f, sr) = mint_mesh::simplify(&positions, &tris, &so).map_err(|e| PipelineError::stage(input, format!("simplifying: {e}")))?;
-    drop((positions, tris));
-    let seconds_simplify = t.elapsed().as_secs_f64();
-    crate::passes::check_cancel(progress)?;
-    // 4. Write.
-    let t = Instant::now();
-    let mut w = MeshWriter::create(output, format, o.resample.write.clone())?;
-    for v in &p {
-        w.write_vertex(*v)?;
-    }
-    for t in &f {
-        w.write_face(*t)?;
-    }
-    w.finish()?;
+    let (sr, _, seconds_write) = simplify_and_write(input, output, format, &o.resample.write, positions, tris, &so, progress)?;
+    // Reading the intermediate counts as simplifying.
+    let seconds_simplify = t.elapsed().as_secs_f64() - seconds_write;
     Ok(DecimateSummary {
         input: input.display().to_string(),
         output: output.display().to_string(),
@@ -160,8 +149,115 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
         seconds_area,
         seconds_resample,
         seconds_simplify,
-        seconds_write: t.elapsed().as_secs_f64(),
+        seconds_write,
         seconds_total: t0.elapsed().as_secs_f64(),
         resample: rs,
+    })
+}
+
+/// Simplifies a mesh held in memory and writes it: the in-core stage of
+/// [`decimate`] and all of [`simplify_file`]. Returns the simplifier's
+/// report and the seconds spent simplifying and writing.
+#[allow(clippy::too_many_arguments)]
+fn simplify_and_write(
+    input: &Path,
+    output: &Path,
+    format: Format,
+    write: &WriteOptions,
+    positions: Vec<[f64; 3]>,
+    tris: Vec<[u32; 3]>,
+    so: &mint_mesh::SimplifyOptions,
+    progress: &dyn Progress,
+) -> Result<(mint_mesh::SimplifyReport, f64, f64), PipelineError> {
+    let t = Instant::now();
+    let (p, f, sr) = mint_mesh::simplify(&positions, &tris, so).map_err(|e| PipelineError::stage(input, format!("simplifying: {e}")))?;
+    drop((positions, tris));
+    let seconds_simplify = t.elapsed().as_secs_f64();
+    crate::passes::check_cancel(progress)?;
+    let t = Instant::now();
+    let mut w = MeshWriter::create(output, format, write.clone())?;
+    for v in &p {
+        w.write_vertex(*v)?;
+    }
+    for t in &f {
+        w.write_face(*t)?;
+    }
+    w.finish()?;
+    Ok((sr, seconds_simplify, t.elapsed().as_secs_f64()))
+}
+
+/// Options of [`simplify_file`].
+#[derive(Debug, Clone)]
+pub struct SimplifyFileOptions {
+    /// Faces of the output.
+    pub target_faces: u64,
+    /// Largest error, relative to the extent (1: the face target decides).
+    pub max_error: f32,
+    /// Weld vertices at identical positions first (STL stores every
+    /// triangle alone: without welding nothing could collapse).
+    pub weld: bool,
+    pub write: WriteOptions,
+}
+
+/// What [`simplify_file`] did.
+#[derive(Debug, Clone, Serialize)]
+pub struct SimplifySummary {
+    pub input: String,
+    pub output: String,
+    pub input_faces: u64,
+    pub input_vertices: u64,
+    pub welded_vertices: u64,
+    pub target_faces: u64,
+    pub output_faces: u64,
+    pub output_vertices: u64,
+    /// The simplifier's largest collapse error, relative to the extent.
+    pub simplify_error: f32,
+    pub input_watertight: bool,
+    pub output_watertight: bool,
+    pub relaxed: u32,
+    pub folded_pairs_removed: u64,
+    pub seconds_read: f64,
+    pub seconds_simplify: f64,
+    pub seconds_write: f64,
+    pub seconds_total: f64,
+}
+
+/// `mint simplify`: the in-core stage alone, for a mesh that fits in
+/// memory: read it whole, weld it (optionally), simplify it to the target
+/// and write it. A closed, 2-manifold, oriented input gives one too.
+pub fn simplify_file(input: &Path, output: &Path, o: &SimplifyFileOptions, progress: &dyn Progress) -> Result<SimplifySummary, PipelineError> {
+    let t0 = Instant::now();
+    let format = Format::from_path(output)?;
+    if o.target_faces < 4 {
+        return Err(PipelineError::stage(output, format!("--faces {}: a closed surface needs at least 4 faces", o.target_faces)));
+    }
+    let (mut positions, mut tris) = mint_io::read_mesh(input)?;
+    if tris.is_empty() {
+        return Err(PipelineError::Empty { path: input.to_path_buf() });
+    }
+    let (input_faces, input_vertices) = (tris.len() as u64, positions.len() as u64);
+    let welded = if o.weld { mint_mesh::weld(&mut positions, &mut tris) } else { 0 };
+    let seconds_read = t0.elapsed().as_secs_f64();
+    crate::passes::check_cancel(progress)?;
+    let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
+    let (sr, seconds_simplify, seconds_write) = simplify_and_write(input, output, format, &o.write, positions, tris, &so, progress)?;
+    Ok(SimplifySummary {
+        input: input.display().to_string(),
+        output: output.display().to_string(),
+        input_faces,
+        input_vertices,
+        welded_vertices: welded,
+        target_faces: o.target_faces,
+        output_faces: sr.output_faces,
+        output_vertices: sr.output_vertices,
+        simplify_error: sr.error,
+        input_watertight: sr.input_watertight,
+        output_watertight: sr.output_watertight,
+        relaxed: sr.relaxed,
+        folded_pairs_removed: sr.folded_pairs_removed,
+        seconds_read,
+        seconds_simplify,
+        seconds_write,
+        seconds_total: t0.elapsed().as_secs_f64(),
     })
 }

@@ -36,7 +36,7 @@ pub mod stages;
 pub mod workdir;
 
 pub use check::{check_file, CheckOptions, CheckStats};
-pub use decimate::{decimate, DecimateOptions, DecimateSummary};
+pub use decimate::{decimate, simplify_file, DecimateOptions, DecimateSummary, SimplifyFileOptions, SimplifySummary};
 pub use engine::{boolean, csg, plan_run, resample, run_task, status, summarize_dir, RunStatus, StageStatus, TaskOptions, TaskOutcome};
 pub use deref::Deref;
 pub use error::PipelineError;

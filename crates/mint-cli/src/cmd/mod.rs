@@ -20,6 +20,7 @@ pub mod optimize;
 pub mod render;
 pub mod resample;
 pub mod scan;
+pub mod simplify;
 pub mod slice;
 pub mod slurm;
 pub mod stage;

@@ -1,0 +1,79 @@
+//! `mint simplify`: the in-core stage of `mint decimate` alone, for a mesh
+//! that fits in memory: weld, quadric edge collapse (f64) to a face
+//! target, check, write. Calls `mint_pipeline::simplify_file`.
+
+use crate::alloc;
+use crate::progress::Bars;
+use crate::units::human_bytes;
+use anyhow::Result;
+use clap::Args;
+use mint_io::WriteOptions;
+use std::path::PathBuf;
+
+#[derive(Args, Debug)]
+pub struct SimplifyArgs {
+    /// Input mesh (read whole into memory: about 200 bytes a face).
+    pub input: PathBuf,
+    /// Output mesh; the format follows the extension.
+    pub output: PathBuf,
+    /// Faces of the output.
+    #[arg(long)]
+    pub faces: u64,
+    /// Largest simplification error, as a fraction of the mesh's extent
+    /// [default: 1, i.e. the face target decides].
+    #[arg(long, value_name = "E", default_value_t = 1.0)]
+    pub error: f32,
+    /// Take the vertex indices as written instead of welding vertices at
+    /// identical positions first (STL stores every triangle alone).
+    #[arg(long)]
+    pub no_weld: bool,
+    /// Write ASCII instead of binary (PLY/STL).
+    #[arg(long)]
+    pub ascii: bool,
+    /// Write vertex coordinates as f64 instead of f32.
+    #[arg(long)]
+    pub double: bool,
+    /// No summary.
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// Print the summary as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub(crate) fn cmd_simplify(a: SimplifyArgs) -> Result<()> {
+    crate::paths::check_output(&a.output, &[&a.input])?;
+    let o = mint_pipeline::SimplifyFileOptions {
+        target_faces: a.faces,
+        max_error: a.error,
+        weld: !a.no_weld,
+        write: WriteOptions { ascii: a.ascii, double: a.double, ..Default::default() },
+    };
+    let bars = Bars::new(a.quiet || a.json);
+    let s = mint_pipeline::simplify_file(&a.input, &a.output, &o, &bars)?;
+    if a.json {
+        let mut v = serde_json::to_value(&s)?;
+        v["peak_heap_bytes"] = alloc::peak_heap().into();
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else if !a.quiet {
+        eprintln!("simplified {} -> {}", s.input, s.output);
+        eprintln!("  input        {} faces, {} vertices ({} welded), {}", s.input_faces, s.input_vertices, s.welded_vertices, if s.input_watertight { "watertight" } else { "not watertight" });
+        eprintln!("  output       {} faces (target {}), {} vertices, error {:.2e} of the extent", s.output_faces, s.target_faces, s.output_vertices, s.simplify_error);
+        eprintln!(
+            "  judged       {}{}",
+            if s.output_watertight { "watertight (closed, 2-manifold, consistently oriented)" } else { "NOT watertight" },
+            if s.relaxed > 0 { format!("; target relaxed {} times to keep it so", s.relaxed) } else { String::new() }
+        );
+        eprintln!(
+            "  time         {:.2}s (read {:.2}s, simplify {:.2}s, write {:.2}s), peak heap {}",
+            s.seconds_total, s.seconds_read, s.seconds_simplify, s.seconds_write, human_bytes(alloc::peak_heap())
+        );
+    }
+    if s.input_watertight && !s.output_watertight {
+        eprintln!("mint: warning: the output is less clean than the input (see the summary)");
+    }
+    if s.output_faces > s.target_faces + s.target_faces / 50 {
+        eprintln!("mint: warning: {} faces, more than the {} asked: the collapses that remained would have broken the surface", s.output_faces, s.target_faces);
+    }
+    Ok(())
+}
