@@ -25,7 +25,13 @@ pub fn scene_with(faces: u64, amplitude: f64, resolution: u32) -> Scene {
     let mut truth = mint_core::TriMesh::default();
     let opts = mint_gen::ScanOptions { holes: 0, flips: 0, patches: 0, slivers: 0, noise_amplitude: amplitude, ..Default::default() };
     mint_gen::scan_like(faces, 3, &opts, &mut truth).unwrap();
-    let scans = synthesize(&truth.positions, &truth.faces, &SynthOptions { views: 8, resolution, noise: SIGMA, seed: 5, ..Default::default() }).unwrap();
+    scene_of(truth, 8, resolution, 5)
+}
+
+/// `truth` scanned from `views` views of `resolution`² samples with depth
+/// noise [`SIGMA`] (noise seed `seed`).
+pub fn scene_of(truth: mint_core::TriMesh, views: usize, resolution: u32, seed: u64) -> Scene {
+    let scans = synthesize(&truth.positions, &truth.faces, &SynthOptions { views, resolution, noise: SIGMA, seed, ..Default::default() }).unwrap();
     let meshes = scans.iter().map(|s| ScanMesh::from_range_image(&s.name, &s.image, &MeshOptions::default()).unwrap()).collect();
     let (lo, hi) = mint_range::scan_mesh::bbox(truth.positions.iter().copied());
     let (lo, hi) = (DVec3::from(lo), DVec3::from(hi));
