@@ -302,6 +302,25 @@ fn align_leaves_out_a_scan_with_no_overlap_and_goes_on() {
     let written = std::fs::read_to_string(&out).unwrap();
     assert_eq!(written.lines().filter(|l| l.starts_with("bmesh")).count(), 5);
     assert!(!written.contains("view_03.ply"));
+    // The output's extension names its convention: an .aln beside the
+    // input is MeshLab's (a count, then per scan its name, a comment line
+    // and a 4x4 matrix), with the same poses as the .conf; elsewhere it
+    // names the scans by absolute paths, and still reads back.
+    let aln = scans.join("aligned.aln");
+    ok(&["align", p(&bad_set), p(&aln)]);
+    let text = std::fs::read_to_string(&aln).unwrap();
+    assert_eq!(text.lines().next(), Some("5"), "{text}");
+    assert!(text.lines().nth(1) == Some("view_00.ply") && !text.contains("bmesh"), "{text}");
+    let (c, a) = (mint_range::ScanSet::read(&out).unwrap(), mint_range::ScanSet::read(&aln).unwrap());
+    for (x, y) in c.entries.iter().zip(&a.entries) {
+        assert_eq!(x.file, y.file);
+        let (m, n) = (x.pose.to_matrix4(), y.pose.to_matrix4());
+        assert!((0..4).all(|r| (0..4).all(|k| (m[r][k] - n[r][k]).abs() < 1e-12)), "{}: {m:?} vs {n:?}", x.file);
+    }
+    let elsewhere = d.path().join("elsewhere.aln");
+    ok(&["align", p(&bad_set), p(&elsewhere)]);
+    let far = mint_range::ScanSet::read(&elsewhere).unwrap();
+    assert!(far.entries.iter().all(|e| Path::new(&e.file).is_absolute() && e.path.exists()), "{:?}", far.entries);
     // A malformed pose.
     std::fs::write(&bad_set, "bmesh view_00.ply 0 0 zero 0 0 0 1\n").unwrap();
     let o = run(&["align", p(&bad_set), p(&out)]);

@@ -108,8 +108,11 @@ pub struct AlignFileSummary {
 
 /// Reads the scan set `set_path` (`.conf` or `.aln`), registers its scans
 /// from their poses ([`align_with`]) and writes the registered ones, with
-/// their refined poses, to `out_set` in the input's convention (scans that
-/// failed are left out and reported). Fails when no scan could be
+/// their refined poses, to `out_set` in the convention its extension names
+/// (`.aln`: MeshLab's; anything else: Stanford's `.conf`). Scans that failed
+/// are left out and reported. Scan files are named as in the input when
+/// `out_set` is in the same directory, else by their absolute paths, so
+/// the written set always finds them. Fails when no scan could be
 /// registered.
 pub fn align_file(set_path: &Path, out_set: &Path, opts: &AlignOptions, progress: &dyn Progress) -> Result<AlignFileSummary, RangeError> {
     let t = std::time::Instant::now();
@@ -121,14 +124,17 @@ pub fn align_file(set_path: &Path, out_set: &Path, opts: &AlignOptions, progress
     let register_seconds = t_register.elapsed().as_secs_f64();
     let mut out = set.clone();
     out.entries.clear();
+    let dir_of = |p: &Path| p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new(".")).canonicalize().ok();
+    let same_dir = dir_of(set_path).is_some() && dir_of(set_path) == dir_of(out_set);
     for (i, e) in set.entries.iter().enumerate() {
         if !matches!(result.reports[i].status, Status::Failed(_)) {
-            out.entries.push(ScanEntry { pose: result.poses[i], ..e.clone() });
+            let file = if same_dir { e.file.clone() } else { e.path.canonicalize().unwrap_or_else(|_| e.path.clone()).display().to_string() };
+            out.entries.push(ScanEntry { pose: result.poses[i], file, ..e.clone() });
         }
     }
     if out.entries.is_empty() {
         return Err(RangeError::Output { path: set_path.to_path_buf(), message: "no scan could be registered".into() });
     }
-    out.write(out_set, SetFormat::from_path(set_path))?;
+    out.write(out_set, SetFormat::from_path(out_set))?;
     Ok(AlignFileSummary { result, scans: scans.len(), seconds: t.elapsed().as_secs_f64(), register_seconds })
 }

@@ -1,5 +1,5 @@
 //! `mint align`: registers range scans to each other by constrained ICP
-//! (multiview by default) and writes the refined poses in the input set's
+//! (multiview by default) and writes the refined poses in the output set's
 //! convention (Stanford .conf or MeshLab .aln, by extension; scan paths are
 //! relative to the set file). Calls `mint_range::align::align_file`.
 
@@ -28,9 +28,11 @@ pub enum MetricArg {
 pub struct AlignArgs {
     /// Scan set with initial poses (.conf or .aln).
     pub set: PathBuf,
-    /// Output scan set with the refined poses, written in the convention of
-    /// the input set. Scans that could not be registered are left out (and
-    /// reported).
+    /// Output scan set with the refined poses, in the convention its
+    /// extension names: .aln is MeshLab's (it opens as a project), anything
+    /// else a Stanford .conf. Scan files keep their names when it is in the
+    /// input's directory, else are written as absolute paths. Scans that
+    /// could not be registered are left out (and reported).
     pub out_set: PathBuf,
     /// Final pairing distance d [default: 2 x the largest sampling distance].
     #[arg(long)]
