@@ -163,7 +163,7 @@ fn interrupt(args: &[&str], ms: u64, sig: &str) -> Output {
 
 /// SIGTERM and SIGHUP stop a run like Ctrl-C: exit 130, the work directory
 /// and the temporary output removed; `mint convert` stops too (it used to
-/// ignore Ctrl-C).
+/// ignore Ctrl-C), and so does `mint simplify` while it collapses.
 #[test]
 fn sigterm_and_sighup_stop_cleanly_with_exit_130() {
     let d = tempfile::tempdir().unwrap();
@@ -177,6 +177,10 @@ fn sigterm_and_sighup_stop_cleanly_with_exit_130() {
         assert_eq!(o.status.code(), Some(130), "SIG{sig}: {:?}: {}", o.status, String::from_utf8_lossy(&o.stderr));
         assert!(entries(&out_dir).is_empty(), "SIG{sig} left {:?}", entries(&out_dir));
     }
+    // The in-core simplifier listens too, between collapses.
+    let o = interrupt(&["simplify", p(&input), p(&out_dir.join("s.ply")), "--faces", "100", "--quiet"], 1500, "TERM");
+    assert_eq!(o.status.code(), Some(130), "simplify, SIGTERM: {:?}: {}", o.status, String::from_utf8_lossy(&o.stderr));
+    assert!(entries(&out_dir).is_empty(), "simplify, SIGTERM left {:?}", entries(&out_dir));
     for (sig, name) in [("INT", "c.obj"), ("TERM", "c.ply"), ("HUP", "c.stl")] {
         let o = interrupt(&["convert", p(&input), p(&out_dir.join(name)), "--ascii", "--quiet"], 100, sig);
         assert_eq!(o.status.code(), Some(130), "convert, SIG{sig}: {:?}: {}", o.status, String::from_utf8_lossy(&o.stderr));

@@ -42,6 +42,9 @@ pub enum MeshError {
         /// What was missing.
         what: &'static str,
     },
+    /// The caller asked to stop (Ctrl-C).
+    #[error("cancelled")]
+    Cancelled,
 }
 
 impl MeshError {

@@ -41,6 +41,6 @@ pub use distance::{
 };
 pub use error::MeshError;
 pub use rng::SplitMix64;
-pub use simplify::{simplify, SimplifyOptions, SimplifyReport};
+pub use simplify::{simplify, simplify_with, SimplifyOptions, SimplifyReport};
 pub use selfx::{faces_intersect, self_intersections, SelfIntersections};
 pub use weld::weld;

@@ -119,6 +119,8 @@ pub struct CollapseStats {
     pub refused: u64,
     /// Rebuilds of the heap from the live edges.
     pub rebuilds: u64,
+    /// The `stop` hook ended the collapse early.
+    pub stopped: bool,
 }
 
 /// The weight of a boundary edge's constraint plane, per squared edge length.
@@ -158,10 +160,13 @@ const BLOCK_SLACK: f64 = 1.1;
 /// on the face count, never on `threads`.
 pub fn collapse(positions: &[[f64; 3]], faces: &[[u32; 3]], target_faces: u64, max_error: f64, threads: usize) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, CollapseStats) {
     let blocks = if faces.len() > BLOCK_MIN_FACES { BLOCKS } else { 1 };
-    collapse_in_blocks(positions, faces, target_faces, max_error, blocks, threads)
+    collapse_in_blocks(positions, faces, target_faces, max_error, blocks, threads, &|| false)
 }
 
-/// [`collapse`] with an explicit number of blocks (1: the whole at once).
+/// [`collapse`] with an explicit number of blocks (1: the whole at once)
+/// and a `stop` hook, asked every few thousand candidates: when it says
+/// true the collapse ends where it is (the mesh is still valid, only less
+/// reduced) and `stats.stopped` is set.
 pub fn collapse_in_blocks(
     positions: &[[f64; 3]],
     faces: &[[u32; 3]],
@@ -169,6 +174,7 @@ pub fn collapse_in_blocks(
     max_error: f64,
     blocks: usize,
     threads: usize,
+    stop: &(dyn Fn() -> bool + Sync),
 ) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, CollapseStats) {
     let nv = positions.len();
     // Work relative to the bounding box's centre (smaller terms, less
@@ -187,13 +193,13 @@ pub fn collapse_in_blocks(
     let mut tri = faces.to_vec();
     let blocks = blocks.clamp(1, 255);
     if blocks > 1 && !faces.is_empty() && target_faces < faces.len() as u64 {
-        tri = collapse_blocks(&mut pos, &mut quad, faces, target_faces, max_distance, blocks, threads.max(1), &mut stats);
+        tri = collapse_blocks(&mut pos, &mut quad, faces, target_faces, max_distance, blocks, threads.max(1), stop, &mut stats);
     }
     if std::env::var_os("MINT_QEM_TRACE").is_some() {
         eprintln!("qem: blocks done: {} faces, {stats:?}", tri.len());
     }
     let pinned = vec![false; nv];
-    let (out_pos, out_faces, _) = run(pos, tri, quad, &pinned, target_faces, max_distance, &mut stats);
+    let (out_pos, out_faces, _) = run(pos, tri, quad, &pinned, target_faces, max_distance, stop, &mut stats);
     let out_pos: Vec<[f64; 3]> = out_pos.iter().map(|p| (*p + centre).to_array()).collect();
     (out_pos, out_faces, stats)
 }
@@ -209,6 +215,7 @@ fn collapse_blocks(
     max_distance: f64,
     blocks: usize,
     threads: usize,
+    stop: &(dyn Fn() -> bool + Sync),
     stats: &mut CollapseStats,
 ) -> Vec<[u32; 3]> {
     let nv = pos.len();
@@ -286,7 +293,7 @@ fn collapse_blocks(
                 // the fine faces along the held vertices.
                 let share = ((BLOCK_SLACK * target_faces as f64) * part.faces.len() as f64 / total).round() as u64;
                 let mut st = CollapseStats::default();
-                let (p, f, q) = run(p, part.faces.clone(), q, &pinned, share, max_distance, &mut st);
+                let (p, f, q) = run(p, part.faces.clone(), q, &pinned, share, max_distance, stop, &mut st);
                 *results[b].lock().unwrap() = Some(BlockResult { pos: p, faces: f, quad: q, stats: st });
             });
         }
@@ -301,6 +308,7 @@ fn collapse_blocks(
         stats.candidates += r.stats.candidates;
         stats.refused += r.stats.refused;
         stats.rebuilds += r.stats.rebuilds;
+        stats.stopped |= r.stats.stopped;
         stats.max_error = stats.max_error.max(r.stats.max_error);
         for (l, &g) in part.global.iter().enumerate() {
             if vblock[g as usize] == SHARED {
@@ -466,6 +474,7 @@ fn run(
     pinned: &[bool],
     target_faces: u64,
     max_distance: f64,
+    stop: &(dyn Fn() -> bool + Sync),
     stats: &mut CollapseStats,
 ) -> (Vec<DVec3>, Vec<[u32; 3]>, Vec<Quadric>) {
     let nv = pos.len();
@@ -552,6 +561,10 @@ fn run(
         }
         let Some(Reverse(cand)) = heap.pop() else { break };
         stats.candidates += 1;
+        if stats.candidates % 4096 == 0 && stop() {
+            stats.stopped = true;
+            break;
+        }
         let (u, v) = (cand.u, cand.v);
         if gone_v[u as usize] || gone_v[v as usize] {
             continue;

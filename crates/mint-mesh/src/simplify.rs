@@ -54,6 +54,17 @@ pub struct SimplifyReport {
 /// Simplifies `positions`/`faces` to about `o.target_faces` faces; returns
 /// the new mesh (unreferenced vertices removed, order kept) and a report.
 pub fn simplify(positions: &[[f64; 3]], faces: &[[u32; 3]], o: &SimplifyOptions) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>, SimplifyReport), MeshError> {
+    simplify_with(positions, faces, o, &|| false)
+}
+
+/// [`simplify`] with a `stop` hook (Ctrl-C), asked while collapsing: when
+/// it says true, [`MeshError::Cancelled`].
+pub fn simplify_with(
+    positions: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    o: &SimplifyOptions,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>, SimplifyReport), MeshError> {
     let trace = std::env::var_os("MINT_QEM_TRACE").is_some();
     let t = std::time::Instant::now();
     let before = try_check(positions, faces)?;
@@ -62,7 +73,11 @@ pub fn simplify(positions: &[[f64; 3]], faces: &[[u32; 3]], o: &SimplifyOptions)
     let mut relaxed = 0;
     loop {
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let (moved, out, collapse) = crate::qem::collapse(positions, faces, target, o.max_error as f64, threads);
+        let blocks = if faces.len() > crate::qem::BLOCK_MIN_FACES { crate::qem::BLOCKS } else { 1 };
+        let (moved, out, collapse) = crate::qem::collapse_in_blocks(positions, faces, target, o.max_error as f64, blocks, threads, stop);
+        if collapse.stopped {
+            return Err(MeshError::Cancelled);
+        }
         if trace {
             eprintln!("qem: {collapse:?} at {:.2}s", t.elapsed().as_secs_f64());
         }

@@ -18,7 +18,7 @@ fn collapsed(m: &Mesh, target: u64) -> (Mesh, CheckReport) {
 
 /// The same, in `blocks` blocks first (on two threads).
 fn collapsed_in(m: &Mesh, target: u64, blocks: usize) -> (Mesh, CheckReport) {
-    let (p, f, _) = collapse_in_blocks(&m.0, &m.1, target, f64::INFINITY, blocks, 2);
+    let (p, f, _) = collapse_in_blocks(&m.0, &m.1, target, f64::INFINITY, blocks, 2, &|| false);
     let mut map = vec![u32::MAX; p.len()];
     let mut q = Vec::new();
     let g: Vec<[u32; 3]> = f
@@ -132,7 +132,7 @@ proptest! {
 #[test]
 fn blocks_give_the_same_mesh_on_any_thread_count() {
     let m = torus(1.0, 0.4, 120, 60);
-    let runs: Vec<_> = [1, 2, 3, 8].iter().map(|&t| collapse_in_blocks(&m.0, &m.1, 2000, f64::INFINITY, 5, t)).collect();
+    let runs: Vec<_> = [1, 2, 3, 8].iter().map(|&t| collapse_in_blocks(&m.0, &m.1, 2000, f64::INFINITY, 5, t, &|| false)).collect();
     for r in &runs[1..] {
         assert_eq!(r.1, runs[0].1);
         assert!(r.0.iter().zip(&runs[0].0).all(|(a, b)| a.map(f64::to_bits) == b.map(f64::to_bits)));

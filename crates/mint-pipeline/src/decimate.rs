@@ -170,7 +170,10 @@ fn simplify_and_write(
     progress: &dyn Progress,
 ) -> Result<(mint_mesh::SimplifyReport, f64, f64), PipelineError> {
     let t = Instant::now();
-    let (p, f, sr) = mint_mesh::simplify(&positions, &tris, so).map_err(|e| PipelineError::stage(input, format!("simplifying: {e}")))?;
+    let (p, f, sr) = mint_mesh::simplify_with(&positions, &tris, so, &|| progress.cancelled()).map_err(|e| match e {
+        mint_mesh::MeshError::Cancelled => PipelineError::Cancelled,
+        e => PipelineError::stage(input, format!("simplifying: {e}")),
+    })?;
     drop((positions, tris));
     let seconds_simplify = t.elapsed().as_secs_f64();
     crate::passes::check_cancel(progress)?;
