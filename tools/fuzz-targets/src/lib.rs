@@ -36,6 +36,7 @@ pub const TARGETS: &[Target] = &[
     ("parse_scene", parse_scene),
     ("discretize", discretize),
     ("resample", resample),
+    ("simplify", simplify),
 ];
 
 /// The target named `name`.
@@ -446,5 +447,45 @@ pub fn resample(data: &[u8]) {
     for e in std::fs::read_dir(scratch()).unwrap() {
         let name = e.unwrap().file_name().into_string().unwrap();
         assert!(name.starts_with("input.") || name.starts_with("again.") || name == "out.ply", "the run left {name} behind");
+    }
+}
+
+/// The in-core simplifier on small meshes over the half-cell lattice:
+/// `data[0]` picks the target (low 4 bits: a fraction of the faces) and
+/// the blocks (high bits: 1 to 4), `data[1]` the vertex count, then 3 bytes
+/// a vertex and 3 bytes a face. Checks that nothing panics, that indices
+/// stay valid and positions finite, and that a closed, 2-manifold,
+/// oriented input keeps that and its genera under `qem::collapse_in_blocks`
+/// itself (not only under `simplify`, which may relax its target), and
+/// that `simplify` hands over a watertight mesh whenever it got one.
+pub fn simplify(data: &[u8]) {
+    if data.len() < 2 {
+        return;
+    }
+    let fraction = f64::from(data[0] & 15) / 15.0;
+    let blocks = usize::from(data[0] >> 4) % 4 + 1;
+    let nv = (data[1] % 32) as usize + 4;
+    let rest = &data[2..];
+    if rest.len() < 3 * nv + 3 {
+        return;
+    }
+    let (vb, fb) = rest.split_at(3 * nv);
+    let positions: Vec<[f64; 3]> = vb.chunks_exact(3).map(|c| [lattice(c[0]), lattice(c[1]), lattice(c[2])]).collect();
+    let faces: Vec<[u32; 3]> = fb.chunks_exact(3).take(96).map(|c| [0, 1, 2].map(|k| (c[k] as usize % nv) as u32)).collect();
+    let before = mint_mesh::check(&positions, &faces);
+    let target = (fraction * faces.len() as f64) as u64;
+    let (p, f, _) = mint_mesh::qem::collapse_in_blocks(&positions, &faces, target, f64::INFINITY, blocks, 2, &|| false);
+    assert!(f.len() <= faces.len(), "faces grew");
+    assert!(f.iter().flatten().all(|&v| (v as usize) < p.len()), "an index out of range");
+    assert!(f.iter().flatten().all(|&v| p[v as usize].iter().all(|c| c.is_finite())), "a non-finite position");
+    if before.watertight {
+        let after = mint_mesh::check(&p, &f);
+        assert!(after.watertight, "{blocks} blocks, target {target}: a watertight input lost it: {after:?}");
+        assert_eq!(after.genera, before.genera, "{blocks} blocks, target {target}: genera changed");
+    }
+    if target >= 4 {
+        if let Ok((_, _, r)) = mint_mesh::simplify(&positions, &faces, &mint_mesh::SimplifyOptions { target_faces: target, max_error: 1.0 }) {
+            assert!(!r.input_watertight || r.output_watertight, "simplify handed over a worse mesh: {r:?}");
+        }
     }
 }
