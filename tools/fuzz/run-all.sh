@@ -6,7 +6,7 @@
 set -u
 SECS=${1:-300}
 shift || true
-TARGETS=${*:-"read_ply read_obj read_stl read_off read_mesh read_raw read_wrl read_3ds read_pro read_conf read_aln read_rgrid parse_scene discretize resample"}
+TARGETS=${*:-"read_ply read_obj read_stl read_off read_mesh read_raw read_wrl read_3ds read_pro read_conf read_aln read_rgrid parse_scene discretize resample simplify"}
 WORK=${FUZZ_WORK:-/tmp/mint-fuzz-work}
 for t in $TARGETS; do
   mkdir -p "$WORK/$t"
