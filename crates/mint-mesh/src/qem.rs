@@ -277,27 +277,32 @@ fn collapse_blocks(
     let next = std::sync::atomic::AtomicUsize::new(0);
     let results: Vec<std::sync::Mutex<Option<BlockResult>>> = (0..blocks).map(|_| std::sync::Mutex::new(None)).collect();
     let (pos_r, quad_r, vblock_r) = (&*pos, &*quad, &vblock);
-    std::thread::scope(|s| {
-        for _ in 0..threads.min(blocks) {
-            s.spawn(|| loop {
-                let b = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                if b >= blocks {
-                    return;
-                }
-                let part = &parts[b];
-                let p: Vec<DVec3> = part.global.iter().map(|&v| pos_r[v as usize]).collect();
-                let q: Vec<Quadric> = part.global.iter().map(|&v| quad_r[v as usize]).collect();
-                let pinned: Vec<bool> = part.global.iter().map(|&v| vblock_r[v as usize] == SHARED).collect();
-                // Its share of the target and a little more: the whole
-                // pass then spends the rest where it costs least, first on
-                // the fine faces along the held vertices.
-                let share = ((BLOCK_SLACK * target_faces as f64) * part.faces.len() as f64 / total).round() as u64;
-                let mut st = CollapseStats::default();
-                let (p, f, q) = run(p, part.faces.clone(), q, &pinned, share, max_distance, stop, &mut st);
-                *results[b].lock().unwrap() = Some(BlockResult { pos: p, faces: f, quad: q, stats: st });
-            });
+    let work = || loop {
+        let b = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        if b >= blocks {
+            return;
         }
-    });
+        let part = &parts[b];
+        let p: Vec<DVec3> = part.global.iter().map(|&v| pos_r[v as usize]).collect();
+        let q: Vec<Quadric> = part.global.iter().map(|&v| quad_r[v as usize]).collect();
+        let pinned: Vec<bool> = part.global.iter().map(|&v| vblock_r[v as usize] == SHARED).collect();
+        // Its share of the target and a little more: the whole pass then
+        // spends the rest where it costs least, first on the fine faces
+        // along the held vertices.
+        let share = ((BLOCK_SLACK * target_faces as f64) * part.faces.len() as f64 / total).round() as u64;
+        let mut st = CollapseStats::default();
+        let (p, f, q) = run(p, part.faces.clone(), q, &pinned, share, max_distance, stop, &mut st);
+        *results[b].lock().unwrap() = Some(BlockResult { pos: p, faces: f, quad: q, stats: st });
+    };
+    if threads <= 1 {
+        work();
+    } else {
+        std::thread::scope(|s| {
+            for _ in 0..threads.min(blocks) {
+                s.spawn(work);
+            }
+        });
+    }
     // Merge: moved positions and quadrics back; a shared vertex gathers
     // what each block added to its quadric.
     let original: Vec<(u32, Quadric)> = (0..nv as u32).filter(|&v| vblock[v as usize] == SHARED).map(|v| (v, quad[v as usize])).collect();
