@@ -454,13 +454,7 @@ fn run<C: Coord>(
                                     err = scatter_one(&mut mine, t, block, &mut corner).err();
                                 }
                             });
-                            let e = match (visited, err) {
-                                (Err(e), _) => Some(PipelineError::from(e)),
-                                (_, Some(e)) => Some(e.into()),
-                                _ if progress.cancelled() => Some(PipelineError::Cancelled),
-                                _ => None,
-                            };
-                            if let Some(e) = e {
+                            if let Some(e) = crate::passes::chunk_outcome(visited, err, progress) {
                                 failed.lock().unwrap().get_or_insert(e);
                                 stop.store(true, Ordering::Relaxed);
                                 return;

@@ -38,6 +38,17 @@ pub(crate) fn check_cancel(progress: &dyn Progress) -> Result<(), PipelineError>
     }
 }
 
+/// The outcome of one worker's chunk of faces: the visit's own error
+/// first, then the sink's, then a pending Ctrl-C.
+pub(crate) fn chunk_outcome(visited: Result<(), mint_io::Error>, sink: Option<StoreError>, progress: &dyn Progress) -> Option<PipelineError> {
+    match (visited, sink) {
+        (Err(e), _) => Some(PipelineError::from(e)),
+        (_, Some(e)) => Some(e.into()),
+        _ if progress.cancelled() => Some(PipelineError::Cancelled),
+        _ => None,
+    }
+}
+
 /// The bounding box of vertices `range` (after `xf`), read from the map in
 /// parallel; `None` for an empty range. Also the check that every vertex is
 /// finite, so that workers resolving indices later need not check again.
