@@ -79,7 +79,7 @@ fn main() {
         let initial: Vec<Rigid> = if deg == 0.0 && mm == 0.0 {
             truth.clone()
         } else {
-            truth.iter().enumerate().map(|(i, p)| if i == 0 { *p } else { exact_perturb(p, center, deg, mm * 1e-3, &mut rng) }).collect()
+            truth.iter().enumerate().map(|(i, p)| if i == 0 { *p } else { mint_range::synth::move_exactly(p, center, deg, mm * 1e-3, &mut rng) }).collect()
         };
         let mut initial = initial;
         if let Some((kp, deg)) = plant {
@@ -87,7 +87,7 @@ fn main() {
                 let rot = Rigid::from_axis_angle(DVec3::Y, deg.to_radians());
                 Rigid { r: rot.r, t: (center - rot.rotate(center)).to_array() }.after(&truth[kp])
             } else {
-                exact_perturb(&truth[kp], center, deg, 0.0, &mut rng)
+                mint_range::synth::move_exactly(&truth[kp], center, deg, 0.0, &mut rng)
             };
         }
         let t = std::time::Instant::now();
@@ -247,19 +247,3 @@ fn errors(t0: &Rigid, ti: &Rigid, p0: &Rigid, pi: &Rigid, center: DVec3) -> (f64
     (d.angle().to_degrees(), rel_t.apply(c).distance(rel_p.apply(c)))
 }
 
-fn exact_perturb(pose: &Rigid, center: DVec3, deg: f64, shift: f64, rng: &mut mint_mesh::SplitMix64) -> Rigid {
-    let axis = unit(rng);
-    let rot = Rigid::from_axis_angle(axis, deg.to_radians());
-    let s = unit(rng) * shift;
-    Rigid { r: rot.r, t: (center - rot.rotate(center) + s).to_array() }.after(pose)
-}
-
-fn unit(rng: &mut mint_mesh::SplitMix64) -> DVec3 {
-    loop {
-        let v = DVec3::new(2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0);
-        let n = v.length();
-        if n > 1e-3 && n <= 1.0 {
-            return v * (1.0 / n);
-        }
-    }
-}

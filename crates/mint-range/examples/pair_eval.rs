@@ -27,7 +27,7 @@ fn main() {
         let mut line = format!("{:>4}-{:<4}", i, j);
         for seed in 0..seeds {
             let mut rng = mint_mesh::SplitMix64::new(1000 + seed);
-            let init = exact_perturb(&truth[j], center, deg, mm * 1e-3, &mut rng);
+            let init = mint_range::synth::move_exactly(&truth[j], center, deg, mm * 1e-3, &mut rng);
             let pair = [scans[i].clone(), scans[j].clone()];
             let t = std::time::Instant::now();
             let r = align(&pair, &[truth[i], init], &AlignOptions { strategy: Strategy::Anchor, start_distance: sd, ..Default::default() }).unwrap();
@@ -39,19 +39,3 @@ fn main() {
     }
 }
 
-fn exact_perturb(pose: &Rigid, center: DVec3, deg: f64, shift: f64, rng: &mut mint_mesh::SplitMix64) -> Rigid {
-    let axis = unit(rng);
-    let rot = Rigid::from_axis_angle(axis, deg.to_radians());
-    let s = unit(rng) * shift;
-    Rigid { r: rot.r, t: (center - rot.rotate(center) + s).to_array() }.after(pose)
-}
-
-fn unit(rng: &mut mint_mesh::SplitMix64) -> DVec3 {
-    loop {
-        let v = DVec3::new(2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0);
-        let n = v.length();
-        if n > 1e-3 && n <= 1.0 {
-            return v * (1.0 / n);
-        }
-    }
-}

@@ -165,11 +165,24 @@ pub fn synthesize(positions: &[[f64; 3]], faces: &[[u32; 3]], opts: &SynthOption
 pub fn perturb(pose: &Rigid, center: DVec3, max_deg: f64, max_shift: f64, rng: &mut SplitMix64) -> Rigid {
     let axis = random_unit(rng);
     let angle = max_deg.to_radians() * rng.next_f64();
-    let rot = Rigid::from_axis_angle(axis, angle);
     let shift = random_unit(rng) * (max_shift * rng.next_f64());
-    // p ↦ R(p − c) + c + shift
-    let delta = Rigid { r: rot.r, t: (center - rot.rotate(center) + shift).to_array() };
-    delta.after(pose)
+    moved_about(pose, center, axis, angle, shift)
+}
+
+/// `pose` moved by exactly `deg` degrees about a uniformly random axis
+/// through `center` and by exactly `shift` in a uniformly random direction
+/// (the starts of the registration tests and benchmarks).
+pub fn move_exactly(pose: &Rigid, center: DVec3, deg: f64, shift: f64, rng: &mut SplitMix64) -> Rigid {
+    let axis = random_unit(rng);
+    let shift = random_unit(rng) * shift;
+    moved_about(pose, center, axis, deg.to_radians(), shift)
+}
+
+/// `p ↦ R(p − c) + c + shift` after `pose`, `R` the rotation by `angle`
+/// about `axis`.
+fn moved_about(pose: &Rigid, center: DVec3, axis: DVec3, angle: f64, shift: DVec3) -> Rigid {
+    let rot = Rigid::from_axis_angle(axis, angle);
+    Rigid { r: rot.r, t: (center - rot.rotate(center) + shift).to_array() }.after(pose)
 }
 
 fn random_unit(rng: &mut SplitMix64) -> DVec3 {

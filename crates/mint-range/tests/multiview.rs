@@ -45,23 +45,6 @@ fn dragon() -> Option<Dragon> {
     Some(Dragon { scans, conf, center: (DVec3::from(lo) + DVec3::from(hi)) * 0.5 })
 }
 
-/// `pose` moved by exactly `deg` about a random axis through `center` and
-/// by exactly `shift` in a random direction.
-fn moved(pose: &Rigid, center: DVec3, deg: f64, shift: f64, rng: &mut mint_mesh::SplitMix64) -> Rigid {
-    let rot = Rigid::from_axis_angle(unit(rng), deg.to_radians());
-    let s = unit(rng) * shift;
-    Rigid { r: rot.r, t: (center - rot.rotate(center) + s).to_array() }.after(pose)
-}
-
-fn unit(rng: &mut mint_mesh::SplitMix64) -> DVec3 {
-    loop {
-        let v = DVec3::new(2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0, 2.0 * rng.next_f64() - 1.0);
-        let n = v.length();
-        if n > 1e-3 && n <= 1.0 {
-            return v * (1.0 / n);
-        }
-    }
-}
 
 /// Scan `i` relative to scan 0, against the same in `truth`: rotation in
 /// degrees and displacement of `center`.
@@ -80,7 +63,7 @@ fn dragon_from_starts(d: &Dragon, deg: f64, mm: f64, seeds: std::ops::Range<u64>
     let mut results: Vec<Vec<Rigid>> = Vec::new();
     for seed in seeds {
         let mut rng = mint_mesh::SplitMix64::new(1000 + seed);
-        let initial: Vec<Rigid> = d.conf.iter().enumerate().map(|(i, p)| if i == 0 { *p } else { moved(p, d.center, deg, mm * 1e-3, &mut rng) }).collect();
+        let initial: Vec<Rigid> = d.conf.iter().enumerate().map(|(i, p)| if i == 0 { *p } else { mint_range::synth::move_exactly(p, d.center, deg, mm * 1e-3, &mut rng) }).collect();
         let t = std::time::Instant::now();
         let r = align(&d.scans, &initial, &AlignOptions::default()).unwrap();
         let secs = t.elapsed().as_secs_f64();
@@ -159,7 +142,7 @@ fn dragon_stand_started_at_the_conf() {
 fn dragon_stand_planted_failure_is_reported_and_spoils_nothing() {
     let Some(d) = dragon() else { return };
     let mut rng = mint_mesh::SplitMix64::new(1000);
-    let mut initial: Vec<Rigid> = d.conf.iter().enumerate().map(|(i, p)| if i == 0 { *p } else { moved(p, d.center, 3.0, 3e-3, &mut rng) }).collect();
+    let mut initial: Vec<Rigid> = d.conf.iter().enumerate().map(|(i, p)| if i == 0 { *p } else { mint_range::synth::move_exactly(p, d.center, 3.0, 3e-3, &mut rng) }).collect();
     let bad = 3;
     let turn = Rigid::from_axis_angle(DVec3::Y, 30f64.to_radians());
     initial[bad] = Rigid { r: turn.r, t: (d.center - turn.rotate(d.center)).to_array() }.after(&d.conf[bad]);
@@ -188,7 +171,7 @@ fn a_view_planted_far_away_fails_alone() {
     let mut initial = common::perturbed(&s, 3.0, 0.01, 11);
     let bad = 5;
     let mut rng = mint_mesh::SplitMix64::new(7);
-    initial[bad] = moved(&s.scans[bad].pose, s.center, 90.0, 0.0, &mut rng);
+    initial[bad] = mint_range::synth::move_exactly(&s.scans[bad].pose, s.center, 90.0, 0.0, &mut rng);
     let r = align(&s.meshes, &initial, &AlignOptions::default()).unwrap();
     for (i, rep) in r.reports.iter().enumerate() {
         let (a, sh) = common::pose_errors(&s.scans[i].pose, &r.poses[i], s.center);
