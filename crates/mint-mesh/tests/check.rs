@@ -434,3 +434,60 @@ proptest! {
         );
     }
 }
+
+/// A fan `v → a → b` per face, around vertex 0: either a random closed
+/// cycle over distinct neighbours (with its faces shuffled, and sometimes
+/// one face flipped, repeated or dropped, or two cycles together), or faces
+/// drawn from a small alphabet where coincidences are common.
+fn any_fan() -> impl Strategy<Value = Vec<(u32, u32)>> {
+    let cycle = (prop::collection::vec(1u32..40, 2..30), any::<u64>(), 0u8..6).prop_map(|(ws, seed, edit)| {
+        let mut ws = ws;
+        ws.sort_unstable();
+        ws.dedup();
+        let mut fan: Vec<(u32, u32)> = (0..ws.len()).map(|i| (ws[i], ws[(i + 1) % ws.len()])).collect();
+        let mut s = seed;
+        let mut next = |n: usize| {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 33) as usize % n.max(1)
+        };
+        for i in (1..fan.len()).rev() {
+            let j = next(i + 1);
+            fan.swap(i, j);
+        }
+        let k = next(fan.len());
+        match edit {
+            1 => fan[k] = (fan[k].1, fan[k].0),
+            2 => fan.push(fan[k]),
+            3 => {
+                fan.remove(k);
+            }
+            4 => {
+                let more: Vec<(u32, u32)> = fan.iter().map(|&(a, b)| (a + 40, b + 40)).collect();
+                fan.extend(more);
+            }
+            _ => {}
+        }
+        fan
+    });
+    let small = prop::collection::vec((1u32..6, 1u32..6), 0..12).prop_map(|f| f.into_iter().filter(|(a, b)| a != b).collect());
+    prop_oneof![cycle, small]
+}
+
+proptest! {
+    /// The per-vertex scan's closed-fan shortcut gives exactly what the
+    /// general scan (sorting every edge's faces) gives, on closed fans and
+    /// on everything near them.
+    #[test]
+    fn closed_fan_shortcut_equals_the_general_scan(fan in any_fan(), v in prop_oneof![Just(0u32), 20u32..60]) {
+        use mint_mesh::check::{scan_vertex, scan_vertex_general, TopologyCounts, VertexScratch};
+        // Around a vertex numbered below, among or above its neighbours.
+        let fan: Vec<(u32, u32)> = fan.into_iter().filter(|&(a, b)| a != v && b != v).collect();
+        let (mut s1, mut s2) = (VertexScratch::default(), VertexScratch::default());
+        let (mut c1, mut c2) = (TopologyCounts::default(), TopologyCounts::default());
+        let t1 = scan_vertex(v, &fan, &mut s1, &mut c1);
+        let t2 = scan_vertex_general(v, &fan, &mut s2, &mut c2);
+        prop_assert_eq!(t1, t2);
+        prop_assert_eq!(c1, c2);
+        prop_assert_eq!(&s1.boundary_out, &s2.boundary_out);
+    }
+}
