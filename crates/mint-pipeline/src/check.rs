@@ -7,14 +7,20 @@
 //! 1. **weld** (unless `--no-weld`): positions go to buckets by a hash of
 //!    their bits; each bucket is sorted, and every vertex gets the smallest
 //!    index at its position (`canonical`, kept only if something welds);
-//! 2. **faces**, one ordered pass: per-face geometry in the in-core chunks
-//!    (so volume and area are the same bits), a union-find over vertices
-//!    for components, and each proper face's three corners `(v, a, b)` sent
-//!    to the bucket of `v`'s block of vertices; collapsed faces' keys to
-//!    their own buckets;
-//! 3. **vertices**, block by block: the block's corners are grouped by
-//!    vertex (a counting sort) and each vertex is judged by
-//!    [`mint_mesh::check::scan_vertex`], the in-core code itself.
+//! 2. **components**, a first pass over the faces: a union-find over
+//!    vertices in face order (one thread) beside workers that sum per-face
+//!    geometry in the in-core chunks (so volume and area are the same bits),
+//!    and for each block of vertices the last chunk of faces touching it;
+//! 3. **corners and vertices**, a second pass: each proper face's three
+//!    corners `(v, a, b)` go to the bucket of `v`'s block (collapsed faces'
+//!    keys to their own buckets), and a block is judged as soon as every
+//!    chunk up to its last is done: its corners are grouped by vertex (a
+//!    counting sort) and each vertex is judged by
+//!    [`mint_mesh::check::scan_vertex`], the in-core code itself. When faces
+//!    and vertices run in a similar order, as in most files, corners are
+//!    judged soon after they are made and never reach the disk; in any
+//!    other order they spill and are judged at the end. A file without
+//!    fixed-size records is read once, as a stream, for both passes.
 //!
 //! Memory: per vertex a union-find parent (4 bytes), two bits, and 4 more
 //! bytes when welding merges anything; per component its Euler
@@ -26,7 +32,7 @@
 use crate::error::PipelineError;
 use crate::progress::{Phase, Progress};
 use mint_io::{MeshReader, ReadOptions, TriangleChunk, VertexPositions};
-use mint_mesh::check::{fan_pair, is_collapsed, report_from, scan_vertex, union_smallest, Bbox, FaceGeom, TopologyCounts, Totals, VertexScratch, FACE_CHUNK};
+use mint_mesh::check::{fan_pair, find_root, is_collapsed, report_from, scan_vertex, Bbox, FaceGeom, TopologyCounts, Totals, VertexScratch, FACE_CHUNK};
 use mint_mesh::weld::position_key;
 use mint_mesh::CheckReport;
 use mint_store::{Buckets, Record, StoreError};
@@ -36,9 +42,12 @@ use std::sync::Mutex;
 
 /// Welding positions (units: vertices).
 pub const WELD: Phase = Phase::named("check: weld");
-/// Reading faces (units: faces).
+/// First pass over the faces: components and geometry (units: faces).
+pub const LINKS: Phase = Phase::named("check: components");
+/// Second pass over the faces, judging vertices as they complete (units:
+/// faces, then vertices).
 pub const FACES: Phase = Phase::named("check: faces");
-/// Judging vertices (units: vertex blocks).
+/// Judging the vertices of a streamed file (units: vertices).
 pub const VERTICES: Phase = Phase::named("check: vertices");
 
 /// Options of [`check_file`].
@@ -195,43 +204,44 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     let (canonical, welded) = if opts.weld { weld(&positions, dir, budget / 2, opts.threads.max(1), progress, &mut stats)? } else { (None, 0) };
 
     lap("weld");
-    // 2. Faces.
+    // 2. Faces, first pass: components, geometry, and for each block of
+    // vertices the last chunk of faces that touches it.
     let threads = opts.threads.max(1);
-    let block_vertices = {
-        // Blocks of vertices whose corners fill about an eighth of the
-        // budget per worker, at 12 bytes a corner and about six corners a
-        // vertex.
-        let per_block = (budget / 8 / threads as u64 / (12 * 6)).max(1 << 12);
-        per_block.max((nv as u64).div_ceil(4096)).max(1)
-    };
+    // Blocks of vertices: a power of two (a shift finds a vertex's block),
+    // small enough that judging one stays in the caches, at most 4096.
+    let block_shift = (nv as u64).div_ceil(4096).max(1 << 14).next_power_of_two().trailing_zeros();
+    let block_vertices = 1u64 << block_shift;
     let blocks = (nv as u64).div_ceil(block_vertices).max(1);
     stats.vertex_blocks = blocks;
     let id = |v: u32| canonical.as_ref().map_or(v, |c: &Vec<u32>| c[v as usize]);
     let sink = |n: usize, t: usize| Sink {
         corners: Buckets::new(dir, &format!("corners-{t}"), blocks as usize, budget / 2 / n as u64),
         collapsed: Buckets::new(dir, &format!("collapsed-{t}"), 64, budget / 16 / n as u64),
-        block_vertices,
+        block_shift,
     };
     let records = reader.triangle_records()?;
     let mut pass = None;
     if let Some(records) = &records {
-        match faces_direct(records, &id, &positions, threads, &sink, progress) {
-            Ok(p) => pass = Some(p),
+        match links_direct(records, &id, &positions, threads, block_shift, blocks, progress) {
+            Ok(p) => pass = Some((p, Vec::new())),
             // Polygons in a fixed-record file: read it as a stream.
             Err(PipelineError::Io(e)) if e.kind() == mint_io::ErrorKind::Unsupported => {}
             Err(e) => return Err(e),
         }
     }
-    let pass = match pass {
+    let (links, sinks) = match pass {
         Some(p) => p,
-        None => faces_streamed(&mut reader, &id, &positions, sink(1, 0), progress)?,
+        None => {
+            let (links, filled) = faces_streamed(&mut reader, &id, &positions, blocks, sink(1, 0), progress)?;
+            (links, vec![filled])
+        }
     };
-    let FacePass { mut parent, referenced, has_collapsed, geom, nfaces, sinks } = pass;
+    let Links { mut parent, referenced, has_collapsed, geom, nfaces, last_chunk } = links;
     if nfaces > (u32::MAX / 3) as u64 {
         return Err(PipelineError::stage(path, format!("{nfaces} faces: `check` handles at most {} (u32 indices)", u32::MAX / 3)));
     }
 
-    lap("faces");
+    lap("links");
     // Component labels, in place (parent[v] <= v), as in core.
     let mut next = 0u32;
     let mut nref = 0u64;
@@ -263,24 +273,34 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     drop(has_collapsed);
     drop(referenced);
 
-    // 3. Vertices, blocks in parallel.
-    let mut corner_sets = Vec::new();
-    let mut collapsed_sets = Vec::new();
-    for s in sinks {
-        let c = s.corners.finish();
-        stats.bytes_spilled += c.bytes_spilled();
-        corner_sets.push(Mutex::new(c));
-        collapsed_sets.push(s.collapsed.finish());
-    }
-    let (counts, mut simple, mut boundary) = vertices(&corner_sets, &labels, nv, block_vertices, blocks, threads, opts.list_boundary, &mut chi, &mut bad, progress)?;
+    // 3. Faces, second pass (fixed records only: the streamed pass above
+    // already sent its corners), and vertices: each block judged as soon as
+    // every chunk that touches it is done.
+    let direct = sinks.is_empty();
+    let sinks: Vec<Mutex<Sink>> = if direct { (0..threads).map(|t| Mutex::new(sink(threads, t))).collect() } else { sinks.into_iter().map(Mutex::new).collect() };
+    let judged = corners_and_vertices(
+        records.as_ref().filter(|_| direct),
+        threads,
+        &id,
+        &sinks,
+        &last_chunk,
+        &Judge { labels: &labels, nv, block_vertices, list_boundary: opts.list_boundary, totals: Mutex::new((&mut chi, &mut bad)) },
+        progress,
+    )?;
+    let (counts, mut simple, mut boundary) = judged;
     simple.sort_unstable();
     boundary.sort_unstable();
     boundary.truncate(opts.list_boundary);
     stats.boundary = boundary;
-    drop(corner_sets);
 
     lap("vertices");
     // Duplicates among collapsed faces: bucket b of every worker's set.
+    let mut collapsed_sets = Vec::new();
+    for s in sinks {
+        let s = s.into_inner().unwrap();
+        stats.bytes_spilled += s.corners.bytes_spilled();
+        collapsed_sets.push(s.collapsed.finish());
+    }
     let mut duplicate_collapsed = 0u64;
     for b in 0..64 {
         let mut keys: Vec<[u32; 3]> = Vec::new();
@@ -313,7 +333,8 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
 struct Sink {
     corners: Buckets<Corner>,
     collapsed: Buckets<Triple>,
-    block_vertices: u64,
+    /// A vertex's block is `v >> block_shift`.
+    block_shift: u32,
 }
 
 impl Sink {
@@ -327,47 +348,57 @@ impl Sink {
         }
         for v in f {
             let (a, b) = fan_pair(&f, v);
-            self.corners.push((v as u64 / self.block_vertices) as usize, Corner { v, a, b })?;
+            self.corners.push((v >> self.block_shift) as usize, Corner { v, a, b })?;
         }
         Ok(())
     }
 }
 
-/// What the pass over the faces leaves.
-struct FacePass {
+/// What the first pass over the faces leaves.
+struct Links {
     parent: Vec<u32>,
     referenced: Bits,
     has_collapsed: Bits,
     geom: FaceGeom,
     nfaces: u64,
-    sinks: Vec<Sink>,
+    /// Per vertex block: the last chunk of [`FACE_CHUNK`] faces with a
+    /// corner in it, or [`UNTOUCHED`].
+    last_chunk: Vec<u32>,
 }
 
-/// The union-find side of one face (welded indices).
+/// A vertex block no face touches.
+const UNTOUCHED: u32 = u32::MAX;
+
+/// The union-find side of one face (welded indices): its three classes
+/// joined under the smallest root, as [`union_smallest`] would.
 #[inline]
 fn link(parent: &mut [u32], referenced: &mut Bits, has_collapsed: &mut Bits, f: [u32; 3]) {
     for v in f {
         referenced.set(v);
     }
-    union_smallest(parent, f[0], f[1]);
-    union_smallest(parent, f[0], f[2]);
+    let r = f.map(|v| find_root(parent, v));
+    let low = r[0].min(r[1]).min(r[2]);
+    for x in r {
+        parent[x as usize] = low;
+    }
     if is_collapsed(&f) {
         has_collapsed.set(f[0]);
     }
 }
 
-/// The faces of a file with fixed-size records: one thread runs the
-/// union-find over all faces in order, while `threads` workers take chunks
-/// of [`FACE_CHUNK`] faces for geometry (combined in chunk order) and
-/// corners (each into its own buckets).
-fn faces_direct(
+/// The first pass over a file with fixed-size records: one thread runs the
+/// union-find over all faces in order and notes each vertex block's last
+/// chunk, while workers sum the geometry of chunks of [`FACE_CHUNK`] faces
+/// (combined in chunk order).
+fn links_direct<I: Fn(u32) -> u32 + Sync>(
     records: &mint_io::TriangleRecords,
-    id: &(dyn Fn(u32) -> u32 + Sync),
+    id: &I,
     positions: &VertexPositions,
     threads: usize,
-    sink: &(dyn Fn(usize, usize) -> Sink + Sync),
+    block_shift: u32,
+    blocks: u64,
     progress: &dyn Progress,
-) -> Result<FacePass, PipelineError> {
+) -> Result<Links, PipelineError> {
     let n = records.len();
     let nv = positions.len();
     let chunks = n.div_ceil(FACE_CHUNK as u64) as usize;
@@ -375,62 +406,73 @@ fn faces_direct(
     let stop = AtomicBool::new(false);
     let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
     let geoms: Mutex<Vec<FaceGeom>> = Mutex::new(vec![FaceGeom::default(); chunks]);
-    progress.start(FACES, n);
-    let (uf, sinks) = std::thread::scope(|s| {
-        let uf = s.spawn(|| -> Result<(Vec<u32>, Bits, Bits), PipelineError> {
+    progress.start(LINKS, n);
+    let uf = std::thread::scope(|s| {
+        let uf = s.spawn(|| -> Result<(Vec<u32>, Bits, Bits, Vec<u32>), PipelineError> {
             let mut parent: Vec<u32> = (0..nv).collect();
             let mut referenced = Bits::new(nv as usize);
             let mut has_collapsed = Bits::new(nv as usize);
-            records.visit_indices(0, n, |_, t| link(&mut parent, &mut referenced, &mut has_collapsed, t.map(id)))?;
-            Ok((parent, referenced, has_collapsed))
-        });
-        let workers: Vec<_> = (0..threads)
-            .map(|w| {
-                let (next, stop, failed, geoms) = (&next, &stop, &failed, &geoms);
-                s.spawn(move || {
-                    let mut out = sink(threads, w);
-                    loop {
-                        let c = next.fetch_add(1, Ordering::Relaxed);
-                        if c >= chunks || stop.load(Ordering::Relaxed) {
-                            return out;
-                        }
-                        let (a, b) = (c as u64 * FACE_CHUNK as u64, ((c + 1) as u64 * FACE_CHUNK as u64).min(n));
-                        let mut g = FaceGeom::default();
-                        let mut err = None;
-                        let visited = records.visit_indices(a, b, |_, t| {
-                            let f = t.map(id);
-                            // The welded mesh's positions: each vertex's
-                            // canonical one (-0.0 may have become 0.0).
-                            g.add(&f, f.map(|v| positions.get(v)));
-                            if err.is_none() {
-                                err = out.face(f).err();
-                            }
-                        });
-                        if let Some(e) = crate::passes::chunk_outcome(visited, err, progress) {
-                            failed.lock().unwrap().get_or_insert(e);
-                            stop.store(true, Ordering::Relaxed);
-                            return out;
-                        }
-                        geoms.lock().unwrap()[c] = g;
-                        progress.advance(b - a);
+            let mut last_chunk = vec![UNTOUCHED; blocks as usize];
+            for c in 0..chunks {
+                let (a, b) = (c as u64 * FACE_CHUNK as u64, ((c + 1) as u64 * FACE_CHUNK as u64).min(n));
+                records.visit_indices(a, b, |_, t| {
+                    let f = t.map(id);
+                    link(&mut parent, &mut referenced, &mut has_collapsed, f);
+                    for v in f {
+                        last_chunk[(v >> block_shift) as usize] = c as u32;
                     }
-                })
-            })
-            .collect();
-        let sinks: Vec<Sink> = workers.into_iter().map(|w| w.join().expect("check worker panicked")).collect();
-        (uf.join().expect("union-find panicked"), sinks)
+                })?;
+                progress.advance(b - a);
+                if stop.load(Ordering::Relaxed) {
+                    break;
+                }
+                if progress.cancelled() {
+                    return Err(PipelineError::Cancelled);
+                }
+            }
+            Ok((parent, referenced, has_collapsed, last_chunk))
+        });
+        for _ in 0..threads {
+            let (next, stop, failed, geoms) = (&next, &stop, &failed, &geoms);
+            s.spawn(move || loop {
+                let c = next.fetch_add(1, Ordering::Relaxed);
+                if c >= chunks || stop.load(Ordering::Relaxed) {
+                    return;
+                }
+                let (a, b) = (c as u64 * FACE_CHUNK as u64, ((c + 1) as u64 * FACE_CHUNK as u64).min(n));
+                let mut g = FaceGeom::default();
+                let visited = records.visit_indices(a, b, |_, t| {
+                    let f = t.map(id);
+                    // The welded mesh's positions: each vertex's canonical
+                    // one (-0.0 may have become 0.0).
+                    g.add(&f, f.map(|v| positions.get(v)));
+                });
+                if let Some(e) = crate::passes::chunk_outcome(visited, None, progress) {
+                    failed.lock().unwrap().get_or_insert(e);
+                    stop.store(true, Ordering::Relaxed);
+                    return;
+                }
+                geoms.lock().unwrap()[c] = g;
+            });
+        }
+        let uf = uf.join().expect("union-find panicked");
+        if uf.is_err() {
+            stop.store(true, Ordering::Relaxed);
+        }
+        uf
     });
     if let Some(e) = failed.into_inner().unwrap() {
         return Err(e);
     }
-    let (parent, referenced, has_collapsed) = uf?;
+    let (parent, referenced, has_collapsed, last_chunk) = uf?;
     progress.finish();
     let geom = geoms.into_inner().unwrap().iter().fold(FaceGeom::default(), |acc, g| acc.then(g));
-    Ok(FacePass { parent, referenced, has_collapsed, geom, nfaces: n, sinks })
+    Ok(Links { parent, referenced, has_collapsed, geom, nfaces: n, last_chunk })
 }
 
-/// The faces of any file, streamed in order by one thread.
-fn faces_streamed(reader: &mut MeshReader, id: &dyn Fn(u32) -> u32, positions: &VertexPositions, mut out: Sink, progress: &dyn Progress) -> Result<FacePass, PipelineError> {
+/// The faces of any file, streamed in order by one thread: the first pass
+/// and every corner (into `out`) at once.
+fn faces_streamed(reader: &mut MeshReader, id: &dyn Fn(u32) -> u32, positions: &VertexPositions, blocks: u64, mut out: Sink, progress: &dyn Progress) -> Result<(Links, Sink), PipelineError> {
     let nv = positions.len();
     let mut parent: Vec<u32> = (0..nv).collect();
     let mut referenced = Bits::new(nv as usize);
@@ -465,104 +507,220 @@ fn faces_streamed(reader: &mut MeshReader, id: &dyn Fn(u32) -> u32, positions: &
         geom = geom.then(&g);
     }
     progress.finish();
-    Ok(FacePass { parent, referenced, has_collapsed, geom, nfaces, sinks: vec![out] })
+    // Every block is ready once the stream is over.
+    let last_chunk = vec![0; blocks as usize];
+    Ok((Links { parent, referenced, has_collapsed, geom, nfaces, last_chunk }, out))
 }
 
-/// Judges every vertex, blocks in parallel: each worker gathers a block's
-/// corners from every set, groups them by vertex (a counting sort), and
-/// scans each vertex; Euler characteristics and flags go to the vertex's
-/// component. Returns the counts and the simple boundary edges (unsorted).
-#[allow(clippy::too_many_arguments)]
-fn vertices(
-    sets: &[Mutex<mint_store::BucketReader<Corner>>],
-    labels: &[u32],
+/// What judging a vertex block needs beside its corners.
+struct Judge<'a> {
+    labels: &'a [u32],
     nv: u32,
     block_vertices: u64,
-    blocks: u64,
-    threads: usize,
     list_boundary: usize,
-    chi: &mut [i64],
-    bad: &mut [bool],
+    /// Per component: Euler characteristic and "not closed".
+    totals: Mutex<(&'a mut [i64], &'a mut [bool])>,
+}
+
+/// One worker's share of the judged vertices, and its buffers.
+#[derive(Default)]
+struct Judged {
+    counts: TopologyCounts,
+    /// Simple boundary vertices' outgoing edges (unsorted).
+    simple: Vec<(u32, u32)>,
+    /// Boundary edges, each worker's first `list_boundary` (unsorted).
+    listed: Vec<[u32; 2]>,
+    scratch: VertexScratch,
+    start: Vec<u32>,
+    fans: Vec<(u32, u32)>,
+    records: Vec<Corner>,
+    deltas: Vec<(u32, i64, bool)>,
+}
+
+impl Judge<'_> {
+    /// Judges vertex block `blk`: takes its corners from every sink,
+    /// groups them by vertex (a counting sort) and scans each vertex; Euler
+    /// characteristics and flags go to the vertex's component.
+    fn block(&self, blk: u64, sinks: &[Mutex<Sink>], j: &mut Judged) -> Result<(), PipelineError> {
+        let v0 = (blk * self.block_vertices) as u32;
+        let v1 = ((blk + 1) * self.block_vertices).min(self.nv as u64) as u32;
+        let n = (v1 - v0) as usize;
+        j.records.clear();
+        for sink in sinks {
+            let bucket = sink.lock().unwrap().corners.take(blk as usize);
+            bucket.read(|batch| j.records.extend_from_slice(batch))?;
+        }
+        if j.records.is_empty() {
+            return Ok(());
+        }
+        j.start.clear();
+        j.start.resize(n + 1, 0);
+        for c in &j.records {
+            j.start[(c.v - v0) as usize + 1] += 1;
+        }
+        for i in 0..n {
+            j.start[i + 1] += j.start[i];
+        }
+        j.fans.clear();
+        j.fans.resize(j.records.len(), (0, 0));
+        let mut at = j.start.clone();
+        for c in &j.records {
+            let s = &mut at[(c.v - v0) as usize];
+            j.fans[*s as usize] = (c.a, c.b);
+            *s += 1;
+        }
+        j.deltas.clear();
+        for i in 0..n {
+            let (s, e) = (j.start[i] as usize, j.start[i + 1] as usize);
+            if s == e {
+                continue;
+            }
+            let v = v0 + i as u32;
+            let t = scan_vertex(v, &j.fans[s..e], &mut j.scratch, &mut j.counts);
+            j.deltas.push((self.labels[v as usize], t.faces_here as i64 - t.edges_here as i64, t.bad));
+            if let Some(w) = t.simple_next {
+                j.simple.push((v, w));
+            }
+            // Each worker keeps its smallest; the caller sorts and keeps
+            // the smallest overall.
+            if j.listed.len() < self.list_boundary {
+                j.listed.extend(j.scratch.boundary_out.iter().map(|&w| [v, w]));
+            }
+        }
+        let mut g = self.totals.lock().unwrap();
+        for &(l, d, b) in &j.deltas {
+            g.0[l as usize] += d;
+            g.1[l as usize] |= b;
+        }
+        Ok(())
+    }
+}
+
+/// The second pass's schedule: chunks of faces handed out in order, and
+/// vertex blocks released for judging once every chunk that touches them
+/// is done.
+struct Schedule {
+    next_chunk: usize,
+    done: Vec<bool>,
+    /// Chunks `0..prefix` are all done.
+    prefix: usize,
+    /// Touched blocks, by their last chunk.
+    order: Vec<u32>,
+    /// `order[..released]` may be judged; `order[..handed]` were handed out.
+    released: usize,
+    handed: usize,
+    stop: bool,
+}
+
+enum Task {
+    Chunk(usize),
+    Block(u64),
+}
+
+/// The second pass over the faces and the judging of the vertices, on
+/// `threads` workers. With `records`, the workers take chunks of faces in
+/// order and send each proper face's corners to their own sink, and a
+/// block is judged as soon as the last chunk that touches it
+/// (`last_chunk`) and every chunk before it are done: on a mesh whose
+/// faces and vertices run in a similar order, corners are judged soon after
+/// they are made and never reach the disk. Judging comes before new
+/// chunks. Without `records` the sinks are full already and every touched
+/// block is judged. Returns the counts, simple boundary edges and listed
+/// boundary edges, unsorted.
+fn corners_and_vertices<I: Fn(u32) -> u32 + Sync>(
+    records: Option<&mint_io::TriangleRecords>,
+    threads: usize,
+    id: &I,
+    sinks: &[Mutex<Sink>],
+    last_chunk: &[u32],
+    judge: &Judge,
     progress: &dyn Progress,
 ) -> Result<(TopologyCounts, Vec<(u32, u32)>, Vec<[u32; 2]>), PipelineError> {
-    let next = AtomicUsize::new(0);
-    let stop = AtomicBool::new(false);
+    let n = records.map_or(0, |r| r.len());
+    let chunks = n.div_ceil(FACE_CHUNK as u64) as usize;
+    let mut order: Vec<u32> = (0..last_chunk.len() as u32).filter(|&b| last_chunk[b as usize] != UNTOUCHED).collect();
+    order.sort_by_key(|&b| (last_chunk[b as usize], b));
+    let released = if chunks == 0 { order.len() } else { 0 };
+    let schedule = Mutex::new(Schedule { next_chunk: 0, done: vec![false; chunks], prefix: 0, order, released, handed: 0, stop: false });
+    let wake = std::sync::Condvar::new();
     let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
-    let shared = Mutex::new((chi, bad));
-    progress.start(VERTICES, blocks);
-    let parts: Vec<(TopologyCounts, Vec<(u32, u32)>, Vec<[u32; 2]>)> = std::thread::scope(|s| {
+    let fail = |e: PipelineError| {
+        failed.lock().unwrap().get_or_insert(e);
+        schedule.lock().unwrap().stop = true;
+        wake.notify_all();
+    };
+    progress.start(if chunks > 0 { FACES } else { VERTICES }, n + judge.nv as u64);
+    let parts: Vec<Judged> = std::thread::scope(|s| {
         let workers: Vec<_> = (0..threads)
-            .map(|_| {
-                let (next, stop, failed, shared) = (&next, &stop, &failed, &shared);
+            .map(|w| {
+                let (schedule, wake, fail) = (&schedule, &wake, &fail);
                 s.spawn(move || {
-                    let mut counts = TopologyCounts::default();
-                    let mut simple = Vec::new();
-                    let mut listed: Vec<[u32; 2]> = Vec::new();
-                    let mut scratch = VertexScratch::default();
-                    let (mut start, mut fans, mut records, mut deltas): (Vec<u32>, Vec<(u32, u32)>, Vec<Corner>, Vec<(u32, i64, bool)>) = Default::default();
+                    let mut j = Judged::default();
                     loop {
-                        let blk = next.fetch_add(1, Ordering::Relaxed) as u64;
-                        if blk >= blocks || stop.load(Ordering::Relaxed) {
-                            return (counts, simple, listed);
-                        }
-                        let v0 = (blk * block_vertices) as u32;
-                        let v1 = ((blk + 1) * block_vertices).min(nv as u64) as u32;
-                        let n = (v1 - v0) as usize;
-                        records.clear();
-                        for set in sets {
-                            let bucket = set.lock().unwrap().take(blk as usize);
-                            if let Err(e) = bucket.read(|batch| records.extend_from_slice(batch)) {
-                                failed.lock().unwrap().get_or_insert(e.into());
-                                stop.store(true, Ordering::Relaxed);
-                                return (counts, simple, listed);
+                        let task = {
+                            let mut s = schedule.lock().unwrap();
+                            loop {
+                                if s.stop {
+                                    return j;
+                                }
+                                if s.handed < s.released {
+                                    s.handed += 1;
+                                    break Task::Block(s.order[s.handed - 1] as u64);
+                                }
+                                if s.next_chunk < chunks {
+                                    s.next_chunk += 1;
+                                    break Task::Chunk(s.next_chunk - 1);
+                                }
+                                if s.handed == s.order.len() {
+                                    return j;
+                                }
+                                s = wake.wait(s).unwrap();
                             }
-                        }
-                        start.clear();
-                        start.resize(n + 1, 0);
-                        for c in &records {
-                            start[(c.v - v0) as usize + 1] += 1;
-                        }
-                        for i in 0..n {
-                            start[i + 1] += start[i];
-                        }
-                        fans.clear();
-                        fans.resize(records.len(), (0, 0));
-                        let mut at = start.clone();
-                        for c in &records {
-                            let s = &mut at[(c.v - v0) as usize];
-                            fans[*s as usize] = (c.a, c.b);
-                            *s += 1;
-                        }
-                        deltas.clear();
-                        for i in 0..n {
-                            let (s, e) = (start[i] as usize, start[i + 1] as usize);
-                            if s == e {
-                                continue;
+                        };
+                        match task {
+                            Task::Chunk(c) => {
+                                let records = records.expect("chunks only with records");
+                                let (a, b) = (c as u64 * FACE_CHUNK as u64, ((c + 1) as u64 * FACE_CHUNK as u64).min(n));
+                                let mut err = None;
+                                let visited = {
+                                    let mut out = sinks[w].lock().unwrap();
+                                    records.visit_indices(a, b, |_, t| {
+                                        if err.is_none() {
+                                            err = out.face(t.map(id)).err();
+                                        }
+                                    })
+                                };
+                                if let Some(e) = crate::passes::chunk_outcome(visited, err, progress) {
+                                    fail(e);
+                                    return j;
+                                }
+                                progress.advance(b - a);
+                                let mut s = schedule.lock().unwrap();
+                                s.done[c] = true;
+                                let mut released = false;
+                                while s.prefix < chunks && s.done[s.prefix] {
+                                    s.prefix += 1;
+                                }
+                                while s.released < s.order.len() && (last_chunk[s.order[s.released] as usize] as usize) < s.prefix {
+                                    s.released += 1;
+                                    released = true;
+                                }
+                                if released || s.next_chunk == chunks {
+                                    wake.notify_all();
+                                }
                             }
-                            let v = v0 + i as u32;
-                            let t = scan_vertex(v, &fans[s..e], &mut scratch, &mut counts);
-                            deltas.push((labels[v as usize], t.faces_here as i64 - t.edges_here as i64, t.bad));
-                            if let Some(w) = t.simple_next {
-                                simple.push((v, w));
+                            Task::Block(blk) => {
+                                if let Err(e) = judge.block(blk, sinks, &mut j) {
+                                    fail(e);
+                                    return j;
+                                }
+                                let v1 = ((blk + 1) * judge.block_vertices).min(judge.nv as u64);
+                                progress.advance(v1 - blk * judge.block_vertices);
+                                if progress.cancelled() {
+                                    fail(PipelineError::Cancelled);
+                                    return j;
+                                }
                             }
-                            // Each worker keeps its smallest; the caller
-                            // sorts and keeps the smallest overall.
-                            if listed.len() < list_boundary {
-                                listed.extend(scratch.boundary_out.iter().map(|&w| [v, w]));
-                            }
-                        }
-                        {
-                            let mut g = shared.lock().unwrap();
-                            for &(l, d, b) in &deltas {
-                                g.0[l as usize] += d;
-                                g.1[l as usize] |= b;
-                            }
-                        }
-                        progress.advance(1);
-                        if progress.cancelled() {
-                            failed.lock().unwrap().get_or_insert(PipelineError::Cancelled);
-                            stop.store(true, Ordering::Relaxed);
-                            return (counts, simple, listed);
                         }
                     }
                 })
@@ -577,10 +735,10 @@ fn vertices(
     let mut counts = TopologyCounts::default();
     let mut simple = Vec::new();
     let mut listed = Vec::new();
-    for (c, s, l) in parts {
-        counts.add(&c);
-        simple.extend(s);
-        listed.extend(l);
+    for j in parts {
+        counts.add(&j.counts);
+        simple.extend(j.simple);
+        listed.extend(j.listed);
     }
     Ok((counts, simple, listed))
 }

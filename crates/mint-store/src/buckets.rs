@@ -10,6 +10,8 @@
 //! allocated, not just what is used. [`Buckets::finish`] turns the writer into a
 //! [`BucketReader`], which hands each bucket's records back in push order,
 //! in batches, so a bucket larger than memory is never held whole.
+//! [`Buckets::take`] hands one finished bucket out while the others are
+//! still being written, which frees its share of the budget.
 //!
 //! Files are plain concatenations of `R::SIZE`-byte records with no header;
 //! they live only for one run, inside a directory the caller owns and
@@ -41,6 +43,9 @@ pub struct Buckets<R: Record> {
     /// Per bucket: its full pages, then the page being filled.
     buffers: Vec<Vec<Vec<R>>>,
     spilled: Vec<u64>,
+    /// Per bucket: how many times it was taken (part of its file's name,
+    /// so that a taken file is never appended to).
+    taken: Vec<u32>,
     /// Records per page (pages are allocated whole).
     page: usize,
     /// Records the allocated pages have room for, in all.
@@ -65,6 +70,7 @@ impl<R: Record> Buckets<R> {
             name: name.to_string(),
             buffers: (0..n).map(|_| Vec::new()).collect(),
             spilled: vec![0; n],
+            taken: vec![0; n],
             page,
             held: 0,
             limit,
@@ -84,7 +90,19 @@ impl<R: Record> Buckets<R> {
     }
 
     fn path(&self, b: usize) -> PathBuf {
-        self.dir.join(format!("{}-{b:05}.bin", self.name))
+        bucket_path(&self.dir, &self.name, b, self.taken[b])
+    }
+
+    /// Takes bucket `b`'s records so far out of the writer, to be read
+    /// now (on any thread), and frees their memory from the budget. Later
+    /// pushes to `b` start the bucket afresh.
+    pub fn take(&mut self, b: usize) -> Bucket<R> {
+        let file = (self.spilled[b] > 0).then(|| (self.path(b), self.spilled[b]));
+        self.spilled[b] = 0;
+        self.taken[b] += 1;
+        let memory = std::mem::take(&mut self.buffers[b]);
+        self.held -= memory.len() * self.page;
+        Bucket { file, memory }
     }
 
     /// Appends `r` to bucket `b`.
@@ -142,7 +160,19 @@ impl<R: Record> Buckets<R> {
 
     /// Stops writing; the records can now be read back bucket by bucket.
     pub fn finish(self) -> BucketReader<R> {
-        BucketReader { dir: self.dir, name: self.name, buffers: self.buffers, spilled: self.spilled, bytes_spilled: self.bytes_spilled }
+        BucketReader { dir: self.dir, name: self.name, buffers: self.buffers, spilled: self.spilled, taken: self.taken, bytes_spilled: self.bytes_spilled }
+    }
+
+    /// Bytes written to disk so far.
+    pub fn bytes_spilled(&self) -> u64 {
+        self.bytes_spilled
+    }
+}
+
+fn bucket_path(dir: &Path, name: &str, b: usize, taken: u32) -> PathBuf {
+    match taken {
+        0 => dir.join(format!("{name}-{b:05}.bin")),
+        t => dir.join(format!("{name}-{b:05}.{t}.bin")),
     }
 }
 
@@ -152,6 +182,7 @@ pub struct BucketReader<R: Record> {
     name: String,
     buffers: Vec<Vec<Vec<R>>>,
     spilled: Vec<u64>,
+    taken: Vec<u32>,
     bytes_spilled: u64,
 }
 
@@ -186,7 +217,7 @@ impl<R: Record> BucketReader<R> {
     /// Takes bucket `b` out of the reader, to be read elsewhere (another
     /// thread); the reader keeps an empty bucket in its place.
     pub fn take(&mut self, b: usize) -> Bucket<R> {
-        let file = (self.spilled[b] > 0).then(|| (self.dir.join(format!("{}-{b:05}.bin", self.name)), self.spilled[b]));
+        let file = (self.spilled[b] > 0).then(|| (bucket_path(&self.dir, &self.name, b, self.taken[b]), self.spilled[b]));
         self.spilled[b] = 0;
         Bucket { file, memory: std::mem::take(&mut self.buffers[b]) }
     }
@@ -278,6 +309,33 @@ mod tests {
             assert!(b.windows(2).all(|w| w[0].1 < w[1].1), "push order is kept");
         }
         assert_eq!(mem.iter().map(Vec::len).sum::<usize>(), 50_000);
+    }
+
+    #[test]
+    fn a_bucket_taken_while_writing_holds_what_was_pushed_and_frees_its_budget() {
+        let dir = tempfile::tempdir().unwrap();
+        // A budget of a few pages: bucket 0 spills, is taken, then refills.
+        let mut w = Buckets::<Pair>::new(dir.path(), "t", 3, 24 * 1024);
+        let mut first = Vec::new();
+        for i in 0..20_000u64 {
+            w.push((i % 3) as usize, Pair(7, i)).unwrap();
+        }
+        assert!(w.bytes_spilled() > 0);
+        w.take(0).read(|batch| first.extend_from_slice(batch)).unwrap();
+        assert_eq!(first, (0..20_000).filter(|i| i % 3 == 0).map(|i| Pair(7, i)).collect::<Vec<_>>());
+        for i in 20_000..40_000u64 {
+            w.push((i % 3) as usize, Pair(8, i)).unwrap();
+        }
+        let mut r = w.finish();
+        let mut again = Vec::new();
+        r.read(0, |batch| again.extend_from_slice(batch)).unwrap();
+        assert_eq!(again, (20_000..40_000).filter(|i| i % 3 == 0).map(|i| Pair(8, i)).collect::<Vec<_>>());
+        for b in 1..3 {
+            let mut v = Vec::new();
+            r.read(b, |batch| v.extend_from_slice(batch)).unwrap();
+            assert_eq!(v.len(), (0..40_000).filter(|i| i % 3 == b as u64).count());
+        }
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "every spill file is removed once read");
     }
 
     #[test]
