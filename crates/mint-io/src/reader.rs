@@ -160,6 +160,13 @@ impl VertexPositions {
         self.0.get(i)
     }
 
+    /// Asks the CPU to start loading vertex `i`'s position (a hint, for
+    /// gathers in no spatial order; out-of-range indices are ignored).
+    #[inline(always)]
+    pub fn prefetch(&self, i: u32) {
+        self.0.prefetch(i)
+    }
+
     /// True when every coordinate is stored as `f32` or a narrower type, so
     /// that a copy kept as `f32` gives back the same `f64` values.
     pub fn exact_in_f32(&self) -> bool {

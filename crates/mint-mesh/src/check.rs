@@ -285,6 +285,18 @@ impl Bbox {
             hi[k] = hi[k].max(p[k]);
         }
     }
+
+    /// Adds every position another box has seen.
+    pub fn merge(&mut self, o: &Bbox) {
+        self.non_finite += o.non_finite;
+        if let (Some(lo), Some(hi)) = (o.min, o.max) {
+            let (mut a, mut b) = (*self, *self);
+            a.add(lo);
+            b.add(hi);
+            self.min = a.min;
+            self.max = b.max;
+        }
+    }
 }
 
 fn bounding_box(positions: &[[f64; 3]]) -> Bbox {

@@ -101,15 +101,17 @@ impl Record for Corner {
     }
 }
 
-/// A position's hash (of its weld key) and its vertex.
+/// A position's hash (the high half of the hash of its weld key; the low
+/// bits chose its bucket) and its vertex. Equal positions have equal
+/// hashes; equal hashes are then compared by position.
 #[derive(Clone, Copy)]
 struct Hashed {
-    h: u64,
+    h: u32,
     v: u32,
 }
 
 impl Record for Hashed {
-    const SIZE: usize = 12;
+    const SIZE: usize = 8;
     #[inline]
     fn put(&self, out: &mut Vec<u8>) {
         out.extend_from_slice(&self.h.to_le_bytes());
@@ -117,7 +119,7 @@ impl Record for Hashed {
     }
     #[inline]
     fn get(b: &[u8]) -> Self {
-        Hashed { h: u64::from_le_bytes(b[..8].try_into().unwrap()), v: u32::from_le_bytes(b[8..12].try_into().unwrap()) }
+        Hashed { h: u32::from_le_bytes(b[..4].try_into().unwrap()), v: u32::from_le_bytes(b[4..8].try_into().unwrap()) }
     }
 }
 
@@ -193,15 +195,9 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
             eprintln!("check: {what} at {:.2}s", t0.elapsed().as_secs_f64());
         }
     };
-    // Bounding box over every position (welding never changes it).
-    let mut bbox = Bbox::empty();
-    for i in 0..nv {
-        bbox.add(positions.get(i));
-    }
-
-    lap("bbox");
-    // 1. Weld.
-    let (canonical, welded) = if opts.weld { weld(&positions, dir, budget / 2, opts.threads.max(1), progress, &mut stats)? } else { (None, 0) };
+    // 1. Bounding box over every position (welding never changes it), and
+    // the weld.
+    let (bbox, canonical, welded) = positions_pass(&positions, opts.weld, dir, budget, opts.threads.max(1), progress, &mut stats)?;
 
     lap("weld");
     // 2. Faces, first pass: components, geometry, and for each block of
@@ -366,6 +362,22 @@ struct Links {
     last_chunk: Vec<u32>,
 }
 
+/// Faces to look ahead when prefetching for vertices in no order.
+const AHEAD: usize = 16;
+
+/// Asks the CPU to start loading `parent[v]`.
+#[inline(always)]
+fn prefetch(parent: &[u32], v: u32) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(p) = parent.get(v as usize) {
+        // SAFETY: a prefetch of a valid reference reads nothing and
+        // cannot fault.
+        unsafe { std::arch::x86_64::_mm_prefetch(p as *const u32 as *const i8, std::arch::x86_64::_MM_HINT_T0) }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (parent, v);
+}
+
 /// A vertex block no face touches.
 const UNTOUCHED: u32 = u32::MAX;
 
@@ -413,15 +425,24 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
             let mut referenced = Bits::new(nv as usize);
             let mut has_collapsed = Bits::new(nv as usize);
             let mut last_chunk = vec![UNTOUCHED; blocks as usize];
+            let mut faces: Vec<[u32; 3]> = Vec::with_capacity(FACE_CHUNK);
             for c in 0..chunks {
                 let (a, b) = (c as u64 * FACE_CHUNK as u64, ((c + 1) as u64 * FACE_CHUNK as u64).min(n));
-                records.visit_indices(a, b, |_, t| {
-                    let f = t.map(id);
+                faces.clear();
+                records.visit_indices(a, b, |_, t| faces.push(t.map(id)))?;
+                for (k, &f) in faces.iter().enumerate() {
+                    // Vertices in no order: start loading the parents of a
+                    // face some way ahead.
+                    if let Some(g) = faces.get(k + AHEAD) {
+                        for &v in g {
+                            prefetch(&parent, v);
+                        }
+                    }
                     link(&mut parent, &mut referenced, &mut has_collapsed, f);
                     for v in f {
                         last_chunk[(v >> block_shift) as usize] = c as u32;
                     }
-                })?;
+                }
                 progress.advance(b - a);
                 if stop.load(Ordering::Relaxed) {
                     break;
@@ -434,25 +455,36 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
         });
         for _ in 0..threads {
             let (next, stop, failed, geoms) = (&next, &stop, &failed, &geoms);
-            s.spawn(move || loop {
+            s.spawn(move || {
+              let mut faces: Vec<[u32; 3]> = Vec::with_capacity(FACE_CHUNK);
+              loop {
                 let c = next.fetch_add(1, Ordering::Relaxed);
                 if c >= chunks || stop.load(Ordering::Relaxed) {
                     return;
                 }
                 let (a, b) = (c as u64 * FACE_CHUNK as u64, ((c + 1) as u64 * FACE_CHUNK as u64).min(n));
                 let mut g = FaceGeom::default();
-                let visited = records.visit_indices(a, b, |_, t| {
-                    let f = t.map(id);
-                    // The welded mesh's positions: each vertex's canonical
-                    // one (-0.0 may have become 0.0).
-                    g.add(&f, f.map(|v| positions.get(v)));
-                });
+                faces.clear();
+                let visited = records.visit_indices(a, b, |_, t| faces.push(t.map(id)));
+                if visited.is_ok() {
+                    for (k, f) in faces.iter().enumerate() {
+                        if let Some(h) = faces.get(k + AHEAD) {
+                            for &v in h {
+                                positions.prefetch(v);
+                            }
+                        }
+                        // The welded mesh's positions: each vertex's
+                        // canonical one (-0.0 may have become 0.0).
+                        g.add(f, f.map(|v| positions.get(v)));
+                    }
+                }
                 if let Some(e) = crate::passes::chunk_outcome(visited, None, progress) {
                     failed.lock().unwrap().get_or_insert(e);
                     stop.store(true, Ordering::Relaxed);
                     return;
                 }
                 geoms.lock().unwrap()[c] = g;
+              }
             });
         }
         let uf = uf.join().expect("union-find panicked");
@@ -743,38 +775,59 @@ fn corners_and_vertices<I: Fn(u32) -> u32 + Sync>(
     Ok((counts, simple, listed))
 }
 
-/// Welds by position: each vertex's smallest index at its exact position
-/// (finite positions only), or `None` when nothing welds; and how many
-/// vertices were merged away. Workers hash their share of the vertices into
-/// buckets of `(hash, vertex)`; then each bucket is sorted by hash, and
-/// only vertices whose hashes collide are compared by position.
-fn weld(positions: &VertexPositions, dir: &Path, budget: u64, threads: usize, progress: &dyn Progress, stats: &mut CheckStats) -> Result<(Option<Vec<u32>>, u64), PipelineError> {
+/// The pass over the positions: their bounding box (every finite one)
+/// and, when `hash` (welding), each vertex's smallest index at its exact
+/// position (finite positions only), or `None` when nothing welds, and how
+/// many vertices were merged away. Workers take a share of the vertices
+/// each (boxes merged: min and max do not depend on the split) and hash
+/// positions into small buckets of `(hash, vertex)`; then each bucket's
+/// hashes go into a table that fits the caches, and only vertices whose
+/// hashes collide are compared by position.
+fn positions_pass(positions: &VertexPositions, hash: bool, dir: &Path, budget: u64, threads: usize, progress: &dyn Progress, stats: &mut CheckStats) -> Result<(Bbox, Option<Vec<u32>>, u64), PipelineError> {
     let nv = positions.len();
-    // Buckets that each sort within an eighth of the budget.
-    let nb = ((nv as u64 * 12).div_ceil((budget / 8).max(1))).clamp(1, 4096) as usize;
+    // Buckets that each fit a sixteenth of the budget (a power of two, at
+    // most 4096; few, so that spilling writes large pieces). The buckets
+    // hold 5/8 of the budget, and each worker at most two buckets' worth.
+    let nb = (nv as u64 * 8).div_ceil((budget / 16).max(1)).clamp(1, 4096).next_power_of_two() as usize;
     progress.start(WELD, nv as u64);
     let per = nv.div_ceil(threads as u32).max(1);
-    let sets: Vec<Result<mint_store::BucketReader<Hashed>, StoreError>> = std::thread::scope(|s| {
+    type Part = Result<(Bbox, mint_store::BucketReader<Hashed>), StoreError>;
+    let parts: Vec<Part> = std::thread::scope(|s| {
         let workers: Vec<_> = (0..threads as u32)
             .map(|t| {
                 s.spawn(move || {
-                    let mut keyed = Buckets::<Hashed>::new(dir, &format!("weld-{t}"), nb, budget / 2 / threads as u64);
-                    for v in (t * per).min(nv)..((t + 1) * per).min(nv) {
+                    let mut bbox = Bbox::empty();
+                    let mut keyed = Buckets::<Hashed>::new(dir, &format!("weld-{t}"), if hash { nb } else { 1 }, budget / 8 * 5 / threads as u64);
+                    let (v0, v1) = ((t * per).min(nv), ((t + 1) * per).min(nv));
+                    for v in v0..v1 {
                         let p = positions.get(v);
-                        if p.iter().all(|c| c.is_finite()) {
+                        bbox.add(p);
+                        if hash && p.iter().all(|c| c.is_finite()) {
                             let h = mix(&position_key(&p));
-                            keyed.push((h % nb as u64) as usize, Hashed { h, v })?;
+                            keyed.push(h as usize & (nb - 1), Hashed { h: (h >> 32) as u32, v })?;
+                        }
+                        if (v - v0) % (1 << 20) == 0 {
+                            progress.advance(((v1 - v) as u64).min(1 << 20));
                         }
                     }
-                    Ok(keyed.finish())
+                    Ok((bbox, keyed.finish()))
                 })
             })
             .collect();
         workers.into_iter().map(|w| w.join().expect("weld worker panicked")).collect()
     });
-    let mut sets: Vec<Mutex<mint_store::BucketReader<Hashed>>> = sets.into_iter().map(|r| r.map(Mutex::new)).collect::<Result<_, _>>()?;
+    let mut bbox = Bbox::empty();
+    let mut sets = Vec::new();
+    for part in parts {
+        let (b, set) = part?;
+        bbox.merge(&b);
+        stats.bytes_spilled += set.bytes_spilled();
+        sets.push(Mutex::new(set));
+    }
     progress.finish();
-    stats.bytes_spilled += sets.iter_mut().map(|m| m.get_mut().unwrap().bytes_spilled()).sum::<u64>();
+    if !hash {
+        return Ok((bbox, None, 0));
+    }
     let next = AtomicUsize::new(0);
     let merges: Vec<Result<Vec<(u32, u32)>, StoreError>> = std::thread::scope(|s| {
         let workers: Vec<_> = (0..threads)
@@ -783,7 +836,11 @@ fn weld(positions: &VertexPositions, dir: &Path, budget: u64, threads: usize, pr
                 s.spawn(move || {
                     let mut merges = Vec::new();
                     let mut recs: Vec<Hashed> = Vec::new();
+                    let mut table: Vec<u32> = Vec::new();
+                    let mut colliding: Vec<u32> = Vec::new();
+                    let mut group: Vec<Hashed> = Vec::new();
                     let mut run: Vec<([u64; 3], u32)> = Vec::new();
+                    let (mut sorted, mut start): (Vec<Hashed>, Vec<usize>) = Default::default();
                     loop {
                         let b = next.fetch_add(1, Ordering::Relaxed);
                         if b >= nb {
@@ -794,17 +851,67 @@ fn weld(positions: &VertexPositions, dir: &Path, budget: u64, threads: usize, pr
                             let bucket = set.lock().unwrap().take(b);
                             bucket.read(|batch| recs.extend_from_slice(batch))?;
                         }
-                        recs.sort_unstable_by_key(|r| (r.h, r.v));
-                        let mut g = 0;
-                        while g < recs.len() {
-                            let mut h = g + 1;
-                            while h < recs.len() && recs[h].h == recs[g].h {
-                                h += 1;
+                        // Split by 8 more bits of the hash (a counting
+                        // sort) into parts of a few thousand records, then
+                        // find the hashes seen twice in each part with an
+                        // open-addressing table of record numbers (+1) that
+                        // stays in the caches.
+                        let part = |h: u32| (h >> 8) as usize & 255;
+                        start.clear();
+                        start.resize(257, 0);
+                        for r in &recs {
+                            start[part(r.h) + 1] += 1;
+                        }
+                        for i in 0..256 {
+                            start[i + 1] += start[i];
+                        }
+                        sorted.clear();
+                        sorted.resize(recs.len(), Hashed { h: 0, v: 0 });
+                        let mut at = start.clone();
+                        for r in &recs {
+                            let k = &mut at[part(r.h)];
+                            sorted[*k] = *r;
+                            *k += 1;
+                        }
+                        for i in 0..256 {
+                            let these = &sorted[start[i]..start[i + 1]];
+                            let bits = (2 * these.len()).next_power_of_two().max(16).trailing_zeros();
+                            table.clear();
+                            table.resize(1 << bits, 0);
+                            colliding.clear();
+                            for (j, r) in these.iter().enumerate() {
+                                let mut slot = (r.h.wrapping_mul(0x9E37_79B9) >> (32 - bits)) as usize;
+                                loop {
+                                    let t = table[slot];
+                                    if t == 0 {
+                                        table[slot] = j as u32 + 1;
+                                        break;
+                                    }
+                                    if these[t as usize - 1].h == r.h {
+                                        colliding.push(r.h);
+                                        break;
+                                    }
+                                    slot = (slot + 1) & ((1 << bits) - 1);
+                                }
                             }
-                            if h - g > 1 {
-                                // Equal hashes: compare the positions themselves.
+                            if colliding.is_empty() {
+                                continue;
+                            }
+                            // Equal hashes (in this part): compare the
+                            // positions themselves.
+                            colliding.sort_unstable();
+                            colliding.dedup();
+                            group.clear();
+                            group.extend(these.iter().filter(|r| colliding.binary_search(&r.h).is_ok()));
+                            group.sort_unstable_by_key(|r| (r.h, r.v));
+                            let mut g = 0;
+                            while g < group.len() {
+                                let mut h = g + 1;
+                                while h < group.len() && group[h].h == group[g].h {
+                                    h += 1;
+                                }
                                 run.clear();
-                                run.extend(recs[g..h].iter().map(|r| (position_key(&positions.get(r.v)), r.v)));
+                                run.extend(group[g..h].iter().map(|r| (position_key(&positions.get(r.v)), r.v)));
                                 run.sort_unstable();
                                 let mut i = 0;
                                 while i < run.len() {
@@ -815,8 +922,8 @@ fn weld(positions: &VertexPositions, dir: &Path, budget: u64, threads: usize, pr
                                     }
                                     i = j;
                                 }
+                                g = h;
                             }
-                            g = h;
                         }
                     }
                 })
@@ -832,5 +939,5 @@ fn weld(positions: &VertexPositions, dir: &Path, budget: u64, threads: usize, pr
             merged += 1;
         }
     }
-    Ok((canonical, merged))
+    Ok((bbox, canonical, merged))
 }
