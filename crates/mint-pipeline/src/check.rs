@@ -210,9 +210,14 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     let blocks = (nv as u64).div_ceil(block_vertices).max(1);
     stats.vertex_blocks = blocks;
     let id = |v: u32| canonical.as_ref().map_or(v, |c: &Vec<u32>| c[v as usize]);
+    // What the buckets may hold: the budget less what is kept per vertex
+    // from here on (union-find parents, two bit sets, the weld's map), and
+    // half of that, since judging a block and the allocator need room too.
+    let per_vertex = nv as u64 * 4 + nv as u64 / 4 + canonical.as_ref().map_or(0, |_| nv as u64 * 4);
+    let buckets = (budget.saturating_sub(per_vertex) / 2).max(8 << 20);
     let sink = |n: usize, t: usize| Sink {
-        corners: Buckets::new(dir, &format!("corners-{t}"), blocks as usize, budget / 2 / n as u64),
-        collapsed: Buckets::new(dir, &format!("collapsed-{t}"), 64, budget / 16 / n as u64),
+        corners: Buckets::new(dir, &format!("corners-{t}"), blocks as usize, buckets / n as u64),
+        collapsed: Buckets::new(dir, &format!("collapsed-{t}"), 64, buckets / 8 / n as u64),
         block_shift,
     };
     let records = reader.triangle_records()?;
