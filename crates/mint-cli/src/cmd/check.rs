@@ -64,7 +64,7 @@ pub(crate) fn cmd_check(a: CheckArgs) -> Result<()> {
         None
     };
     if !a.json && !a.quiet && stats.bytes_spilled > 0 {
-        eprintln!("  ({} of corners spilled to disk to stay within --mem)", human_bytes(stats.bytes_spilled));
+        eprintln!("  ({} of positions and corners spilled to disk to stay within --mem)", human_bytes(stats.bytes_spilled));
     }
     if a.json {
         let mut v = serde_json::to_value(&r)?;
