@@ -214,7 +214,7 @@ impl Positions {
     }
 
     /// Vertex `i`. Panics if `i >= count()`.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn get(&self, i: u32) -> [f64; 3] {
         assert!(i < self.count, "vertex index {i} out of range (vertex count {})", self.count);
         match self.kind {

@@ -155,7 +155,7 @@ impl VertexPositions {
         self.0.count() == 0
     }
     /// Position of vertex `i` (panics if `i >= len()`).
-    #[inline]
+    #[inline(always)]
     pub fn get(&self, i: u32) -> [f64; 3] {
         self.0.get(i)
     }

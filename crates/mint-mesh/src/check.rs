@@ -78,7 +78,6 @@
 //! Non-goals: no geometric self-intersection test, no repair.
 
 use crate::error::MeshError;
-use glam::DVec3;
 use mint_core::TriMesh;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -350,17 +349,22 @@ pub struct FaceGeom {
 
 impl FaceGeom {
     /// Adds one face: its indices (after welding) and corner positions.
-    #[inline]
+    #[inline(always)]
     pub fn add(&mut self, f: &[u32; 3], [a, b, c]: [[f64; 3]; 3]) {
         if is_collapsed(f) {
             self.collapsed += 1;
             self.degenerate += 1;
             return;
         }
-        let (pa, pb, pc) = (DVec3::from(a), DVec3::from(b), DVec3::from(c));
-        self.area2 += (pb - pa).cross(pc - pa).length();
-        self.volume6 += pa.dot(pb.cross(pc));
-        if !surely_not_collinear(a, b, c) && collinear_exact(a, b, c) {
+        // glam's cross, dot and length written out, operation for
+        // operation (the same bits), with the edges shared by the filter.
+        let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+        let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+        let n = [u[1] * v[2] - v[1] * u[2], u[2] * v[0] - v[2] * u[0], u[0] * v[1] - v[0] * u[1]];
+        self.area2 += ((n[0] * n[0]) + (n[1] * n[1]) + (n[2] * n[2])).sqrt();
+        let m = [b[1] * c[2] - c[1] * b[2], b[2] * c[0] - c[2] * b[0], b[0] * c[1] - c[0] * b[1]];
+        self.volume6 += (a[0] * m[0]) + (a[1] * m[1]) + (a[2] * m[2]);
+        if !surely_not_collinear(u, v) && collinear_exact(a, b, c) {
             self.degenerate += 1;
         }
     }
@@ -386,16 +390,15 @@ fn face_geometry(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> FaceGeom {
     parts.iter().fold(FaceGeom::default(), |acc, g| acc.then(g))
 }
 
-/// A filter before [`collinear_exact`]: true when one component of
-/// `(b-a)×(c-a)`, computed in floating point, is certainly not zero. Each
+/// A filter before [`collinear_exact`], given the edges `u = b-a` and
+/// `v = c-a`: true when one component of `u×v`, computed in floating point, is certainly not zero. Each
 /// component is a 2D orientation `l - r` of products of differences;
 /// Shewchuk's bound on its rounding error is about `3.3e-16 * (|l| + |r|)`,
 /// so a computed value beyond three times that cannot come from zero
 /// (checked only well above the subnormal range, and never for NaN). Only
 /// the rest (near-degenerate faces) pay for the exact test.
-#[inline]
-fn surely_not_collinear(a: [f64; 3], b: [f64; 3], c: [f64; 3]) -> bool {
-    let (u, v) = ((DVec3::from(b) - DVec3::from(a)).to_array(), (DVec3::from(c) - DVec3::from(a)).to_array());
+#[inline(always)]
+fn surely_not_collinear(u: [f64; 3], v: [f64; 3]) -> bool {
     let orient = |i: usize, j: usize| {
         let (l, r) = (u[i] * v[j], u[j] * v[i]);
         // Far from underflow, where the relative bound holds.

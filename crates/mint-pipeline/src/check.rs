@@ -461,35 +461,23 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
         for _ in 0..threads {
             let (next, stop, failed, geoms) = (&next, &stop, &failed, &geoms);
             s.spawn(move || {
-              let mut faces: Vec<[u32; 3]> = Vec::with_capacity(FACE_CHUNK);
-              loop {
-                let c = next.fetch_add(1, Ordering::Relaxed);
-                if c >= chunks || stop.load(Ordering::Relaxed) {
-                    return;
-                }
-                let (a, b) = (c as u64 * FACE_CHUNK as u64, ((c + 1) as u64 * FACE_CHUNK as u64).min(n));
-                let mut g = FaceGeom::default();
-                faces.clear();
-                let visited = records.visit_indices(a, b, |_, t| faces.push(t.map(id)));
-                if visited.is_ok() {
-                    for (k, f) in faces.iter().enumerate() {
-                        if let Some(h) = faces.get(k + AHEAD) {
-                            for &v in h {
-                                positions.prefetch(v);
-                            }
-                        }
-                        // The welded mesh's positions: each vertex's
-                        // canonical one (-0.0 may have become 0.0).
-                        g.add(f, f.map(|v| positions.get(v)));
+                let mut faces: Vec<[u32; 3]> = Vec::with_capacity(FACE_CHUNK);
+                loop {
+                    let c = next.fetch_add(1, Ordering::Relaxed);
+                    if c >= chunks || stop.load(Ordering::Relaxed) {
+                        return;
                     }
+                    let (a, b) = (c as u64 * FACE_CHUNK as u64, ((c + 1) as u64 * FACE_CHUNK as u64).min(n));
+                    faces.clear();
+                    let visited = records.visit_indices(a, b, |_, t| faces.push(t.map(id)));
+                    let g = if visited.is_ok() { chunk_geometry(&faces, positions) } else { FaceGeom::default() };
+                    if let Some(e) = crate::passes::chunk_outcome(visited, None, progress) {
+                        failed.lock().unwrap().get_or_insert(e);
+                        stop.store(true, Ordering::Relaxed);
+                        return;
+                    }
+                    geoms.lock().unwrap()[c] = g;
                 }
-                if let Some(e) = crate::passes::chunk_outcome(visited, None, progress) {
-                    failed.lock().unwrap().get_or_insert(e);
-                    stop.store(true, Ordering::Relaxed);
-                    return;
-                }
-                geoms.lock().unwrap()[c] = g;
-              }
             });
         }
         let uf = uf.join().expect("union-find panicked");
@@ -505,6 +493,26 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
     progress.finish();
     let geom = geoms.into_inner().unwrap().iter().fold(FaceGeom::default(), |acc, g| acc.then(g));
     Ok(Links { parent, referenced, has_collapsed, geom, nfaces: n, last_chunk })
+}
+
+/// The geometry sums of one chunk of faces (welded indices), at the
+/// welded mesh's positions: each vertex's canonical one (-0.0 may have
+/// become 0.0).
+#[inline(never)]
+fn chunk_geometry(faces: &[[u32; 3]], positions: &VertexPositions) -> FaceGeom {
+    let mut g = FaceGeom::default();
+    for (k, f) in faces.iter().enumerate() {
+        if let Some(h) = faces.get(k + AHEAD) {
+            for &v in h {
+                positions.prefetch(v);
+            }
+        }
+        // Three calls, not `f.map(..)`: the array map went through the
+        // stack, and its stores and loads of mixed widths stalled.
+        let (a, b, c) = (positions.get(f[0]), positions.get(f[1]), positions.get(f[2]));
+        g.add(f, [a, b, c]);
+    }
+    g
 }
 
 /// The faces of any file, streamed in order by one thread: the first pass
