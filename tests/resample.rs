@@ -179,13 +179,22 @@ fn resample_under_limit(faces: u64) {
     let m = load(&out);
     let r = mint_mesh::check(&m.positions, &m.faces);
     assert!(r.watertight && r.genus_total == 0, "{r:?}");
-    // The check of the input stays within --mem (its corners spill to disk)
-    // under half that limit.
-    let o = std::process::Command::new("prlimit").arg("--data=134217728").arg(mint_bin()).args(["check", &input.display().to_string(), "--json", "--mem", "48M"]).output().unwrap();
-    assert!(o.status.success(), "check under 128 MiB failed: {}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!((v["watertight"].as_bool(), v["faces"].as_u64()), (Some(true), Some(faces)));
-    assert!(v["spilled_bytes"].as_u64().unwrap() > 0, "the check was meant to spill under --mem 48M");
+    // The check of the input stays within --mem under half that limit: in
+    // generation order its corners are judged as they come, and with
+    // vertices and faces shuffled they spill to disk.
+    let shuffled = dir.path().join("shuffled.ply");
+    let st = std::process::Command::new(mint_bin()).args(["gen", "sphere"]).arg(&shuffled).args(["--faces", &faces.to_string(), "--order", "shuffled"]).status().unwrap();
+    assert!(st.success());
+    for (file, must_spill) in [(&input, false), (&shuffled, true)] {
+        let o = std::process::Command::new("prlimit").arg("--data=134217728").arg(mint_bin()).args(["check", &file.display().to_string(), "--json", "--mem", "48M"]).output().unwrap();
+        assert!(o.status.success(), "check under 128 MiB failed: {}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!((v["watertight"].as_bool(), v["faces"].as_u64()), (Some(true), Some(faces)));
+        if must_spill {
+            assert!(v["spilled_bytes"].as_u64().unwrap() > 0, "the shuffled check was meant to spill under --mem 48M");
+        }
+    }
+    std::fs::remove_file(&shuffled).unwrap();
     // A picture of the input streams through the same limit.
     let png = dir.path().join("in.png");
     let o = std::process::Command::new("prlimit").arg("--data=268435456").arg(mint_bin()).arg("render").arg(&input).arg(&png).args(["--json", "--quiet"]).output().unwrap();
