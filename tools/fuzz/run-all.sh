@@ -8,6 +8,11 @@ SECS=${1:-300}
 shift || true
 TARGETS=${*:-"read_ply read_obj read_stl read_off read_mesh read_raw read_wrl read_3ds read_pro read_conf read_aln read_rgrid parse_scene discretize resample simplify"}
 WORK=${FUZZ_WORK:-/tmp/mint-fuzz-work}
+# Needs the nightly toolchain and cargo-fuzz (not part of a fresh machine).
+if ! cargo +nightly fuzz --version > /dev/null 2>&1; then
+  echo "run-all.sh: cargo-fuzz is missing; install it with: cargo install cargo-fuzz --locked (about 3 minutes)" >&2
+  exit 1
+fi
 for t in $TARGETS; do
   mkdir -p "$WORK/$t"
   echo "== $t ($SECS s)"
