@@ -231,14 +231,18 @@ impl Positions {
         debug_assert!(i < self.count && self.kind == PosKind::F32Le);
         let rec = self.base + i as usize * self.stride;
         let b = self.map.bytes();
-        self.off.map(|o| {
+        let at = |o: usize| {
             // SAFETY: `new` asserted that the record of the last vertex,
             // plus each coordinate's offset and size, lies inside the map,
             // and records of smaller indices lie before it; callers pass
             // only range-checked indices (`i < count`).
             let v = unsafe { std::ptr::read_unaligned(b.as_ptr().add(rec + o) as *const [u8; 4]) };
             f32::from_le_bytes(v) as f64
-        })
+        };
+        // Three reads, not `off.map(..)`: the map went through the stack,
+        // and its narrow stores read back wide stalled the callers
+        // (measured in `check`'s geometry).
+        [at(self.off[0]), at(self.off[1]), at(self.off[2])]
     }
 
     /// Asks the CPU to start loading vertex `i`'s record into the cache
@@ -268,11 +272,12 @@ impl Positions {
         debug_assert!(i < self.count && self.kind == PosKind::F64Le);
         let rec = self.base + i as usize * self.stride;
         let b = self.map.bytes();
-        self.off.map(|o| {
+        let at = |o: usize| {
             // SAFETY: as in `get_f32le`.
             let v = unsafe { std::ptr::read_unaligned(b.as_ptr().add(rec + o) as *const [u8; 8]) };
             f64::from_le_bytes(v)
-        })
+        };
+        [at(self.off[0]), at(self.off[1]), at(self.off[2])]
     }
 
     /// Vertex `i` of any layout (bounds-checked slices).

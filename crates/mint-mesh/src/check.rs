@@ -364,7 +364,7 @@ impl FaceGeom {
         self.area2 += ((n[0] * n[0]) + (n[1] * n[1]) + (n[2] * n[2])).sqrt();
         let m = [b[1] * c[2] - c[1] * b[2], b[2] * c[0] - c[2] * b[0], b[0] * c[1] - c[0] * b[1]];
         self.volume6 += (a[0] * m[0]) + (a[1] * m[1]) + (a[2] * m[2]);
-        if !surely_not_collinear(u, v) && collinear_exact(a, b, c) {
+        if !surely_not_collinear(u, v) && collinear_cold(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]) {
             self.degenerate += 1;
         }
     }
@@ -406,6 +406,16 @@ fn surely_not_collinear(u: [f64; 3], v: [f64; 3]) -> bool {
         m > 1e-280 && (l - r).abs() > 1e-15 * m
     };
     orient(0, 1) || orient(1, 2) || orient(2, 0)
+}
+
+/// [`collinear_exact`] out of line, taking scalars: a call that takes the
+/// corner arrays themselves made the compiler keep them in memory on the
+/// hot path of [`FaceGeom::add`] (stalled stores and loads, measured).
+#[cold]
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn collinear_cold(ax: f64, ay: f64, az: f64, bx: f64, by: f64, bz: f64, cx: f64, cy: f64, cz: f64) -> bool {
+    collinear_exact([ax, ay, az], [bx, by, bz], [cx, cy, cz])
 }
 
 /// True iff the three points are exactly collinear (or coincident): the
