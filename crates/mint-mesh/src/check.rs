@@ -505,6 +505,18 @@ pub fn union_smallest(parent: &mut [u32], a: u32, b: u32) -> bool {
     true
 }
 
+/// Joins the classes of a face's three vertices under the smallest of
+/// their roots: the classes [`union_smallest`] twice would give, with one
+/// root lookup fewer.
+#[inline]
+pub fn union_face(parent: &mut [u32], f: [u32; 3]) {
+    let r = f.map(|v| find_root(parent, v));
+    let low = r[0].min(r[1]).min(r[2]);
+    for x in r {
+        parent[x as usize] = low;
+    }
+}
+
 /// Union-find over vertices through faces. Returns per-vertex component
 /// labels (`NONE` for unreferenced vertices), the number of referenced
 /// vertices and the number of components. Roots are always the smallest
@@ -516,8 +528,7 @@ fn component_labels(nv: usize, faces: &[[u32; 3]]) -> (Vec<u32>, u64, u64) {
         for &i in f {
             referenced[i as usize] = true;
         }
-        union_smallest(&mut parent, f[0], f[1]);
-        union_smallest(&mut parent, f[0], f[2]);
+        union_face(&mut parent, *f);
     }
     // In place: parent[v] <= v, so by the time v is visited its parent holds
     // a final label (roots get fresh labels in ascending order).

@@ -4,9 +4,11 @@
 //! The in-core check classifies every edge and fan from each vertex's own
 //! incident faces. Here those incidences come from disk instead of a table
 //! in memory:
-//! 1. **weld** (unless `--no-weld`): positions go to buckets by a hash of
-//!    their bits; each bucket is sorted, and every vertex gets the smallest
-//!    index at its position (`canonical`, kept only if something welds);
+//! 1. **positions**, one parallel pass: the bounding box, and the weld
+//!    (unless `--no-weld`): positions go to buckets by a hash of their
+//!    bits, each bucket's hashes go through a cache-sized table, and where
+//!    hashes collide every vertex gets the smallest index at its position
+//!    (`canonical`, kept only if something welds);
 //! 2. **components**, a first pass over the faces: a union-find over
 //!    vertices in face order (one thread) beside workers that sum per-face
 //!    geometry in the in-core chunks (so volume and area are the same bits),
@@ -32,7 +34,7 @@
 use crate::error::PipelineError;
 use crate::progress::{Phase, Progress};
 use mint_io::{MeshReader, ReadOptions, TriangleChunk, VertexPositions};
-use mint_mesh::check::{fan_pair, find_root, is_collapsed, report_from, scan_vertex, Bbox, FaceGeom, TopologyCounts, Totals, VertexScratch, FACE_CHUNK};
+use mint_mesh::check::{fan_pair, is_collapsed, report_from, scan_vertex, union_face, Bbox, FaceGeom, TopologyCounts, Totals, VertexScratch, FACE_CHUNK};
 use mint_mesh::weld::position_key;
 use mint_mesh::CheckReport;
 use mint_store::{Buckets, Record, StoreError};
@@ -386,18 +388,13 @@ fn prefetch(parent: &[u32], v: u32) {
 /// A vertex block no face touches.
 const UNTOUCHED: u32 = u32::MAX;
 
-/// The union-find side of one face (welded indices): its three classes
-/// joined under the smallest root, as [`union_smallest`] would.
+/// The union-find side of one face (welded indices).
 #[inline]
 fn link(parent: &mut [u32], referenced: &mut Bits, has_collapsed: &mut Bits, f: [u32; 3]) {
     for v in f {
         referenced.set(v);
     }
-    let r = f.map(|v| find_root(parent, v));
-    let low = r[0].min(r[1]).min(r[2]);
-    for x in r {
-        parent[x as usize] = low;
-    }
+    union_face(parent, f);
     if is_collapsed(&f) {
         has_collapsed.set(f[0]);
     }
