@@ -289,50 +289,29 @@ impl Bbox {
     pub fn merge(&mut self, o: &Bbox) {
         self.non_finite += o.non_finite;
         if let (Some(lo), Some(hi)) = (o.min, o.max) {
-            let (mut a, mut b) = (*self, *self);
-            a.add(lo);
-            b.add(hi);
-            self.min = a.min;
-            self.max = b.max;
+            let (min, max) = (self.min.get_or_insert(lo), self.max.get_or_insert(hi));
+            for k in 0..3 {
+                min[k] = min[k].min(lo[k]);
+                max[k] = max[k].max(hi[k]);
+            }
         }
     }
 }
 
 fn bounding_box(positions: &[[f64; 3]]) -> Bbox {
-    let (min, max, non_finite) = positions
+    positions
         .par_chunks(FACE_CHUNK)
         .map(|chunk| {
-            let mut lo = [f64::INFINITY; 3];
-            let mut hi = [f64::NEG_INFINITY; 3];
-            let mut bad = 0u64;
-            for p in chunk {
-                if p.iter().all(|x| x.is_finite()) {
-                    for k in 0..3 {
-                        lo[k] = lo[k].min(p[k]);
-                        hi[k] = hi[k].max(p[k]);
-                    }
-                } else {
-                    bad += 1;
-                }
+            let mut b = Bbox::empty();
+            for &p in chunk {
+                b.add(p);
             }
-            (lo, hi, bad)
+            b
         })
-        .reduce(
-            || ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3], 0),
-            |a, b| {
-                (
-                    std::array::from_fn(|k| a.0[k].min(b.0[k])),
-                    std::array::from_fn(|k| a.1[k].max(b.1[k])),
-                    a.2 + b.2,
-                )
-            },
-        );
-    let any = (positions.len() as u64) > non_finite;
-    Bbox {
-        min: any.then_some(min),
-        max: any.then_some(max),
-        non_finite,
-    }
+        .reduce(Bbox::empty, |mut a, b| {
+            a.merge(&b);
+            a
+        })
 }
 
 /// Per-face geometry sums: six times the signed volume, twice the area,
@@ -391,8 +370,8 @@ fn face_geometry(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> FaceGeom {
 }
 
 /// A filter before [`collinear_exact`], given the edges `u = b-a` and
-/// `v = c-a`: true when one component of `u×v`, computed in floating point, is certainly not zero. Each
-/// component is a 2D orientation `l - r` of products of differences;
+/// `v = c-a`: true when one component of `u×v`, computed in floating
+/// point, is certainly not zero. Each component is a 2D orientation `l - r` of products of differences;
 /// Shewchuk's bound on its rounding error is about `3.3e-16 * (|l| + |r|)`,
 /// so a computed value beyond three times that cannot come from zero
 /// (checked only well above the subnormal range, and never for NaN). Only
