@@ -107,8 +107,8 @@ impl TriangleRecords {
                 let data = map.bytes();
                 let fast = !*be && *stride == 13 && *pre == 0 && *cty == Scalar::U8 && matches!(ity, Scalar::U32 | Scalar::I32);
                 match (fast, self.positions.kind()) {
-                    (true, PosKind::F32Le) => self.fast(data, *start, first, end, element, |i| self.positions.get_f32le(i), visitor),
-                    (true, PosKind::F64Le) => self.fast(data, *start, first, end, element, |i| self.positions.get_f64le(i), visitor),
+                    (true, PosKind::F32Le) => self.fast::<false>(data, *start, first, end, element, visitor),
+                    (true, PosKind::F64Le) => self.fast::<true>(data, *start, first, end, element, visitor),
                     _ => {
                         let nv = self.positions.count() as i64;
                         for k in first..end {
@@ -133,6 +133,28 @@ impl TriangleRecords {
                         Ok(())
                     }
                 }
+            }
+        }
+    }
+
+    /// Asks the kernel to start reading records `first .. end` (clamped)
+    /// from disk now, without waiting for them: a hint, given some way
+    /// ahead of the records being visited, so that a file larger than the
+    /// page cache streams in while the CPU works instead of in each
+    /// worker's page faults. Costs a page-cache lookup when the records
+    /// are already in memory.
+    pub fn read_ahead(&self, first: u64, end: u64) {
+        let end = end.min(self.len());
+        if first >= end {
+            return;
+        }
+        match &self.faces {
+            FixedFaces::Ply { map, start, stride, .. } => map.advise_willneed(start + first as usize * stride, (end - first) as usize * stride),
+            FixedFaces::Soup { .. } => {
+                // A facet record holds its three corners: the positions'.
+                let (base, _) = self.positions.byte_range();
+                let stride = self.positions.stride();
+                self.positions.mapped().advise_willneed(base + first as usize * stride, (end - first) as usize * stride);
             }
         }
     }
@@ -226,33 +248,23 @@ impl TriangleRecords {
     }
 
     /// The common layout: `uchar 3`, three little-endian 32-bit indices.
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn fast(
-        &self,
-        data: &[u8],
-        start: usize,
-        first: u64,
-        end: u64,
-        element: &str,
-        fetch: impl Fn(u32) -> [f64; 3],
-        visitor: &mut impl TriangleVisitor,
-    ) -> Result<(), Error> {
+    fn fast<const F64: bool>(&self, data: &[u8], start: usize, first: u64, end: u64, element: &str, visitor: &mut impl TriangleVisitor) -> Result<(), Error> {
         let nv = self.positions.count();
         let bytes = &data[start + first as usize * 13..start + end as usize * 13];
         // Prefetch the corners of the triangle this many records ahead: in
         // a mesh whose vertices are in no spatial order each corner is a
         // cache (and TLB) miss, and this keeps many of them in flight.
+        // (Written in the loop, not as a closure: a closure is compiled on
+        // its own, without the target features of a caller that
+        // `visit_chunk` compiles for AVX2, and was not inlined there.)
         const AHEAD: usize = 32;
-        let ahead = |i: usize| {
+        for (i, r) in bytes.chunks_exact(13).enumerate() {
             if let Some(r) = bytes.get((i + AHEAD) * 13..(i + AHEAD) * 13 + 13) {
                 for c in 0..3 {
                     self.positions.prefetch(u32::from_le_bytes([r[1 + 4 * c], r[2 + 4 * c], r[3 + 4 * c], r[4 + 4 * c]]));
                 }
             }
-        };
-        for (i, r) in bytes.chunks_exact(13).enumerate() {
-            ahead(i);
             let r: &[u8; 13] = r.try_into().unwrap();
             let k = first + i as u64;
             if r[0] != 3 {
@@ -266,7 +278,9 @@ impl TriangleRecords {
                 let v = if v < 0 { v } else { bad as i64 };
                 return Err(self.reject(Reject::Index(v), k, element, Some((start + k as usize * 13) as u64)));
             }
-            let p = [fetch(t[0]), fetch(t[1]), fetch(t[2])];
+            // Positions stored as f64 (`F64`) or f32, little-endian.
+            let pos = &self.positions;
+            let p = if F64 { [pos.get_f64le(t[0]), pos.get_f64le(t[1]), pos.get_f64le(t[2])] } else { [pos.get_f32le(t[0]), pos.get_f32le(t[1]), pos.get_f32le(t[2])] };
             check_finite(&p, &t).map_err(|r| self.reject(r, k, element, Some((start + k as usize * 13) as u64)))?;
             visitor.triangle(&p);
         }

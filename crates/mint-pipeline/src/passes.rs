@@ -24,6 +24,10 @@ use std::sync::{Condvar, Mutex};
 /// split input start at multiples of it, so that the per-chunk volumes (and
 /// their sum) do not depend on the split.
 pub const CHUNK_TRIANGLES: usize = 64 * 1024;
+/// How many chunks ahead of the workers the direct path asks the kernel to
+/// read (about 40 MB of common PLY faces): far enough that a cold file's
+/// reads overlap the work, small beside any page cache.
+const READ_AHEAD: u64 = 48;
 /// Estimated heap bytes per stored record while its slab is reconstructed:
 /// the record, its vertex, about two faces, active-cell ids, and slack.
 pub const BYTES_PER_RECORD_IN_SLAB: u64 = 128;
@@ -262,13 +266,17 @@ pub(crate) fn discretize_direct(
                     return;
                 }
                 let (a, b) = (first + c * chunk, (first + (c + 1) * chunk).min(end));
+                // Keep the disk busy READ_AHEAD chunks ahead of the workers
+                // (each worker asks for the chunk that far past its own).
+                let ahead = a + READ_AHEAD * chunk;
+                records.read_ahead(ahead, (ahead + chunk).min(end));
                 let mut recs = Vec::with_capacity(1024);
                 let mut volume = 0.0;
                 let visited = match (grid.slab_axis, xf) {
-                    (0, None) => visit_chunk::<0>(records, a, b, local, None, nb, &mut recs, &mut volume, progress),
-                    (1, None) => visit_chunk::<1>(records, a, b, local, None, nb, &mut recs, &mut volume, progress),
-                    (_, None) => visit_chunk::<2>(records, a, b, local, None, nb, &mut recs, &mut volume, progress),
-                    (_, Some(t)) => visit_chunk::<3>(records, a, b, local, Some(t), nb, &mut recs, &mut volume, progress),
+                    (0, None) => visit_chunk::<0>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
+                    (1, None) => visit_chunk::<1>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
+                    (_, None) => visit_chunk::<2>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
+                    (_, Some(t)) => visit_chunk::<3>(&ChunkJob { records, a, b, local, xf: Some(t), nb, progress }, &mut recs, &mut volume),
                 };
                 match visited {
                     Ok(true) => {}
@@ -319,19 +327,50 @@ pub(crate) fn write_chunks(rx: crossbeam_channel::Receiver<(usize, Vec<Intercept
 /// One chunk of the direct path: each triangle to local coordinates (the
 /// slab axis `S` a constant, so that the permutation costs nothing; `S = 3`:
 /// any axis, with a transform), its volume, its crossings.
-#[allow(clippy::too_many_arguments)]
+///
+/// On x86-64 CPUs with AVX2 the same code runs compiled for them (chosen at
+/// run time): the VEX encoding's three-operand forms save the register
+/// copies that dominate the per-triangle work. The arithmetic is the same
+/// IEEE operations in the same order (Rust never fuses a multiply and an
+/// add on its own), so the output bytes do not depend on the CPU;
+/// `MINT_NO_AVX2=1` in the environment forces the baseline compilation, so
+/// that a test can compare the two.
 #[inline(never)]
-fn visit_chunk<const S: usize>(
-    records: &TriangleRecords,
+fn visit_chunk<const S: usize>(job: &ChunkJob, recs: &mut Vec<Intercept>, volume: &mut f64) -> Result<bool, mint_io::Error> {
+    #[cfg(target_arch = "x86_64")]
+    if use_avx2() {
+        #[target_feature(enable = "avx2")]
+        unsafe fn with_avx2<const S: usize>(job: &ChunkJob, recs: &mut Vec<Intercept>, volume: &mut f64) -> Result<bool, mint_io::Error> {
+            visit_chunk_body::<S>(job, recs, volume)
+        }
+        // SAFETY: the CPU has AVX2 (checked by `use_avx2`).
+        return unsafe { with_avx2::<S>(job, recs, volume) };
+    }
+    visit_chunk_body::<S>(job, recs, volume)
+}
+
+/// What one call of [`visit_chunk`] works on: records `a .. b`.
+struct ChunkJob<'a> {
+    records: &'a TriangleRecords,
     a: u64,
     b: u64,
-    local: &LocalMap,
-    xf: Option<&Transform>,
+    local: &'a LocalMap,
+    xf: Option<&'a Transform>,
     nb: u32,
-    recs: &mut Vec<Intercept>,
-    volume: &mut f64,
-    progress: &dyn Progress,
-) -> Result<bool, mint_io::Error> {
+    progress: &'a dyn Progress,
+}
+
+/// True when [`visit_chunk`] may run its AVX2 compilation (decided once).
+#[cfg(target_arch = "x86_64")]
+fn use_avx2() -> bool {
+    static USE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *USE.get_or_init(|| std::arch::is_x86_feature_detected!("avx2") && std::env::var_os("MINT_NO_AVX2").is_none())
+}
+
+/// [`visit_chunk`]'s work, inlined into each of its two compilations.
+#[inline(always)]
+fn visit_chunk_body<const S: usize>(job: &ChunkJob, recs: &mut Vec<Intercept>, volume: &mut f64) -> Result<bool, mint_io::Error> {
+    let ChunkJob { records, a, b, local, xf, nb, progress } = *job;
     // One visitor for the whole chunk (one running volume sum, so the same
     // bits), walked in steps so that a cancellation is seen within a step
     // even when every corner is a page fault.
