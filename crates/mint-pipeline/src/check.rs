@@ -497,6 +497,23 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
 /// become 0.0).
 #[inline(never)]
 fn chunk_geometry(faces: &[[u32; 3]], positions: &VertexPositions) -> FaceGeom {
+    // Compiled for AVX2 as well, as resample's per-triangle loop is (see
+    // `passes::visit_chunk`): the same operations, fewer register copies.
+    #[cfg(target_arch = "x86_64")]
+    if crate::passes::use_avx2() {
+        #[target_feature(enable = "avx2")]
+        unsafe fn with_avx2(faces: &[[u32; 3]], positions: &VertexPositions) -> FaceGeom {
+            chunk_geometry_body(faces, positions)
+        }
+        // SAFETY: the CPU has AVX2 (checked by `use_avx2`).
+        return unsafe { with_avx2(faces, positions) };
+    }
+    chunk_geometry_body(faces, positions)
+}
+
+/// [`chunk_geometry`]'s work, inlined into each of its two compilations.
+#[inline(always)]
+fn chunk_geometry_body(faces: &[[u32; 3]], positions: &VertexPositions) -> FaceGeom {
     let mut g = FaceGeom::default();
     for (k, f) in faces.iter().enumerate() {
         if let Some(h) = faces.get(k + AHEAD) {

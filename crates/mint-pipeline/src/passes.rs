@@ -360,9 +360,10 @@ struct ChunkJob<'a> {
     progress: &'a dyn Progress,
 }
 
-/// True when [`visit_chunk`] may run its AVX2 compilation (decided once).
+/// True when the hot loops may run their AVX2 compilations (decided once;
+/// `MINT_NO_AVX2` in the environment says no).
 #[cfg(target_arch = "x86_64")]
-fn use_avx2() -> bool {
+pub(crate) fn use_avx2() -> bool {
     static USE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
     *USE.get_or_init(|| std::arch::is_x86_feature_detected!("avx2") && std::env::var_os("MINT_NO_AVX2").is_none())
 }
