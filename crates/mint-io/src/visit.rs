@@ -258,9 +258,13 @@ impl TriangleRecords {
         // (Written in the loop, not as a closure: a closure is compiled on
         // its own, without the target features of a caller that
         // `visit_chunk` compiles for AVX2, and was not inlined there.)
+        // The look-ahead reaches past `end` (to the file's last record), so
+        // that a caller walking a range in steps does not start each step
+        // with a full memory latency per corner.
         const AHEAD: usize = 32;
+        let reach = &data[start + first as usize * 13..start + (end + AHEAD as u64).min(self.len()) as usize * 13];
         for (i, r) in bytes.chunks_exact(13).enumerate() {
-            if let Some(r) = bytes.get((i + AHEAD) * 13..(i + AHEAD) * 13 + 13) {
+            if let Some(r) = reach.get((i + AHEAD) * 13..(i + AHEAD) * 13 + 13) {
                 for c in 0..3 {
                     self.positions.prefetch(u32::from_le_bytes([r[1 + 4 * c], r[2 + 4 * c], r[3 + 4 * c], r[4 + 4 * c]]));
                 }
