@@ -604,30 +604,42 @@ impl Judge<'_> {
         let v0 = (blk * self.block_vertices) as u32;
         let v1 = ((blk + 1) * self.block_vertices).min(self.nv as u64) as u32;
         let n = (v1 - v0) as usize;
+        // The corners, in push order: the buckets' pages themselves when
+        // none is on disk (the common case), else read into `records`.
+        let buckets: Vec<mint_store::Bucket<Corner>> = sinks.iter().map(|sink| sink.lock().unwrap().corners.take(blk as usize)).collect();
+        let in_memory = buckets.iter().all(|b| b.pages().is_some());
         j.records.clear();
-        for sink in sinks {
-            let bucket = sink.lock().unwrap().corners.take(blk as usize);
-            bucket.read(|batch| j.records.extend_from_slice(batch))?;
+        let mut kept = Vec::new();
+        if in_memory {
+            kept = buckets;
+        } else {
+            for bucket in buckets {
+                bucket.read(|batch| j.records.extend_from_slice(batch))?;
+            }
         }
-        if j.records.is_empty() {
+        let slices: Vec<&[Corner]> = if in_memory { kept.iter().flat_map(|b| b.pages().unwrap_or_default()).map(|p| &p[..]).collect() } else { vec![&j.records[..]] };
+        let total: usize = slices.iter().map(|s| s.len()).sum();
+        if total == 0 {
             return Ok(());
         }
         j.start.clear();
         j.start.resize(n + 1, 0);
-        for c in &j.records {
+        for c in slices.iter().copied().flatten() {
             j.start[(c.v - v0) as usize + 1] += 1;
         }
         for i in 0..n {
             j.start[i + 1] += j.start[i];
         }
         j.fans.clear();
-        j.fans.resize(j.records.len(), (0, 0));
+        j.fans.resize(total, (0, 0));
         let mut at = j.start.clone();
-        for c in &j.records {
+        for c in slices.iter().copied().flatten() {
             let s = &mut at[(c.v - v0) as usize];
             j.fans[*s as usize] = (c.a, c.b);
             *s += 1;
         }
+        drop(slices);
+        drop(kept);
         j.deltas.clear();
         for i in 0..n {
             let (s, e) = (j.start[i] as usize, j.start[i + 1] as usize);

@@ -40,8 +40,11 @@ const READ_BATCH: usize = 1 << 16;
 pub struct Buckets<R: Record> {
     dir: PathBuf,
     name: String,
-    /// Per bucket: its full pages, then the page being filled.
+    /// Per bucket: its full pages.
     buffers: Vec<Vec<Vec<R>>>,
+    /// Per bucket: the page being filled (no capacity before the bucket's
+    /// first record), kept apart so that a push reaches it in one step.
+    open: Vec<Vec<R>>,
     spilled: Vec<u64>,
     /// Per bucket: how many times it was taken (part of its file's name,
     /// so that a taken file is never appended to).
@@ -69,6 +72,7 @@ impl<R: Record> Buckets<R> {
             dir: dir.to_path_buf(),
             name: name.to_string(),
             buffers: (0..n).map(|_| Vec::new()).collect(),
+            open: (0..n).map(|_| Vec::new()).collect(),
             spilled: vec![0; n],
             taken: vec![0; n],
             page,
@@ -100,7 +104,11 @@ impl<R: Record> Buckets<R> {
         let file = (self.spilled[b] > 0).then(|| (self.path(b), self.spilled[b]));
         self.spilled[b] = 0;
         self.taken[b] += 1;
-        let memory = std::mem::take(&mut self.buffers[b]);
+        let mut memory = std::mem::take(&mut self.buffers[b]);
+        let open = std::mem::take(&mut self.open[b]);
+        if open.capacity() > 0 {
+            memory.push(open);
+        }
         self.held -= memory.len() * self.page;
         Bucket { file, memory }
     }
@@ -108,11 +116,10 @@ impl<R: Record> Buckets<R> {
     /// Appends `r` to bucket `b`.
     #[inline]
     pub fn push(&mut self, b: usize, r: R) -> Result<(), StoreError> {
-        if let Some(page) = self.buffers[b].last_mut() {
-            if page.len() < page.capacity() {
-                page.push(r);
-                return Ok(());
-            }
+        let page = &mut self.open[b];
+        if page.len() < page.capacity() {
+            page.push(r);
+            return Ok(());
         }
         self.new_page_and_push(b, r)
     }
@@ -121,12 +128,16 @@ impl<R: Record> Buckets<R> {
     /// spilling if the page would pass the budget.
     #[cold]
     fn new_page_and_push(&mut self, b: usize, r: R) -> Result<(), StoreError> {
+        let full = std::mem::take(&mut self.open[b]);
+        if full.capacity() > 0 {
+            self.buffers[b].push(full);
+        }
         if self.held + self.page > self.limit {
             self.spill()?;
         }
         let mut page = Vec::with_capacity(self.page);
         page.push(r);
-        self.buffers[b].push(page);
+        self.open[b] = page;
         self.held += self.page;
         Ok(())
     }
@@ -134,6 +145,10 @@ impl<R: Record> Buckets<R> {
     /// Appends every bucket's pages to its file and frees them.
     fn spill(&mut self) -> Result<(), StoreError> {
         for b in 0..self.buffers.len() {
+            let open = std::mem::take(&mut self.open[b]);
+            if !open.is_empty() {
+                self.buffers[b].push(open);
+            }
             if self.buffers[b].is_empty() {
                 continue;
             }
@@ -159,7 +174,12 @@ impl<R: Record> Buckets<R> {
     }
 
     /// Stops writing; the records can now be read back bucket by bucket.
-    pub fn finish(self) -> BucketReader<R> {
+    pub fn finish(mut self) -> BucketReader<R> {
+        for (pages, open) in self.buffers.iter_mut().zip(std::mem::take(&mut self.open)) {
+            if !open.is_empty() {
+                pages.push(open);
+            }
+        }
         BucketReader { dir: self.dir, name: self.name, buffers: self.buffers, spilled: self.spilled, taken: self.taken, bytes_spilled: self.bytes_spilled }
     }
 
@@ -230,6 +250,12 @@ pub struct Bucket<R: Record> {
 }
 
 impl<R: Record> Bucket<R> {
+    /// The records, page by page in push order, when none of them is on
+    /// disk; `None` when some are.
+    pub fn pages(&self) -> Option<&[Vec<R>]> {
+        self.file.is_none().then_some(&self.memory[..])
+    }
+
     /// Calls `f` with the records in push order, in batches, then removes
     /// the bucket's file.
     pub fn read(self, mut f: impl FnMut(&[R])) -> Result<(), StoreError> {
