@@ -13,11 +13,14 @@
 //!    vertices in face order (one thread) beside workers that sum per-face
 //!    geometry in the in-core chunks (so volume and area are the same bits),
 //!    and for each block of vertices the last chunk of faces touching it;
-//! 3. **corners and vertices**, a second pass: each proper face's three
-//!    corners `(v, a, b)` go to the bucket of `v`'s block (collapsed faces'
-//!    keys to their own buckets), and a block is judged as soon as every
-//!    chunk up to its last is done: its corners are grouped by vertex (a
-//!    counting sort) and each vertex is judged by
+//! 3. **corners and vertices**, a second pass: each proper face goes once
+//!    to the bucket of every vertex block it touches (one bucket when its
+//!    vertices are near in number, as they mostly are: a third of the
+//!    bytes of sending its three corners apart; collapsed faces' keys go
+//!    to their own buckets), and a block is judged as soon as every chunk
+//!    up to its last is done: its faces' corners `(v, a, b)` with `v` in
+//!    the block are grouped by vertex (a counting sort) and each vertex is
+//!    judged by
 //!    [`mint_mesh::check::scan_vertex`], the in-core code itself. When faces
 //!    and vertices run in a similar order, as in most files, corners are
 //!    judged soon after they are made and never reach the disk; in any
@@ -80,29 +83,6 @@ pub struct CheckStats {
     pub boundary: Vec<[u32; 2]>,
 }
 
-/// A corner `v → a → b` of a proper face, on its way to `v`'s block.
-#[derive(Clone, Copy)]
-struct Corner {
-    v: u32,
-    a: u32,
-    b: u32,
-}
-
-impl Record for Corner {
-    const SIZE: usize = 12;
-    #[inline]
-    fn put(&self, out: &mut Vec<u8>) {
-        out.extend_from_slice(&self.v.to_le_bytes());
-        out.extend_from_slice(&self.a.to_le_bytes());
-        out.extend_from_slice(&self.b.to_le_bytes());
-    }
-    #[inline]
-    fn get(b: &[u8]) -> Self {
-        let w = |i: usize| u32::from_le_bytes(b[i..i + 4].try_into().unwrap());
-        Corner { v: w(0), a: w(4), b: w(8) }
-    }
-}
-
 /// A position's hash (the high half of the hash of its weld key; the low
 /// bits chose its bucket) and its vertex. Equal positions have equal
 /// hashes; equal hashes are then compared by position.
@@ -125,7 +105,8 @@ impl Record for Hashed {
     }
 }
 
-/// A collapsed face's sorted indices.
+/// Three vertex indices: a proper face as written (welded), on its way to
+/// the blocks of its vertices, or a collapsed face's sorted indices.
 #[derive(Clone, Copy)]
 struct Triple([u32; 3]);
 
@@ -332,9 +313,9 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     Ok((report, stats))
 }
 
-/// Where one worker's corners and collapsed faces go.
+/// Where one worker's proper faces (by vertex block) and collapsed faces go.
 struct Sink {
-    corners: Buckets<Corner>,
+    corners: Buckets<Triple>,
     collapsed: Buckets<Triple>,
     /// A vertex's block is `v >> block_shift`.
     block_shift: u32,
@@ -349,9 +330,15 @@ impl Sink {
             k.sort_unstable();
             return self.collapsed.push((mix(&[k[0] as u64, k[1] as u64, k[2] as u64]) % 64) as usize, Triple(k));
         }
-        for v in f {
-            let (a, b) = fan_pair(&f, v);
-            self.corners.push((v >> self.block_shift) as usize, Corner { v, a, b })?;
+        // Once per block it touches (its corners in the block are
+        // unpacked when the block is judged).
+        let k = f.map(|v| (v >> self.block_shift) as usize);
+        self.corners.push(k[0], Triple(f))?;
+        if k[1] != k[0] {
+            self.corners.push(k[1], Triple(f))?;
+        }
+        if k[2] != k[0] && k[2] != k[1] {
+            self.corners.push(k[2], Triple(f))?;
         }
         Ok(())
     }
@@ -592,7 +579,7 @@ struct Judged {
     scratch: VertexScratch,
     start: Vec<u32>,
     fans: Vec<(u32, u32)>,
-    records: Vec<Corner>,
+    records: Vec<Triple>,
     deltas: Vec<(u32, i64, bool)>,
 }
 
@@ -604,9 +591,9 @@ impl Judge<'_> {
         let v0 = (blk * self.block_vertices) as u32;
         let v1 = ((blk + 1) * self.block_vertices).min(self.nv as u64) as u32;
         let n = (v1 - v0) as usize;
-        // The corners, in push order: the buckets' pages themselves when
+        // The faces, in push order: the buckets' pages themselves when
         // none is on disk (the common case), else read into `records`.
-        let buckets: Vec<mint_store::Bucket<Corner>> = sinks.iter().map(|sink| sink.lock().unwrap().corners.take(blk as usize)).collect();
+        let buckets: Vec<mint_store::Bucket<Triple>> = sinks.iter().map(|sink| sink.lock().unwrap().corners.take(blk as usize)).collect();
         let in_memory = buckets.iter().all(|b| b.pages().is_some());
         j.records.clear();
         let mut kept = Vec::new();
@@ -617,26 +604,36 @@ impl Judge<'_> {
                 bucket.read(|batch| j.records.extend_from_slice(batch))?;
             }
         }
-        let slices: Vec<&[Corner]> = if in_memory { kept.iter().flat_map(|b| b.pages().unwrap_or_default()).map(|p| &p[..]).collect() } else { vec![&j.records[..]] };
-        let total: usize = slices.iter().map(|s| s.len()).sum();
-        if total == 0 {
+        let slices: Vec<&[Triple]> = if in_memory { kept.iter().flat_map(|b| b.pages().unwrap_or_default()).map(|p| &p[..]).collect() } else { vec![&j.records[..]] };
+        if slices.iter().all(|s| s.is_empty()) {
             return Ok(());
         }
+        // Counting sort of the faces' corners in the block, by vertex; a
+        // vertex's fan keeps the faces' push order.
         j.start.clear();
         j.start.resize(n + 1, 0);
-        for c in slices.iter().copied().flatten() {
-            j.start[(c.v - v0) as usize + 1] += 1;
+        let here = |v: u32| v.wrapping_sub(v0) < n as u32;
+        for Triple(f) in slices.iter().copied().flatten() {
+            for &v in f {
+                if here(v) {
+                    j.start[(v - v0) as usize + 1] += 1;
+                }
+            }
         }
         for i in 0..n {
             j.start[i + 1] += j.start[i];
         }
         j.fans.clear();
-        j.fans.resize(total, (0, 0));
+        j.fans.resize(j.start[n] as usize, (0, 0));
         let mut at = j.start.clone();
-        for c in slices.iter().copied().flatten() {
-            let s = &mut at[(c.v - v0) as usize];
-            j.fans[*s as usize] = (c.a, c.b);
-            *s += 1;
+        for Triple(f) in slices.iter().copied().flatten() {
+            for &v in f {
+                if here(v) {
+                    let s = &mut at[(v - v0) as usize];
+                    j.fans[*s as usize] = fan_pair(f, v);
+                    *s += 1;
+                }
+            }
         }
         drop(slices);
         drop(kept);
