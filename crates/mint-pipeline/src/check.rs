@@ -199,7 +199,7 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     let per_vertex = nv as u64 * 4 + nv as u64 / 4 + canonical.as_ref().map_or(0, |_| nv as u64 * 4);
     let buckets = (budget.saturating_sub(per_vertex) / 2).max(8 << 20);
     let sink = |n: usize, t: usize| Sink {
-        corners: Buckets::new(dir, &format!("corners-{t}"), blocks as usize, buckets / n as u64),
+        by_block: Buckets::new(dir, &format!("faces-{t}"), blocks as usize, buckets / n as u64),
         collapsed: Buckets::new(dir, &format!("collapsed-{t}"), 64, buckets / 8 / n as u64),
         block_shift,
     };
@@ -258,7 +258,7 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     drop(referenced);
 
     // 3. Faces, second pass (fixed records only: the streamed pass above
-    // already sent its corners), and vertices: each block judged as soon as
+    // already sent its faces), and vertices: each block judged as soon as
     // every chunk that touches it is done.
     let direct = sinks.is_empty();
     let sinks: Vec<Mutex<Sink>> = if direct { (0..threads).map(|t| Mutex::new(sink(threads, t))).collect() } else { sinks.into_iter().map(Mutex::new).collect() };
@@ -282,7 +282,7 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     let mut collapsed_sets = Vec::new();
     for s in sinks {
         let s = s.into_inner().unwrap();
-        stats.bytes_spilled += s.corners.bytes_spilled();
+        stats.bytes_spilled += s.by_block.bytes_spilled();
         collapsed_sets.push(s.collapsed.finish());
     }
     let mut duplicate_collapsed = 0u64;
@@ -315,14 +315,14 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
 
 /// Where one worker's proper faces (by vertex block) and collapsed faces go.
 struct Sink {
-    corners: Buckets<Triple>,
+    by_block: Buckets<Triple>,
     collapsed: Buckets<Triple>,
     /// A vertex's block is `v >> block_shift`.
     block_shift: u32,
 }
 
 impl Sink {
-    /// One face (welded indices): its corners, or its key if collapsed.
+    /// One face (welded indices): to its vertex blocks, or its key if collapsed.
     #[inline]
     fn face(&mut self, f: [u32; 3]) -> Result<(), StoreError> {
         if is_collapsed(&f) {
@@ -333,12 +333,12 @@ impl Sink {
         // Once per block it touches (its corners in the block are
         // unpacked when the block is judged).
         let k = f.map(|v| (v >> self.block_shift) as usize);
-        self.corners.push(k[0], Triple(f))?;
+        self.by_block.push(k[0], Triple(f))?;
         if k[1] != k[0] {
-            self.corners.push(k[1], Triple(f))?;
+            self.by_block.push(k[1], Triple(f))?;
         }
         if k[2] != k[0] && k[2] != k[1] {
-            self.corners.push(k[2], Triple(f))?;
+            self.by_block.push(k[2], Triple(f))?;
         }
         Ok(())
     }
@@ -584,8 +584,8 @@ struct Judged {
 }
 
 impl Judge<'_> {
-    /// Judges vertex block `blk`: takes its corners from every sink,
-    /// groups them by vertex (a counting sort) and scans each vertex; Euler
+    /// Judges vertex block `blk`: takes its faces from every sink,
+    /// groups their corners in the block by vertex (a counting sort) and scans each vertex; Euler
     /// characteristics and flags go to the vertex's component.
     fn block(&self, blk: u64, sinks: &[Mutex<Sink>], j: &mut Judged) -> Result<(), PipelineError> {
         let v0 = (blk * self.block_vertices) as u32;
@@ -593,7 +593,7 @@ impl Judge<'_> {
         let n = (v1 - v0) as usize;
         // The faces, in push order: the buckets' pages themselves when
         // none is on disk (the common case), else read into `records`.
-        let buckets: Vec<mint_store::Bucket<Triple>> = sinks.iter().map(|sink| sink.lock().unwrap().corners.take(blk as usize)).collect();
+        let buckets: Vec<mint_store::Bucket<Triple>> = sinks.iter().map(|sink| sink.lock().unwrap().by_block.take(blk as usize)).collect();
         let in_memory = buckets.iter().all(|b| b.pages().is_some());
         j.records.clear();
         let mut kept = Vec::new();
@@ -687,11 +687,11 @@ enum Task {
 
 /// The second pass over the faces and the judging of the vertices, on
 /// `threads` workers. With `records`, the workers take chunks of faces in
-/// order and send each proper face's corners to their own sink, and a
+/// order and send each proper face to their own sink (by vertex block), and a
 /// block is judged as soon as the last chunk that touches it
 /// (`last_chunk`) and every chunk before it are done: on a mesh whose
-/// faces and vertices run in a similar order, corners are judged soon after
-/// they are made and never reach the disk. Judging comes before new
+/// faces and vertices run in a similar order, faces are judged soon after
+/// they are sent and never reach the disk. Judging comes before new
 /// chunks. Without `records` the sinks are full already and every touched
 /// block is judged. Returns the counts, simple boundary edges and listed
 /// boundary edges, unsorted.
