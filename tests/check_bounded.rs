@@ -34,12 +34,15 @@ fn same_report(path: &Path, spill_expected: bool) {
 fn the_bounded_check_gives_the_in_core_report_spilled_or_not() {
     let d = tempfile::tempdir().unwrap();
     let dir = d.path();
-    // A clean torus (1.2M faces: its corners spill under the 16 MiB floor),
-    // and the same mesh shuffled.
+    // A clean torus (1.2M faces) and the same mesh shuffled. In file order
+    // each face goes to one vertex block, judged as soon as it is
+    // complete, so whether anything spills under the 16 MiB floor depends
+    // on timing; shuffled, every block waits for the end, and its faces
+    // must spill.
     let mut torus = TriMesh::default();
     mint_gen::genus(1, 1_200_000, &mut torus).unwrap();
     let t = write_trimesh(dir, "torus.ply", &torus);
-    same_report(&t, true);
+    same_report(&t, false);
     let ts = write_mesh(dir, "torus-shuffled.ply", |s| mint_gen::shuffle_mesh(&torus, 3, s).unwrap());
     same_report(&ts, true);
     // A dirty scan: holes, flipped faces, overlaps, non-manifold slivers.
