@@ -423,10 +423,21 @@ impl<'a> Ctx<'a> {
         Ok(operands)
     }
 
-    /// Sub-slabs of layers `a .. b` that fit the budget.
+    /// Sub-slabs of layers `a .. b` that fit the budget, and (with more
+    /// than one thread) small enough that every thread gets several: a
+    /// slab's records are at most a quarter of one thread's share, but never
+    /// below [`MIN_SUB_SLAB_BYTES`]. The output does not depend on the cut.
     fn sub_slabs(&self, a: u32, b: u32) -> Result<Vec<(u32, u32)>, PipelineError> {
         let counts = self.plane_counts()?;
-        Ok(if a >= b { Vec::new() } else { plan_slabs(&counts, a, b, self.plan.tuning.slab_layers, self.slab_budget()) })
+        if a >= b {
+            return Ok(Vec::new());
+        }
+        let mut budget = self.slab_budget();
+        if self.threads > 1 {
+            let bytes = counts[a as usize..=b as usize].iter().sum::<u64>() * BYTES_PER_RECORD_IN_SLAB;
+            budget = budget.min((bytes / (4 * self.threads as u64)).max(MIN_SUB_SLAB_BYTES));
+        }
+        Ok(plan_slabs(&counts, a, b, self.plan.tuning.slab_layers, budget))
     }
 
     /// Warms every reduce a slab task needs, so that worker threads only read.
@@ -437,6 +448,9 @@ impl<'a> Ctx<'a> {
         Ok(())
     }
 }
+
+/// The smallest sub-slab worth a thread of its own, in planned bytes.
+const MIN_SUB_SLAB_BYTES: u64 = 1 << 20;
 
 /// Splits layers `0 .. counts.len()` into `slabs` consecutive ranges, cut
 /// where the running count passes each `i / slabs` share of the total (and
