@@ -29,7 +29,7 @@
 //! memory or task order.
 
 use crate::error::PipelineError;
-use crate::deref::{choose, discretize_sorted, Deref, DerefChoice, Faces, SortStats};
+use crate::deref::{choose, prefetch_pays, discretize_sorted, Deref, DerefChoice, Faces, SortStats};
 use crate::passes::{bounds, check_cancel, discretize_all, discretize_direct, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, CHUNK_TRIANGLES, FIXED_RESERVE};
 use crate::plan::{OperandPlan, Plan};
 use crate::progress::Progress;
@@ -558,11 +558,15 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
         // Files with fixed-size records are read directly by every worker;
         // others (and, as one part, files that turn out to hold polygons)
         // stream through the reader.
-        let direct = match split_faces {
+        let mut direct = match split_faces {
             Some(_) => reader.triangle_records()?,
             None => None,
         };
         let positions = reader.positions();
+        if let Some(records) = direct.as_mut() {
+            let on = prefetch_pays(records, &positions, range);
+            records.set_prefetch(on);
+        }
         let choice = choose(ctx.deref, direct.as_ref(), &positions, range);
         let mut result = None;
         let mut sort_stats = None;

@@ -1,0 +1,74 @@
+//! The direct record path (`TriangleRecords::visit`) against the streaming
+//! reader: every triangle of a mesh whose vertices and faces are shuffled
+//! (so that prefetching has work to do), with the corner prefetch on and
+//! off, over ranges that start and end anywhere, for f32 and f64 positions.
+use mint_core::TriMesh;
+use mint_io::{Format, MeshReader, ReadOptions, WriteOptions};
+
+use super::util::{read, soup, write};
+
+/// A `n` x `n` vertex grid bent into a bowl, its vertices and faces in an
+/// order unrelated to space (a fixed 64-bit LCG, Fisher-Yates).
+fn shuffled_grid(n: u32) -> TriMesh {
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = |bound: usize| {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        ((state >> 33) as usize) % bound
+    };
+    let nv = (n * n) as usize;
+    let mut order: Vec<u32> = (0..nv as u32).collect();
+    for i in (1..nv).rev() {
+        order.swap(i, next(i + 1));
+    }
+    let mut slot = vec![0u32; nv];
+    for (new, &old) in order.iter().enumerate() {
+        slot[old as usize] = new as u32;
+    }
+    let positions = order
+        .iter()
+        .map(|&v| {
+            let (x, y) = ((v % n) as f64 / n as f64, (v / n) as f64 / n as f64);
+            [x, y, 0.1 + x * x + y * y / 3.0]
+        })
+        .collect();
+    let mut faces = Vec::new();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let v = |i: u32, j: u32| slot[(j * n + i) as usize];
+            faces.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+            faces.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+        }
+    }
+    for i in (1..faces.len()).rev() {
+        faces.swap(i, next(i + 1));
+    }
+    TriMesh { positions, faces }
+}
+
+#[test]
+fn visiting_records_gives_the_streamed_triangles_with_and_without_prefetch() {
+    let d = tempfile::tempdir().unwrap();
+    let m = shuffled_grid(300);
+    for double in [false, true] {
+        let path = d.path().join(format!("grid-{double}.ply"));
+        write(&path, Format::Ply, WriteOptions { double, ..WriteOptions::default() }, &m);
+        let want = soup(&read(&path));
+        let reader = MeshReader::open(&path, ReadOptions::default()).unwrap();
+        let mut records = reader.triangle_records().unwrap().expect("binary PLY triangles are fixed records");
+        assert_eq!(records.len(), want.len() as u64);
+        for prefetch in [true, false] {
+            records.set_prefetch(prefetch);
+            // Whole, then in uneven steps whose look-ahead crosses each end.
+            for step in [u64::MAX, 1, 31, 4097] {
+                let mut got = Vec::with_capacity(want.len());
+                let mut at = 0;
+                while at < records.len() {
+                    let to = at.saturating_add(step).min(records.len());
+                    records.visit(at, to, &mut |p: &[[f64; 3]; 3]| got.push(*p)).unwrap();
+                    at = to;
+                }
+                assert!(got == want, "double {double}, prefetch {prefetch}, step {step}: other triangles");
+            }
+        }
+    }
+}
