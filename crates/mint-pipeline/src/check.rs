@@ -407,6 +407,7 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
     let stop = AtomicBool::new(false);
     let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
     let geoms: Mutex<Vec<FaceGeom>> = Mutex::new(vec![FaceGeom::default(); chunks]);
+    let prefetch_corners = crate::deref::prefetch_pays(records, positions, (0, n));
     progress.start(LINKS, n);
     let uf = std::thread::scope(|s| {
         let uf = s.spawn(|| -> Result<(Vec<u32>, Bits, Bits, Vec<u32>), PipelineError> {
@@ -454,7 +455,7 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
                     let (a, b) = (c as u64 * FACE_CHUNK as u64, ((c + 1) as u64 * FACE_CHUNK as u64).min(n));
                     faces.clear();
                     let visited = records.visit_indices(a, b, |_, t| faces.push(t.map(id)));
-                    let g = if visited.is_ok() { chunk_geometry(&faces, positions) } else { FaceGeom::default() };
+                    let g = if visited.is_ok() { chunk_geometry(&faces, positions, prefetch_corners) } else { FaceGeom::default() };
                     if let Some(e) = crate::passes::chunk_outcome(visited, None, progress) {
                         failed.lock().unwrap().get_or_insert(e);
                         stop.store(true, Ordering::Relaxed);
@@ -483,27 +484,37 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
 /// welded mesh's positions: each vertex's canonical one (-0.0 may have
 /// become 0.0).
 #[inline(never)]
-fn chunk_geometry(faces: &[[u32; 3]], positions: &VertexPositions) -> FaceGeom {
+fn chunk_geometry(faces: &[[u32; 3]], positions: &VertexPositions, prefetch: bool) -> FaceGeom {
     // Compiled for AVX2 as well, as resample's per-triangle loop is (see
     // `passes::visit_chunk`): the same operations, fewer register copies.
     #[cfg(target_arch = "x86_64")]
     if crate::passes::use_avx2() {
         #[target_feature(enable = "avx2")]
-        unsafe fn with_avx2(faces: &[[u32; 3]], positions: &VertexPositions) -> FaceGeom {
-            chunk_geometry_body(faces, positions)
+        unsafe fn with_avx2(faces: &[[u32; 3]], positions: &VertexPositions, prefetch: bool) -> FaceGeom {
+            if prefetch {
+                chunk_geometry_body::<true>(faces, positions)
+            } else {
+                chunk_geometry_body::<false>(faces, positions)
+            }
         }
         // SAFETY: the CPU has AVX2 (checked by `use_avx2`).
-        return unsafe { with_avx2(faces, positions) };
+        return unsafe { with_avx2(faces, positions, prefetch) };
     }
-    chunk_geometry_body(faces, positions)
+    if prefetch {
+        chunk_geometry_body::<true>(faces, positions)
+    } else {
+        chunk_geometry_body::<false>(faces, positions)
+    }
 }
 
 /// [`chunk_geometry`]'s work, inlined into each of its two compilations.
 #[inline(always)]
-fn chunk_geometry_body(faces: &[[u32; 3]], positions: &VertexPositions) -> FaceGeom {
+fn chunk_geometry_body<const PREFETCH: bool>(faces: &[[u32; 3]], positions: &VertexPositions) -> FaceGeom {
     let mut g = FaceGeom::default();
     for (k, f) in faces.iter().enumerate() {
-        if let Some(h) = faces.get(k + AHEAD) {
+        // Only where locality is poor; see `deref::prefetch_pays`.
+        if !PREFETCH {
+        } else if let Some(h) = faces.get(k + AHEAD) {
             for &v in h {
                 positions.prefetch(v);
             }
