@@ -214,6 +214,17 @@ impl Positions {
         self.ty.iter().all(|t| matches!(t, Scalar::F32 | Scalar::I8 | Scalar::U8 | Scalar::I16 | Scalar::U16))
     }
 
+    /// The bytes of vertices `first .. end` when they are packed
+    /// little-endian f32 triples (`x y z`, 12 bytes a vertex, nothing
+    /// between: what most binary PLY scans and every mint output hold);
+    /// `None` for any other layout. The range must be within `count`.
+    pub(crate) fn packed_f32(&self, first: u32, end: u32) -> Option<&[u8]> {
+        if self.kind != PosKind::F32Le || self.stride != 12 || self.off != [0, 4, 8] || first > end || end > self.count {
+            return None;
+        }
+        Some(&self.map.bytes()[self.base + first as usize * 12..self.base + end as usize * 12])
+    }
+
     pub(crate) fn mapped(&self) -> &Mapped {
         &self.map
     }

@@ -209,12 +209,55 @@ impl VertexPositions {
             }
             Ok(Some((lo, hi)))
         }
+        if let Some(b) = self.0.packed_f32(first, end).and_then(packed_f32_bounds) {
+            return Ok(Some(b));
+        }
         match self.0.kind() {
             PosKind::F32Le => scan(first, end, |i| self.0.get_f32le(i)),
             PosKind::F64Le => scan(first, end, |i| self.0.get_f64le(i)),
             PosKind::Other => scan(first, end, |i| self.0.get_other(i)),
         }
     }
+}
+
+/// The bounding box of packed little-endian f32 triples, or `None` when a
+/// coordinate is NaN or infinite (the caller then finds which, vertex by
+/// vertex). Four vertices a step in twelve independent lanes, lane `i`
+/// holding axis `i % 3`, which the compiler keeps in vector registers; the
+/// scalar loop's `f64::min` per coordinate ran at a third of the speed.
+/// f32 to f64 is exact and keeps order, so the box is the scalar loop's
+/// (up to the sign of a zero bound, which no grid depends on).
+fn packed_f32_bounds(bytes: &[u8]) -> Option<([f64; 3], [f64; 3])> {
+    let mut lo = [f32::INFINITY; 12];
+    let mut hi = [f32::NEG_INFINITY; 12];
+    // `v - v` is 0 for a finite `v` and NaN otherwise; the sums stay 0
+    // only if every coordinate is finite.
+    let mut finite = [0.0f32; 12];
+    let mut steps = bytes.chunks_exact(48);
+    for s in &mut steps {
+        for i in 0..12 {
+            let v = f32::from_le_bytes([s[4 * i], s[4 * i + 1], s[4 * i + 2], s[4 * i + 3]]);
+            lo[i] = if v < lo[i] { v } else { lo[i] };
+            hi[i] = if v > hi[i] { v } else { hi[i] };
+            finite[i] += v - v;
+        }
+    }
+    for (k, s) in steps.remainder().chunks_exact(4).enumerate() {
+        let v = f32::from_le_bytes([s[0], s[1], s[2], s[3]]);
+        lo[k % 3] = if v < lo[k % 3] { v } else { lo[k % 3] };
+        hi[k % 3] = if v > hi[k % 3] { v } else { hi[k % 3] };
+        finite[k % 3] += v - v;
+    }
+    if finite.iter().any(|&f| f != 0.0) {
+        return None;
+    }
+    let mut l = [f64::INFINITY; 3];
+    let mut h = [f64::NEG_INFINITY; 3];
+    for i in 0..12 {
+        l[i % 3] = l[i % 3].min(lo[i] as f64);
+        h[i % 3] = h[i % 3].max(hi[i] as f64);
+    }
+    Some((l, h))
 }
 
 /// The fewest bytes any format spends on one face record (binary PLY with
@@ -426,6 +469,41 @@ impl MeshReader {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The packed f32 bounds against a plain loop, for every count of
+    /// vertices from 0 to 40 (every remainder of the four-vertex steps),
+    /// with a non-finite coordinate planted at every place in turn.
+    #[test]
+    fn packed_f32_bounds_equal_the_plain_loop_and_refuse_non_finite() {
+        let mut state = 7u64;
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * 1.0e3
+        };
+        for n in 0..40usize {
+            let coords: Vec<f32> = (0..3 * n).map(|_| next()).collect();
+            let bytes: Vec<u8> = coords.iter().flat_map(|c| c.to_le_bytes()).collect();
+            let got = packed_f32_bounds(&bytes);
+            if n == 0 {
+                assert_eq!(got, Some(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3])));
+                continue;
+            }
+            let mut lo = [f64::INFINITY; 3];
+            let mut hi = [f64::NEG_INFINITY; 3];
+            for (k, &c) in coords.iter().enumerate() {
+                lo[k % 3] = lo[k % 3].min(c as f64);
+                hi[k % 3] = hi[k % 3].max(c as f64);
+            }
+            assert_eq!(got, Some((lo, hi)), "{n} vertices");
+            for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+                for at in 0..3 * n {
+                    let mut b = bytes.clone();
+                    b[4 * at..4 * at + 4].copy_from_slice(&bad.to_le_bytes());
+                    assert_eq!(packed_f32_bounds(&b), None, "{bad} at coordinate {at} of {n} vertices");
+                }
+            }
+        }
+    }
 
     /// A header announcing 2^32 - 1, 2^62 or 2^64 - 1 faces over a file of a
     /// few hundred bytes: the hint stays within the file's size, and reading
