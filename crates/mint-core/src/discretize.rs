@@ -83,6 +83,12 @@ pub fn discretize_triangle(p: &[[f64; 3]; 3], emit: impl FnMut(Crossing)) {
     if !((has[1] && has[2]) || (has[2] && has[0]) || (has[0] && has[1])) {
         return;
     }
+    // Callers pass finite corners (files are checked as they are read);
+    // should one not be, the triangle crosses nothing, rather than walking
+    // an unbounded range of lines or clamping to NaN.
+    if !p.iter().flatten().all(|c| c.is_finite()) {
+        return;
+    }
     let last = [ceil(hi[0]) - 1.0, ceil(hi[1]) - 1.0, ceil(hi[2]) - 1.0];
     debug_assert_eq!(has, [first[0] <= last[0], first[1] <= last[1], first[2] <= last[2]]);
     crossings(p, lo, hi, first, last, has, emit);
@@ -261,6 +267,24 @@ mod tests {
         let t = [[0.5, 0.5, 0.0], [1.5, 0.5, 1e6], [0.5, 1.5, 1e6 + 1e-3]];
         for c in collect(t) {
             assert!(c.value >= c.cell as f64 && c.value <= c.cell as f64 + 1.0);
+        }
+    }
+
+    /// A triangle with a NaN or infinite corner crosses nothing, wherever
+    /// the bad value is, and does not panic or loop (it used to panic in
+    /// `clamp` on NaN).
+    #[test]
+    fn a_triangle_with_a_non_finite_corner_crosses_nothing() {
+        let good = [[0.5, 0.5, 0.2], [3.5, 0.7, 0.4], [0.6, 3.5, 2.5]];
+        assert!(!collect(good).is_empty());
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            for k in 0..3 {
+                for d in 0..3 {
+                    let mut t = good;
+                    t[k][d] = bad;
+                    assert!(collect(t).is_empty(), "{bad} at corner {k}, axis {d}");
+                }
+            }
         }
     }
 

@@ -50,11 +50,22 @@ pub struct TriangleRecords {
     positions: Positions,
     faces: FixedFaces,
     prefetch: bool,
+    finite_known: bool,
 }
 
 impl TriangleRecords {
     pub(crate) fn new(path: PathBuf, positions: Positions, faces: FixedFaces) -> TriangleRecords {
-        TriangleRecords { path, positions, faces, prefetch: true }
+        TriangleRecords { path, positions, faces, prefetch: true, finite_known: false }
+    }
+
+    /// Tells [`TriangleRecords::visit`] that every position is already known
+    /// to be finite (the caller checked them all, for instance with
+    /// `VertexPositions::bounds`), so that the common layout's loop skips
+    /// its per-triangle check: a tenth of the visit when nothing else is
+    /// done per triangle. Indices are still checked. Should a position be
+    /// NaN or infinite after all, visitors receive it.
+    pub fn set_positions_known_finite(&mut self, known: bool) {
+        self.finite_known = known;
     }
 
     /// Whether [`TriangleRecords::visit`] prefetches the corners of the
@@ -266,6 +277,7 @@ impl TriangleRecords {
     #[inline(always)]
     fn fast<const F64: bool, const PREFETCH: bool>(&self, data: &[u8], start: usize, first: u64, end: u64, element: &str, visitor: &mut impl TriangleVisitor) -> Result<(), Error> {
         let nv = self.positions.count();
+        let finite_known = self.finite_known;
         let bytes = &data[start + first as usize * 13..start + end as usize * 13];
         // Prefetch the corners of the triangle this many records ahead: in
         // a mesh whose vertices are in no spatial order each corner is a
@@ -302,7 +314,9 @@ impl TriangleRecords {
             // Positions stored as f64 (`F64`) or f32, little-endian.
             let pos = &self.positions;
             let p = if F64 { [pos.get_f64le(t[0]), pos.get_f64le(t[1]), pos.get_f64le(t[2])] } else { [pos.get_f32le(t[0]), pos.get_f32le(t[1]), pos.get_f32le(t[2])] };
-            check_finite(&p, &t).map_err(|r| self.reject(r, k, element, Some((start + k as usize * 13) as u64)))?;
+            if !finite_known {
+                check_finite(&p, &t).map_err(|r| self.reject(r, k, element, Some((start + k as usize * 13) as u64)))?;
+            }
             visitor.triangle(&p);
         }
         Ok(())

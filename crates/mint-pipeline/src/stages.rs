@@ -566,6 +566,9 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
         if let Some(records) = direct.as_mut() {
             let on = prefetch_pays(records, &positions, range);
             records.set_prefetch(on);
+            // The bounds stage, complete before any discretize task (the
+            // grid is made from its results), checked every vertex finite.
+            records.set_positions_known_finite(true);
         }
         let choice = choose(ctx.deref, direct.as_ref(), &positions, range);
         let mut result = None;

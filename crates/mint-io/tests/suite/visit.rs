@@ -1,7 +1,9 @@
 //! The direct record path (`TriangleRecords::visit`) against the streaming
 //! reader: every triangle of a mesh whose vertices and faces are shuffled
 //! (so that prefetching has work to do), with the corner prefetch on and
-//! off, over ranges that start and end anywhere, for f32 and f64 positions.
+//! off and the finiteness check on and off, over ranges that start and end
+//! anywhere, for f32 and f64 positions; and a NaN position, reported unless
+//! the caller said every position is finite.
 use mint_core::TriMesh;
 use mint_io::{Format, MeshReader, ReadOptions, WriteOptions};
 
@@ -56,8 +58,9 @@ fn visiting_records_gives_the_streamed_triangles_with_and_without_prefetch() {
         let reader = MeshReader::open(&path, ReadOptions::default()).unwrap();
         let mut records = reader.triangle_records().unwrap().expect("binary PLY triangles are fixed records");
         assert_eq!(records.len(), want.len() as u64);
-        for prefetch in [true, false] {
+        for (prefetch, known) in [(true, false), (false, false), (true, true), (false, true)] {
             records.set_prefetch(prefetch);
+            records.set_positions_known_finite(known);
             // Whole, then in uneven steps whose look-ahead crosses each end.
             for step in [u64::MAX, 1, 31, 4097] {
                 let mut got = Vec::with_capacity(want.len());
@@ -67,8 +70,30 @@ fn visiting_records_gives_the_streamed_triangles_with_and_without_prefetch() {
                     records.visit(at, to, &mut |p: &[[f64; 3]; 3]| got.push(*p)).unwrap();
                     at = to;
                 }
-                assert!(got == want, "double {double}, prefetch {prefetch}, step {step}: other triangles");
+                assert!(got == want, "double {double}, prefetch {prefetch}, known finite {known}, step {step}: other triangles");
             }
         }
     }
+}
+
+#[test]
+fn a_nan_position_is_reported_unless_the_caller_vouched_for_every_position() {
+    let d = tempfile::tempdir().unwrap();
+    let path = d.path().join("nan.ply");
+    write(&path, Format::Ply, WriteOptions::default(), &shuffled_grid(20));
+    // The writer refuses NaN: patch vertex 7's y in the file.
+    let mut bytes = std::fs::read(&path).unwrap();
+    let body = bytes.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    bytes[body + 7 * 12 + 4..body + 7 * 12 + 8].copy_from_slice(&f32::NAN.to_le_bytes());
+    std::fs::write(&path, &bytes).unwrap();
+    let reader = MeshReader::open(&path, ReadOptions::default()).unwrap();
+    let mut records = reader.triangle_records().unwrap().unwrap();
+    let mut seen = 0;
+    let e = records.visit(0, records.len(), &mut |_: &[[f64; 3]; 3]| seen += 1).unwrap_err();
+    assert_eq!(e.kind(), mint_io::ErrorKind::Value, "{e}");
+    assert!(e.to_string().contains("vertex 7"), "{e}");
+    records.set_positions_known_finite(true);
+    let mut nan = 0;
+    records.visit(0, records.len(), &mut |p: &[[f64; 3]; 3]| nan += p.iter().flatten().any(|c| c.is_nan()) as usize).unwrap();
+    assert!(nan > 0 && seen < records.len() as usize);
 }
