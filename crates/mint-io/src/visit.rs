@@ -9,7 +9,9 @@
 //! generic scalar readers.
 //!
 //! Every index is range-checked and every position checked finite, as the
-//! streaming reader does, with the same kind of located error.
+//! streaming reader does, with the same kind of located error (the
+//! finiteness check can be waived by a caller that has checked every
+//! position already: [`TriangleRecords::set_positions_known_finite`]).
 
 use crate::error::{Error, ErrorKind};
 use crate::mapped::Mapped;
