@@ -225,6 +225,17 @@ impl Positions {
         Some(&self.map.bytes()[self.base + first as usize * 12..self.base + end as usize * 12])
     }
 
+    /// The map from vertex 0's record on, when the positions are packed
+    /// little-endian f32 triples and at least 4 more bytes follow the last
+    /// one in the map: then the 16 bytes at `12 * i` hold vertex `i`'s
+    /// `x y z` and 4 bytes of whatever follows, for every `i < count`, and
+    /// can be read as one vector. `None` otherwise.
+    pub(crate) fn packed_f32_windows(&self) -> Option<&[u8]> {
+        let all = self.packed_f32(0, self.count)?;
+        let bytes = self.map.bytes();
+        (self.base + all.len() + 4 <= bytes.len()).then(|| &bytes[self.base..self.base + all.len() + 4])
+    }
+
     pub(crate) fn mapped(&self) -> &Mapped {
         &self.map
     }

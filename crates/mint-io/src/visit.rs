@@ -25,6 +25,19 @@ use std::sync::Arc;
 pub trait TriangleVisitor {
     /// One triangle: the positions of its three corners, in order.
     fn triangle(&mut self, p: &[[f64; 3]; 3]);
+
+    /// The same, for positions stored as packed little-endian f32 triples
+    /// whose finiteness the caller vouched for
+    /// ([`TriangleRecords::set_positions_known_finite`]): the first 12
+    /// bytes of `raw[k]` are corner `k`'s `x y z`, the last 4 whatever
+    /// follows it in the file. A visitor can load each corner as one
+    /// vector; the default converts and calls
+    /// [`TriangleVisitor::triangle`], which gets the same values.
+    #[inline(always)]
+    fn triangle_f32le(&mut self, raw: &[[u8; 16]; 3]) {
+        let f = |r: &[u8; 16], o: usize| f32::from_le_bytes([r[o], r[o + 1], r[o + 2], r[o + 3]]) as f64;
+        self.triangle(&raw.each_ref().map(|r| [f(r, 0), f(r, 4), f(r, 8)]));
+    }
 }
 
 impl<F: FnMut(&[[f64; 3]; 3])> TriangleVisitor for F {
@@ -132,11 +145,16 @@ impl TriangleRecords {
             FixedFaces::Ply { map, element, start, stride, pre, cty, ity, be, .. } => {
                 let data = map.bytes();
                 let fast = !*be && *stride == 13 && *pre == 0 && *cty == Scalar::U8 && matches!(ity, Scalar::U32 | Scalar::I32);
-                match (fast, self.positions.kind(), self.prefetch) {
-                    (true, PosKind::F32Le, true) => self.fast::<false, true>(data, *start, first, end, element, visitor),
-                    (true, PosKind::F64Le, true) => self.fast::<true, true>(data, *start, first, end, element, visitor),
-                    (true, PosKind::F32Le, false) => self.fast::<false, false>(data, *start, first, end, element, visitor),
-                    (true, PosKind::F64Le, false) => self.fast::<true, false>(data, *start, first, end, element, visitor),
+                // Vouched-for packed f32 positions go to the visitor as raw
+                // 16-byte windows (`TriangleVisitor::triangle_f32le`).
+                let raw = self.finite_known && self.positions.packed_f32_windows().is_some();
+                match (fast, self.positions.kind(), self.prefetch, raw) {
+                    (true, PosKind::F32Le, true, true) => self.fast::<false, true, true>(data, *start, first, end, element, visitor),
+                    (true, PosKind::F32Le, false, true) => self.fast::<false, false, true>(data, *start, first, end, element, visitor),
+                    (true, PosKind::F32Le, true, false) => self.fast::<false, true, false>(data, *start, first, end, element, visitor),
+                    (true, PosKind::F32Le, false, false) => self.fast::<false, false, false>(data, *start, first, end, element, visitor),
+                    (true, PosKind::F64Le, true, _) => self.fast::<true, true, false>(data, *start, first, end, element, visitor),
+                    (true, PosKind::F64Le, false, _) => self.fast::<true, false, false>(data, *start, first, end, element, visitor),
                     _ => {
                         let nv = self.positions.count() as i64;
                         for k in first..end {
@@ -277,9 +295,13 @@ impl TriangleRecords {
 
     /// The common layout: `uchar 3`, three little-endian 32-bit indices.
     #[inline(always)]
-    fn fast<const F64: bool, const PREFETCH: bool>(&self, data: &[u8], start: usize, first: u64, end: u64, element: &str, visitor: &mut impl TriangleVisitor) -> Result<(), Error> {
+    fn fast<const F64: bool, const PREFETCH: bool, const RAW: bool>(&self, data: &[u8], start: usize, first: u64, end: u64, element: &str, visitor: &mut impl TriangleVisitor) -> Result<(), Error> {
         let nv = self.positions.count();
         let finite_known = self.finite_known;
+        // `RAW`: 16 readable bytes from every vertex's record (checked by
+        // `packed_f32_windows`, which the caller saw return `Some`).
+        let windows = if RAW { self.positions.packed_f32_windows().unwrap_or(&[]) } else { &[] };
+        assert!(!RAW || windows.len() >= nv as usize * 12 + 4);
         let bytes = &data[start + first as usize * 13..start + end as usize * 13];
         // Prefetch the corners of the triangle this many records ahead: in
         // a mesh whose vertices are in no spatial order each corner is a
@@ -312,6 +334,14 @@ impl TriangleRecords {
                 let v = bad as i32 as i64;
                 let v = if v < 0 { v } else { bad as i64 };
                 return Err(self.reject(Reject::Index(v), k, element, Some((start + k as usize * 13) as u64)));
+            }
+            if RAW {
+                // SAFETY: every index is below `nv` (checked above), and
+                // `windows` holds `12 * nv + 4` bytes (asserted above), so
+                // the 16 bytes from `12 * v` are inside it.
+                let w = |v: u32| unsafe { std::ptr::read_unaligned(windows.as_ptr().add(v as usize * 12) as *const [u8; 16]) };
+                visitor.triangle_f32le(&[w(t[0]), w(t[1]), w(t[2])]);
+                continue;
             }
             // Positions stored as f64 (`F64`) or f32, little-endian.
             let pos = &self.positions;

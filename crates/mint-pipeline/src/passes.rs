@@ -412,6 +412,18 @@ impl<const S: usize, const AVX: bool> TriangleVisitor for Chunk<'_, S, AVX> {
         }
         triangle::<S>(p, self.local, self.xf, self.nb, self.recs, &mut self.volume)
     }
+
+    #[inline(always)]
+    fn triangle_f32le(&mut self, raw: &[[u8; 16]; 3]) {
+        #[cfg(target_arch = "x86_64")]
+        if AVX && S < 3 {
+            // SAFETY: as in `triangle`.
+            unsafe { triangle_avx_f32::<S>(raw, self.local, self.nb, self.recs, &mut self.volume) };
+            return;
+        }
+        let f = |r: &[u8; 16], o: usize| f32::from_le_bytes([r[o], r[o + 1], r[o + 2], r[o + 3]]) as f64;
+        self.triangle(&raw.each_ref().map(|r| [f(r, 0), f(r, 4), f(r, 8)]))
+    }
 }
 
 /// [`triangle`] for a slab axis `S` of 0, 1 or 2 (no transform), on AVX
@@ -429,20 +441,65 @@ impl<const S: usize, const AVX: bool> TriangleVisitor for Chunk<'_, S, AVX> {
 #[inline(always)]
 unsafe fn triangle_avx<const S: usize>(p: &[[f64; 3]; 3], local: &LocalMap, nb: u32, recs: &mut Vec<Intercept>, v: &mut f64) {
     use std::arch::x86_64::*;
+    // Local axes (a, b, s) = ((s + 1) % 3, (s + 2) % 3, s), as in `triangle`;
+    // the fourth lane is 0 throughout.
+    let world = |q: &[f64; 3]| match S {
+        0 => _mm256_setr_pd(q[1], q[2], q[0], 0.0),
+        1 => _mm256_setr_pd(q[2], q[0], q[1], 0.0),
+        _ => _mm256_setr_pd(q[0], q[1], q[2], 0.0),
+    };
+    triangle_avx_local(world(&p[0]), world(&p[1]), world(&p[2]), local, nb, recs, v)
+}
+
+/// [`triangle_avx`] for corners given as packed little-endian f32 windows
+/// (`TriangleVisitor::triangle_f32le`): each corner is one 16-byte load
+/// and one conversion to f64 (exact, so the same values), its lanes put in
+/// local axis order with the fourth set to 0, as `triangle_avx` has them.
+///
+/// # Safety
+/// As [`triangle_avx`].
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn triangle_avx_f32<const S: usize>(raw: &[[u8; 16]; 3], local: &LocalMap, nb: u32, recs: &mut Vec<Intercept>, v: &mut f64) {
+    use std::arch::x86_64::*;
+    // (x, y, z, w) -> (y, z, x, w), (z, x, y, w) or (x, y, z, w).
+    const YZX: i32 = 0b11_00_10_01;
+    const ZXY: i32 = 0b11_01_00_10;
+    let zero = _mm256_setzero_pd();
+    let world = |r: &[u8; 16]| {
+        let q = _mm256_cvtps_pd(_mm_loadu_ps(r.as_ptr() as *const f32));
+        let q = match S {
+            0 => _mm256_permute4x64_pd::<YZX>(q),
+            1 => _mm256_permute4x64_pd::<ZXY>(q),
+            _ => q,
+        };
+        _mm256_blend_pd::<0b1000>(q, zero)
+    };
+    triangle_avx_local(world(&raw[0]), world(&raw[1]), world(&raw[2]), local, nb, recs, v)
+}
+
+/// The rest of [`triangle_avx`]: corners in local axis order (fourth lane
+/// 0) to local coordinates, the volume, the reject, the crossings.
+///
+/// # Safety
+/// As [`triangle_avx`].
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn triangle_avx_local(
+    p0: std::arch::x86_64::__m256d,
+    p1: std::arch::x86_64::__m256d,
+    p2: std::arch::x86_64::__m256d,
+    local: &LocalMap,
+    nb: u32,
+    recs: &mut Vec<Intercept>,
+    v: &mut f64,
+) {
+    use std::arch::x86_64::*;
     let o = local.origin;
     let origin = _mm256_setr_pd(o[0], o[1], o[2], 0.0);
     let inv = _mm256_set1_pd(local.inv);
-    // Local axes (a, b, s) = ((s + 1) % 3, (s + 2) % 3, s), as in `triangle`;
-    // the fourth lane is 0 throughout.
-    let map = |q: &[f64; 3]| {
-        let q = match S {
-            0 => _mm256_setr_pd(q[1], q[2], q[0], 0.0),
-            1 => _mm256_setr_pd(q[2], q[0], q[1], 0.0),
-            _ => _mm256_setr_pd(q[0], q[1], q[2], 0.0),
-        };
-        _mm256_mul_pd(_mm256_sub_pd(q, origin), inv)
-    };
-    let (a, b, c) = (map(&p[0]), map(&p[1]), map(&p[2]));
+    let map = |q: __m256d| _mm256_mul_pd(_mm256_sub_pd(q, origin), inv);
+    let (a, b, c) = (map(p0), map(p1), map(p2));
     // signed_volume6: a0 (b1 c2 - b2 c1) - a1 (b0 c2 - b2 c0) + a2 (b0 c1 - b1 c0),
     // lanes (b1, b0, b0) (c2, c2, c1) - (b2, b2, b1) (c1, c0, c0).
     const B1B0B0: i32 = 0b11_00_00_01;
@@ -677,6 +734,7 @@ mod tests {
     #[test]
     #[cfg(target_arch = "x86_64")]
     fn the_avx2_triangle_equals_the_scalar_one_bit_for_bit() {
+        // Also the raw f32 windows' entry (`triangle_avx_f32`).
         if !std::arch::is_x86_feature_detected!("avx2") {
             eprintln!("this CPU has no AVX2: the AVX2 path never runs here, nothing to compare");
             return;
@@ -738,6 +796,38 @@ mod tests {
                 assert_eq!(got, want, "crossings of {p:?} on axis {s}");
                 assert_eq!(vg.to_bits(), vw.to_bits(), "volume of {p:?} on axis {s}");
                 rejected += want.is_empty() as u32;
+                // The same corners rounded to f32 and given as raw 16-byte
+                // windows, whose last 4 bytes (the next record in a file)
+                // are anything, NaN and infinity included.
+                let mut raw = [[0u8; 16]; 3];
+                let mut pf = [[0.0f64; 3]; 3];
+                for k in 0..3 {
+                    for d in 0..3 {
+                        let c = p[k][d] as f32;
+                        raw[k][4 * d..4 * d + 4].copy_from_slice(&c.to_le_bytes());
+                        pf[k][d] = c as f64;
+                    }
+                    let junk = [f32::NAN, f32::INFINITY, f32::from_bits(1), f32::from_bits(next() as u32)][(next() % 4) as usize];
+                    raw[k][12..].copy_from_slice(&junk.to_le_bytes());
+                }
+                let (mut want, mut got) = (Vec::new(), Vec::new());
+                let (mut vw, mut vg) = (0.0f64, 0.0f64);
+                match s {
+                    0 => {
+                        triangle::<0>(&pf, map, None, 64, &mut want, &mut vw);
+                        unsafe { triangle_avx_f32::<0>(&raw, map, 64, &mut got, &mut vg) };
+                    }
+                    1 => {
+                        triangle::<1>(&pf, map, None, 64, &mut want, &mut vw);
+                        unsafe { triangle_avx_f32::<1>(&raw, map, 64, &mut got, &mut vg) };
+                    }
+                    _ => {
+                        triangle::<2>(&pf, map, None, 64, &mut want, &mut vw);
+                        unsafe { triangle_avx_f32::<2>(&raw, map, 64, &mut got, &mut vg) };
+                    }
+                }
+                assert_eq!(got, want, "crossings of the f32 windows of {pf:?} on axis {s}");
+                assert_eq!(vg.to_bits(), vw.to_bits(), "volume of the f32 windows of {pf:?} on axis {s}");
             }
         }
         // Both kinds of triangle were met.

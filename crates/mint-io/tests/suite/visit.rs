@@ -5,9 +5,9 @@
 //! anywhere, for f32 and f64 positions; and a NaN position, reported unless
 //! the caller said every position is finite.
 use mint_core::TriMesh;
-use mint_io::{Format, MeshReader, ReadOptions, WriteOptions};
+use mint_io::{Format, MeshReader, ReadOptions, TriangleVisitor, WriteOptions};
 
-use super::util::{read, soup, write};
+use super::util::{ply_bytes, read, soup, write, write_file, El, V};
 
 /// A `n` x `n` vertex grid bent into a bowl, its vertices and faces in an
 /// order unrelated to space (a fixed 64-bit LCG, Fisher-Yates).
@@ -96,4 +96,49 @@ fn a_nan_position_is_reported_unless_the_caller_vouched_for_every_position() {
     let mut nan = 0;
     records.visit(0, records.len(), &mut |p: &[[f64; 3]; 3]| nan += p.iter().flatten().any(|c| c.is_nan()) as usize).unwrap();
     assert!(nan > 0 && seen < records.len() as usize);
+}
+
+/// A visitor that takes the raw f32 windows itself and records which
+/// method each triangle came through.
+#[derive(Default)]
+struct Raw {
+    tris: Vec<[[f64; 3]; 3]>,
+    raw: usize,
+}
+
+impl TriangleVisitor for Raw {
+    fn triangle(&mut self, p: &[[f64; 3]; 3]) {
+        self.tris.push(*p);
+    }
+    fn triangle_f32le(&mut self, raw: &[[u8; 16]; 3]) {
+        let f = |r: &[u8; 16], o: usize| f32::from_le_bytes(r[o..o + 4].try_into().unwrap()) as f64;
+        self.tris.push(raw.each_ref().map(|r| [f(r, 0), f(r, 4), f(r, 8)]));
+        self.raw += 1;
+    }
+}
+
+/// Vouched-for packed f32 positions come as raw windows with the streamed
+/// values, up to the last vertex; where the last vertex ends the file (its
+/// window would run past the map: faces before vertices), they come as
+/// converted triangles instead, and the same.
+#[test]
+fn raw_f32_windows_give_the_same_triangles_and_never_run_past_the_file() {
+    let d = tempfile::tempdir().unwrap();
+    let m = shuffled_grid(40);
+    let verts: Vec<Vec<V>> = m.positions.iter().map(|p| p.iter().map(|&c| V::N(c)).collect()).collect();
+    let faces: Vec<Vec<V>> = m.faces.iter().map(|f| vec![V::L(f.iter().map(|&i| i as f64).collect())]).collect();
+    let vertex = || El { name: "vertex", props: &["float x", "float y", "float z"], records: verts.clone() };
+    let face = || El { name: "face", props: &["list uchar int vertex_indices"], records: faces.clone() };
+    for (name, vertices_last) in [("vf.ply", false), ("fv.ply", true)] {
+        let els = if vertices_last { [face(), vertex()] } else { [vertex(), face()] };
+        let path = write_file(d.path(), name, &ply_bytes("binary_little_endian", &[], &els));
+        let want = soup(&read(&path));
+        let reader = MeshReader::open(&path, ReadOptions::default()).unwrap();
+        let mut records = reader.triangle_records().unwrap().unwrap();
+        records.set_positions_known_finite(true);
+        let mut v = Raw::default();
+        records.visit(0, records.len(), &mut v).unwrap();
+        assert!(v.tris == want, "{name}: other triangles");
+        assert_eq!(v.raw, if vertices_last { 0 } else { want.len() }, "{name}: raw windows");
+    }
 }
