@@ -726,6 +726,23 @@ mod tests {
         assert_eq!(plan_slabs(&counts, 0, 10, None, u64::MAX), vec![(0, 10)]);
     }
 
+    /// Crossings and volume of one triangle on slab axis `S`: scalar and
+    /// AVX2 from f64 corners, then scalar from the f32-rounded corners and
+    /// AVX2 from their raw windows.
+    #[cfg(target_arch = "x86_64")]
+    fn all_four<const S: usize>(p: &[[f64; 3]; 3], pf: &[[f64; 3]; 3], raw: &[[u8; 16]; 3], map: &LocalMap) -> [(Vec<Intercept>, f64); 4] {
+        let mut out: [(Vec<Intercept>, f64); 4] = Default::default();
+        let [a, b, c, d] = &mut out;
+        triangle::<S>(p, map, None, 64, &mut a.0, &mut a.1);
+        triangle::<S>(pf, map, None, 64, &mut c.0, &mut c.1);
+        // SAFETY: the caller checked that the CPU has AVX2.
+        unsafe {
+            triangle_avx::<S>(p, map, 64, &mut b.0, &mut b.1);
+            triangle_avx_f32::<S>(raw, map, 64, &mut d.0, &mut d.1);
+        }
+        out
+    }
+
     /// The AVX2 triangle gives the scalar one's crossings and volume bits
     /// on every slab axis, for triangles made to sit on and beside grid
     /// lines and planes (integers, integers plus or minus an ulp, halves),
@@ -776,58 +793,31 @@ mod tests {
             if round % 7 == 0 {
                 p[2] = p[(round as usize / 7) % 2]; // a repeated corner
             }
+            // The same corners rounded to f32 and given as raw 16-byte
+            // windows, whose last 4 bytes (the next record in a file) are
+            // anything, NaN and infinity included.
+            let mut raw = [[0u8; 16]; 3];
+            let mut pf = [[0.0f64; 3]; 3];
+            for k in 0..3 {
+                for d in 0..3 {
+                    let c = p[k][d] as f32;
+                    raw[k][4 * d..4 * d + 4].copy_from_slice(&c.to_le_bytes());
+                    pf[k][d] = c as f64;
+                }
+                let junk = [f32::NAN, f32::INFINITY, f32::from_bits(1), f32::from_bits(next() as u32)][(next() % 4) as usize];
+                raw[k][12..].copy_from_slice(&junk.to_le_bytes());
+            }
             for s in 0..3 {
-                let (mut want, mut got) = (Vec::new(), Vec::new());
-                let (mut vw, mut vg) = (0.0f64, 0.0f64);
-                match s {
-                    0 => {
-                        triangle::<0>(&p, map, None, 64, &mut want, &mut vw);
-                        unsafe { triangle_avx::<0>(&p, map, 64, &mut got, &mut vg) };
-                    }
-                    1 => {
-                        triangle::<1>(&p, map, None, 64, &mut want, &mut vw);
-                        unsafe { triangle_avx::<1>(&p, map, 64, &mut got, &mut vg) };
-                    }
-                    _ => {
-                        triangle::<2>(&p, map, None, 64, &mut want, &mut vw);
-                        unsafe { triangle_avx::<2>(&p, map, 64, &mut got, &mut vg) };
-                    }
-                }
-                assert_eq!(got, want, "crossings of {p:?} on axis {s}");
-                assert_eq!(vg.to_bits(), vw.to_bits(), "volume of {p:?} on axis {s}");
-                rejected += want.is_empty() as u32;
-                // The same corners rounded to f32 and given as raw 16-byte
-                // windows, whose last 4 bytes (the next record in a file)
-                // are anything, NaN and infinity included.
-                let mut raw = [[0u8; 16]; 3];
-                let mut pf = [[0.0f64; 3]; 3];
-                for k in 0..3 {
-                    for d in 0..3 {
-                        let c = p[k][d] as f32;
-                        raw[k][4 * d..4 * d + 4].copy_from_slice(&c.to_le_bytes());
-                        pf[k][d] = c as f64;
-                    }
-                    let junk = [f32::NAN, f32::INFINITY, f32::from_bits(1), f32::from_bits(next() as u32)][(next() % 4) as usize];
-                    raw[k][12..].copy_from_slice(&junk.to_le_bytes());
-                }
-                let (mut want, mut got) = (Vec::new(), Vec::new());
-                let (mut vw, mut vg) = (0.0f64, 0.0f64);
-                match s {
-                    0 => {
-                        triangle::<0>(&pf, map, None, 64, &mut want, &mut vw);
-                        unsafe { triangle_avx_f32::<0>(&raw, map, 64, &mut got, &mut vg) };
-                    }
-                    1 => {
-                        triangle::<1>(&pf, map, None, 64, &mut want, &mut vw);
-                        unsafe { triangle_avx_f32::<1>(&raw, map, 64, &mut got, &mut vg) };
-                    }
-                    _ => {
-                        triangle::<2>(&pf, map, None, 64, &mut want, &mut vw);
-                        unsafe { triangle_avx_f32::<2>(&raw, map, 64, &mut got, &mut vg) };
-                    }
-                }
-                assert_eq!(got, want, "crossings of the f32 windows of {pf:?} on axis {s}");
-                assert_eq!(vg.to_bits(), vw.to_bits(), "volume of the f32 windows of {pf:?} on axis {s}");
+                let [want, got, want_f32, got_f32] = match s {
+                    0 => all_four::<0>(&p, &pf, &raw, map),
+                    1 => all_four::<1>(&p, &pf, &raw, map),
+                    _ => all_four::<2>(&p, &pf, &raw, map),
+                };
+                assert_eq!(got.0, want.0, "crossings of {p:?} on axis {s}");
+                assert_eq!(got.1.to_bits(), want.1.to_bits(), "volume of {p:?} on axis {s}");
+                assert_eq!(got_f32.0, want_f32.0, "crossings of the f32 windows of {pf:?} on axis {s}");
+                assert_eq!(got_f32.1.to_bits(), want_f32.1.to_bits(), "volume of the f32 windows of {pf:?} on axis {s}");
+                rejected += want.0.is_empty() as u32;
             }
         }
         // Both kinds of triangle were met.
