@@ -53,7 +53,7 @@ pub use convert::{convert, convert_cancellable, ConvertSummary};
 pub use error::{Error, ErrorKind, Position};
 pub use format::Format;
 pub use reader::{read_info, read_mesh, read_mesh_with, ElementInfo, MeshInfo, MeshReader, RangeGrid, ReadOptions, ReadStats, TriangleChunk, VertexPositions, WholeMesh};
-pub use visit::{TriangleRecords, TriangleVisitor};
+pub use visit::{f32le_corners, TriangleRecords, TriangleVisitor};
 pub use writer::{MeshWriter, WriteOptions, WriteSummary};
 
 #[cfg(test)]

@@ -35,9 +35,16 @@ pub trait TriangleVisitor {
     /// [`TriangleVisitor::triangle`], which gets the same values.
     #[inline(always)]
     fn triangle_f32le(&mut self, raw: &[[u8; 16]; 3]) {
-        let f = |r: &[u8; 16], o: usize| f32::from_le_bytes([r[o], r[o + 1], r[o + 2], r[o + 3]]) as f64;
-        self.triangle(&raw.each_ref().map(|r| [f(r, 0), f(r, 4), f(r, 8)]));
+        self.triangle(&f32le_corners(raw));
     }
+}
+
+/// The corner positions of [`TriangleVisitor::triangle_f32le`]'s windows,
+/// as [`TriangleVisitor::triangle`] receives them.
+#[inline(always)]
+pub fn f32le_corners(raw: &[[u8; 16]; 3]) -> [[f64; 3]; 3] {
+    let f = |r: &[u8; 16], o: usize| f32::from_le_bytes([r[o], r[o + 1], r[o + 2], r[o + 3]]) as f64;
+    raw.each_ref().map(|r| [f(r, 0), f(r, 4), f(r, 8)])
 }
 
 impl<F: FnMut(&[[f64; 3]; 3])> TriangleVisitor for F {

@@ -421,8 +421,7 @@ impl<const S: usize, const AVX: bool> TriangleVisitor for Chunk<'_, S, AVX> {
             unsafe { triangle_avx_f32::<S>(raw, self.local, self.nb, self.recs, &mut self.volume) };
             return;
         }
-        let f = |r: &[u8; 16], o: usize| f32::from_le_bytes([r[o], r[o + 1], r[o + 2], r[o + 3]]) as f64;
-        self.triangle(&raw.each_ref().map(|r| [f(r, 0), f(r, 4), f(r, 8)]))
+        self.triangle(&mint_io::f32le_corners(raw))
     }
 }
 
