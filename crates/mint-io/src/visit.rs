@@ -154,14 +154,16 @@ impl TriangleRecords {
                 let fast = !*be && *stride == 13 && *pre == 0 && *cty == Scalar::U8 && matches!(ity, Scalar::U32 | Scalar::I32);
                 // Vouched-for packed f32 positions go to the visitor as raw
                 // 16-byte windows (`TriangleVisitor::triangle_f32le`).
-                let raw = self.finite_known && self.positions.packed_f32_windows().is_some();
+                let windows = if self.finite_known { self.positions.packed_f32_windows() } else { None };
+                let raw = windows.is_some();
+                let windows = windows.unwrap_or(&[]);
                 match (fast, self.positions.kind(), self.prefetch, raw) {
-                    (true, PosKind::F32Le, true, true) => self.fast::<false, true, true>(data, *start, first, end, element, visitor),
-                    (true, PosKind::F32Le, false, true) => self.fast::<false, false, true>(data, *start, first, end, element, visitor),
-                    (true, PosKind::F32Le, true, false) => self.fast::<false, true, false>(data, *start, first, end, element, visitor),
-                    (true, PosKind::F32Le, false, false) => self.fast::<false, false, false>(data, *start, first, end, element, visitor),
-                    (true, PosKind::F64Le, true, _) => self.fast::<true, true, false>(data, *start, first, end, element, visitor),
-                    (true, PosKind::F64Le, false, _) => self.fast::<true, false, false>(data, *start, first, end, element, visitor),
+                    (true, PosKind::F32Le, true, true) => self.fast::<false, true, true>(data, *start, first, end, element, windows, visitor),
+                    (true, PosKind::F32Le, false, true) => self.fast::<false, false, true>(data, *start, first, end, element, windows, visitor),
+                    (true, PosKind::F32Le, true, false) => self.fast::<false, true, false>(data, *start, first, end, element, windows, visitor),
+                    (true, PosKind::F32Le, false, false) => self.fast::<false, false, false>(data, *start, first, end, element, windows, visitor),
+                    (true, PosKind::F64Le, true, _) => self.fast::<true, true, false>(data, *start, first, end, element, windows, visitor),
+                    (true, PosKind::F64Le, false, _) => self.fast::<true, false, false>(data, *start, first, end, element, windows, visitor),
                     _ => {
                         let nv = self.positions.count() as i64;
                         for k in first..end {
@@ -302,12 +304,21 @@ impl TriangleRecords {
 
     /// The common layout: `uchar 3`, three little-endian 32-bit indices.
     #[inline(always)]
-    fn fast<const F64: bool, const PREFETCH: bool, const RAW: bool>(&self, data: &[u8], start: usize, first: u64, end: u64, element: &str, visitor: &mut impl TriangleVisitor) -> Result<(), Error> {
+    #[allow(clippy::too_many_arguments)]
+    fn fast<const F64: bool, const PREFETCH: bool, const RAW: bool>(
+        &self,
+        data: &[u8],
+        start: usize,
+        first: u64,
+        end: u64,
+        element: &str,
+        windows: &[u8],
+        visitor: &mut impl TriangleVisitor,
+    ) -> Result<(), Error> {
         let nv = self.positions.count();
         let finite_known = self.finite_known;
-        // `RAW`: 16 readable bytes from every vertex's record (checked by
-        // `packed_f32_windows`, which the caller saw return `Some`).
-        let windows = if RAW { self.positions.packed_f32_windows().unwrap_or(&[]) } else { &[] };
+        // `RAW`: `windows` (from `packed_f32_windows`) holds 16 readable
+        // bytes from every vertex's record.
         assert!(!RAW || windows.len() >= nv as usize * 12 + 4);
         let bytes = &data[start + first as usize * 13..start + end as usize * 13];
         // Prefetch the corners of the triangle this many records ahead: in
