@@ -54,3 +54,45 @@ pub fn union(a: &mut TriMesh, b: &TriMesh) {
     a.positions.extend_from_slice(&b.positions);
     a.faces.extend(b.faces.iter().map(|f| f.map(|i| i + off)));
 }
+
+/// A test's run: the spec's settings (its job and output come with each
+/// call) and the tuning, changed field by field with [`Opts::with`].
+#[derive(Debug, Clone)]
+pub struct Opts {
+    pub spec: mint_pipeline::RunSpec,
+    pub tuning: mint_pipeline::Tuning,
+}
+
+impl Opts {
+    /// Defaults on a grid of `size`.
+    pub fn new(size: mint_core::GridSize) -> Opts {
+        Opts { spec: mint_pipeline::RunSpec::resample("", "", size), tuning: Default::default() }
+    }
+
+    /// A copy changed by `f`.
+    pub fn with(&self, f: impl FnOnce(&mut Opts)) -> Opts {
+        let mut o = self.clone();
+        f(&mut o);
+        o
+    }
+
+    /// The spec of `job` into `output` with these settings.
+    pub fn spec(&self, job: mint_pipeline::Job, output: &Path) -> mint_pipeline::RunSpec {
+        mint_pipeline::RunSpec { job, output: output.to_path_buf(), ..self.spec.clone() }.normalized()
+    }
+}
+
+/// Resamples `input` into `output` with `o`.
+pub fn resample(input: &Path, output: &Path, o: &Opts, p: &dyn mint_pipeline::Progress) -> Result<mint_pipeline::ResampleSummary, mint_pipeline::PipelineError> {
+    mint_pipeline::run(&o.spec(mint_pipeline::Job::Resample { input: input.to_path_buf() }, output), &o.tuning, p)
+}
+
+/// `a op b` into `output` with `o`.
+pub fn boolean(op: mint_core::expr::BoolOp, a: &Path, b: &Path, output: &Path, o: &Opts, p: &dyn mint_pipeline::Progress) -> Result<mint_pipeline::ResampleSummary, mint_pipeline::PipelineError> {
+    mint_pipeline::run(&o.spec(mint_pipeline::Job::Bool { op, a: a.to_path_buf(), b: b.to_path_buf() }, output), &o.tuning, p)
+}
+
+/// The scene `scene` (read from `scene_name`) into `output` with `o`.
+pub fn csg(scene: &mint_pipeline::Scene, scene_name: &str, output: &Path, o: &Opts, p: &dyn mint_pipeline::Progress) -> Result<mint_pipeline::ResampleSummary, mint_pipeline::PipelineError> {
+    mint_pipeline::run_scene(&o.spec(mint_pipeline::Job::Csg { scene: scene_name.into() }, output), scene, &o.tuning, p)
+}

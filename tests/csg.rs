@@ -5,12 +5,13 @@
 use crate::common::{load, write_mesh};
 use mint_core::expr::BoolOp;
 use mint_core::{GridSize, TriMesh};
-use mint_pipeline::{boolean, csg, parse_scene, resample, NoProgress, ResampleOptions};
+use crate::common::{boolean, csg, resample, Opts};
+use mint_pipeline::{parse_scene, NoProgress};
 use mint_testkit::topology::check_closed_oriented;
 use std::path::Path;
 
-fn opts(cells: u64) -> ResampleOptions {
-    ResampleOptions { size: GridSize::Cells(cells), ..Default::default() }
+fn opts(cells: u64) -> Opts {
+    Opts::new(GridSize::Cells(cells))
 }
 
 /// Meshes a scene given as text; returns the output mesh's volume.

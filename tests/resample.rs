@@ -8,17 +8,18 @@
 use crate::common::{box_mesh, load, union, write_mesh, write_trimesh};
 use mint_core::{GridSize, TriMesh, MARGIN};
 use mint_mesh::TriangleBvh;
-use mint_pipeline::{resample, NoProgress, ResampleOptions, ResampleSummary};
+use crate::common::{resample, Opts};
+use mint_pipeline::{NoProgress, ResampleSummary};
 use mint_testkit::topology::check_closed_oriented;
 use std::path::{Path, PathBuf};
 
-fn run(input: &Path, out: &Path, opts: ResampleOptions) -> (ResampleSummary, TriMesh) {
+fn run(input: &Path, out: &Path, opts: Opts) -> (ResampleSummary, TriMesh) {
     let s = resample(input, out, &opts, &NoProgress).unwrap();
     (s, load(out))
 }
 
-fn opts(size: GridSize) -> ResampleOptions {
-    ResampleOptions { size, ..Default::default() }
+fn opts(size: GridSize) -> Opts {
+    Opts::new(size)
 }
 
 /// All the properties a clean closed input must give.
@@ -93,7 +94,7 @@ fn closed_inputs_give_watertight_outputs_at_several_sizes_and_offsets() {
                     continue; // keep box faces exactly on grid planes
                 }
                 let out = dir.path().join("out.ply");
-                let (s, m) = run(&input, &out, ResampleOptions { grid_offset: offset, ..opts(size) });
+                let (s, m) = run(&input, &out, opts(size).with(|o| { o.spec.grid.offset = offset; }));
                 let genus = if case.name == "components" { None } else { case.genus };
                 assert_good(&format!("{} {size:?} {offset:?}", case.name), &input_mesh, &s, &m, genus);
             }
@@ -121,20 +122,21 @@ fn output_bytes_do_not_depend_on_threads_slabs_or_memory() {
     let dir = tempfile::tempdir().unwrap();
     let input = write_mesh(dir.path(), "g.ply", |s| drop(mint_gen::genus(2, 50_000, s).unwrap()));
     let reference = dir.path().join("ref.ply");
-    let base = ResampleOptions { threads: 1, ..opts(GridSize::Cells(30_000)) };
+    let base = opts(GridSize::Cells(30_000)).with(|o| { o.tuning.threads = 1; });
     let (s0, _) = run(&input, &reference, base.clone());
     assert_eq!(s0.slabs, 1, "the reference run is one slab");
     let want = std::fs::read(&reference).unwrap();
-    let variants: Vec<(&str, ResampleOptions)> = vec![
-        ("threads 2", ResampleOptions { threads: 2, ..base.clone() }),
-        ("slab 1", ResampleOptions { slab_layers: Some(1), threads: 2, ..base.clone() }),
-        ("slab 7", ResampleOptions { slab_layers: Some(7), ..base.clone() }),
-        ("small mem", ResampleOptions { mem_bytes: 48 << 20 | 1 << 20, threads: 2, ..base.clone() }),
+    let variants: Vec<(&str, Opts)> = vec![
+        ("threads 2", base.clone().with(|o| { o.tuning.threads = 2; })),
+        ("slab 1", base.clone().with(|o| { o.tuning.slab_layers = Some(1); o.tuning.threads = 2; })),
+        ("slab 7", base.clone().with(|o| { o.tuning.slab_layers = Some(7); })),
+        // The smallest budget (a smaller --mem is raised to it).
+        ("small mem", base.clone().with(|o| { o.tuning.mem_bytes = mint_pipeline::Budget::MIN; o.tuning.threads = 2; })),
     ];
     for (name, o) in variants {
         let out = dir.path().join("v.ply");
         let (s, _) = run(&input, &out, o);
-        assert!(name == "threads 2" || s.slabs > 1, "{name}: expected several slabs, got {}", s.slabs);
+        assert!(name == "threads 2" || name == "small mem" || s.slabs > 1, "{name}: expected several slabs, got {}", s.slabs);
         assert!(std::fs::read(&out).unwrap() == want, "{name}: output bytes differ");
     }
 }
@@ -244,19 +246,19 @@ fn a_shuffled_copy_resamples_to_the_same_bytes_with_mmap_and_sort_dereferencing(
             s.face(*f).unwrap();
         }
     });
-    let run_it = |input: &Path, o: ResampleOptions| {
+    let run_it = |input: &Path, o: Opts| {
         let out = dir.path().join("out.ply");
         let (s, _) = run(input, &out, o);
         (std::fs::read(&out).unwrap(), s)
     };
-    let bytes = |input: &Path, o: ResampleOptions| run_it(input, o).0;
+    let bytes = |input: &Path, o: Opts| run_it(input, o).0;
     let base = opts(GridSize::Cells(80_000));
-    let want = bytes(&ordered, ResampleOptions { deref: Deref::Mmap, ..base.clone() });
-    let want_obj = bytes(&ordered_obj, ResampleOptions { deref: Deref::Mmap, ..base.clone() });
+    let want = bytes(&ordered, base.clone().with(|o| { o.tuning.deref = Deref::Mmap; }));
+    let want_obj = bytes(&ordered_obj, base.clone().with(|o| { o.tuning.deref = Deref::Mmap; }));
     for deref in [Deref::Mmap, Deref::Sort] {
-        let d = ResampleOptions { deref, ..base.clone() };
+        let d = base.clone().with(|o| { o.tuning.deref = deref; });
         // 20 MiB: the sort's corner buckets (about 4.8 MB) spill.
-        let small = ResampleOptions { mem_bytes: 20 << 20, ..d.clone() };
+        let small = d.clone().with(|o| { o.tuning.mem_bytes = 20 << 20; });
         assert!(bytes(&ordered, d.clone()) == want, "{deref:?}: ordered binary PLY differs");
         let (got, s) = run_it(&shuffled, small.clone());
         assert!(got == want, "{deref:?}: shuffled binary PLY differs");
@@ -264,7 +266,7 @@ fn a_shuffled_copy_resamples_to_the_same_bytes_with_mmap_and_sort_dereferencing(
         if deref == Deref::Sort {
             assert!(s.deref_spilled_bytes > 0, "the sort was meant to spill under 20 MiB");
         }
-        let parts = ResampleOptions { parts: 3, slabs: 2, work_dir: Some(dir.path().join(format!("w-{deref:?}"))), mem_bytes: 49 << 20, ..d.clone() };
+        let parts = d.clone().with(|o| { o.tuning.parts = 3; o.tuning.slabs = 2; o.tuning.work_dir = Some(dir.path().join(format!("w-{deref:?}"))); o.tuning.mem_bytes = 49 << 20; });
         assert!(bytes(&shuffled, parts) == want, "{deref:?}: shuffled binary PLY in parts differs");
         assert!(bytes(&shuffled_obj, small) == want_obj, "{deref:?}: shuffled OBJ differs");
     }
@@ -298,13 +300,7 @@ fn the_engine_and_the_in_core_hole_protocol_give_the_same_mesh() {
     let (mut closed, mut open) = (0, 0);
     for max_hole in [1, 4, 8] {
         let out = dir.path().join(format!("out-{max_hole}.ply"));
-        let o = ResampleOptions {
-            max_hole: Some(max_hole),
-            slabs: 3,
-            work_dir: Some(dir.path().join(format!("w-{max_hole}"))),
-            write: mint_io::WriteOptions { double: true, ..Default::default() },
-            ..opts(GridSize::Cells(40_000))
-        };
+        let o = opts(GridSize::Cells(40_000)).with(|o| { o.spec.max_hole = Some(max_hole); o.tuning.slabs = 3; o.tuning.work_dir = Some(dir.path().join(format!("w-{max_hole}"))); o.spec.write.double = true; });
         let (s, engine) = run(&scan, &out, o);
         (closed, open) = (closed + s.holes_closed, open + s.holes_left_open);
         let g = mint_core::Grid::around(lo, hi, GridSize::Cells(40_000), [0.0; 3], None).unwrap();

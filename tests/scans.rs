@@ -4,17 +4,18 @@
 use crate::common::{load, write_mesh, write_trimesh};
 use mint_core::signs::SignRule;
 use mint_core::{GridSize, TriMesh};
-use mint_pipeline::{resample, NoProgress, ResampleOptions, ResampleSummary};
+use crate::common::{resample, Opts};
+use mint_pipeline::{NoProgress, ResampleSummary};
 use mint_testkit::topology::check_closed_oriented;
 use std::path::Path;
 
-fn run(input: &Path, out: &Path, o: ResampleOptions) -> (ResampleSummary, TriMesh) {
+fn run(input: &Path, out: &Path, o: Opts) -> (ResampleSummary, TriMesh) {
     let s = resample(input, out, &o, &NoProgress).unwrap_or_else(|e| panic!("{}: {e}", input.display()));
     (s, load(out))
 }
 
-fn cells(n: u64) -> ResampleOptions {
-    ResampleOptions { size: GridSize::Cells(n), ..Default::default() }
+fn cells(n: u64) -> Opts {
+    Opts::new(GridSize::Cells(n))
 }
 
 #[test]
@@ -51,11 +52,11 @@ fn a_torus_with_half_its_faces_flipped_gives_the_clean_torus_bytes() {
     let a = write_trimesh(d.path(), "clean.ply", &clean);
     let b = write_trimesh(d.path(), "flipped.ply", &flipped);
     let (oa, ob) = (d.path().join("a.ply"), d.path().join("b.ply"));
-    run(&a, &oa, ResampleOptions { signs: SignRule::Orient, ..cells(50_000) });
+    run(&a, &oa, cells(50_000).with(|o| { o.spec.signs = SignRule::Orient; }));
     let (s, _) = run(&b, &ob, cells(50_000));
     assert_eq!(s.sign_rule, "parity");
     assert!(std::fs::read(&oa).unwrap() == std::fs::read(&ob).unwrap(), "outputs differ");
-    let (sp, _) = run(&b, &ob, ResampleOptions { signs: SignRule::Parity, ..cells(50_000) });
+    let (sp, _) = run(&b, &ob, cells(50_000).with(|o| { o.spec.signs = SignRule::Parity; }));
     assert_eq!(sp.sign_rule, "parity");
     assert!(std::fs::read(&oa).unwrap() == std::fs::read(&ob).unwrap(), "parity output differs");
 }
@@ -103,7 +104,7 @@ fn real_meshes_resample_at_three_sizes_manifold_and_watertight_when_closed() {
             assert_eq!((r.non_manifold_edges, r.non_manifold_vertices, r.inconsistently_oriented_edges), (0, 0, 0), "{f} at {n}: {r:?}");
             assert_eq!(r.watertight, s.holes_left_open == 0, "{f} at {n}: {r:?}");
             // --close-all: watertight.
-            let (s, m) = run(&input, &out, ResampleOptions { max_hole: None, ..cells(n) });
+            let (s, m) = run(&input, &out, cells(n).with(|o| { o.spec.max_hole = None; }));
             let r = mint_mesh::check(&m.positions, &m.faces);
             assert!(r.watertight, "{f} at {n} cells with --close-all: {r:?}");
             eprintln!("{f} at {n} cells: {} faces, rule {}, {} lines through holes, {} synthesized", s.output_faces, s.sign_rule, s.inconsistent_lines, s.synthesized_vertices);
@@ -142,19 +143,19 @@ fn a_hole_wider_than_max_hole_stays_open_with_one_loop_and_close_all_closes_it()
         mint_gen::scan_like(200_000, 3, &opts, s).unwrap();
     });
     let out = d.path().join("o.ply");
-    let (s, m) = run(&input, &out, ResampleOptions { max_hole: Some(4), ..cells_opts(cells) });
+    let (s, m) = run(&input, &out, cells_opts(cells).with(|o| { o.spec.max_hole = Some(4); }));
     let r = mint_mesh::check(&m.positions, &m.faces);
     assert_eq!(s.holes_left_open, 1, "{s:?}");
     assert_eq!((r.non_manifold_edges, r.non_manifold_vertices, r.inconsistently_oriented_edges), (0, 0, 0), "{r:?}");
     assert_eq!(r.boundary_loops, 1, "{r:?}");
     assert_eq!(r.non_simple_boundary_edges, 0);
-    let (s, m) = run(&input, &out, ResampleOptions { max_hole: None, ..cells_opts(cells) });
+    let (s, m) = run(&input, &out, cells_opts(cells).with(|o| { o.spec.max_hole = None; }));
     assert_eq!(s.holes_left_open, 0);
     let r = mint_mesh::check(&m.positions, &m.faces);
     assert!(r.watertight, "{r:?}");
 }
 
-fn cells_opts(n: u64) -> ResampleOptions {
+fn cells_opts(n: u64) -> Opts {
     cells(n)
 }
 
@@ -168,7 +169,7 @@ fn the_summary_counts_the_boundary_loops_check_counts() {
     });
     for (max_hole, slabs) in [(1u32, 1u32), (2, 1), (1, 3), (0, 4)] {
         let out = d.path().join("o.ply");
-        let o = ResampleOptions { max_hole: Some(max_hole), slabs, slab_layers: Some(3), ..cells(1_000_000) };
+        let o = cells(1_000_000).with(|o| { o.spec.max_hole = Some(max_hole); o.tuning.slabs = slabs; o.tuning.slab_layers = Some(3); });
         let (s, m) = run(&input, &out, o);
         let r = mint_mesh::check(&m.positions, &m.faces);
         assert!(s.holes_left_open > 0, "max_hole {max_hole}: expected open holes");

@@ -6,11 +6,12 @@ use crate::common::{box_mesh, write_mesh, write_trimesh};
 use mint_core::expr::BoolOp;
 use mint_core::GridSize;
 use mint_pipeline::engine::{plan_run, run_task, TaskOptions, TaskOutcome};
-use mint_pipeline::{boolean, csg, parse_scene, resample, Job, NoProgress, Plan, ResampleOptions};
+use crate::common::{boolean, csg, resample, Opts};
+use mint_pipeline::{parse_scene, Job, NoProgress, Plan, Stage};
 use std::path::{Path, PathBuf};
 
-fn opts(cells: u64) -> ResampleOptions {
-    ResampleOptions { size: GridSize::Cells(cells), threads: 2, ..Default::default() }
+fn opts(cells: u64) -> Opts {
+    Opts::new(GridSize::Cells(cells)).with(|o| o.tuning.threads = 2)
 }
 
 fn mint_bin() -> PathBuf {
@@ -53,7 +54,8 @@ fn run_all_tasks(dir: &Path, order: Order) {
             Order::Shuffled(seed) => Rng(seed ^ st.tasks as u64).shuffle(&mut tasks),
         }
         for t in tasks {
-            let o = run_task(dir, &st.name, t, &TaskOptions { threads: 1 + (t as usize % 2), mem_bytes: None, deref: if t % 3 == 1 { mint_pipeline::Deref::Sort } else { mint_pipeline::Deref::Auto } }, &NoProgress)
+            let topts = TaskOptions { threads: Some(1 + (t as usize % 2)), mem_bytes: None, deref: Some(if t % 3 == 1 { mint_pipeline::Deref::Sort } else { mint_pipeline::Deref::Auto }) };
+            let o = run_task(dir, st.name, t, &topts, &NoProgress)
                 .unwrap_or_else(|e| panic!("{} {t}: {e}", st.name));
             assert_eq!(o, TaskOutcome::Ran);
         }
@@ -62,17 +64,17 @@ fn run_all_tasks(dir: &Path, order: Order) {
 
 /// Plans `job` into a fresh directory with `parts` and `slabs`, runs it task
 /// by task in `order`, and returns the output bytes.
-fn staged_bytes(root: &Path, name: &str, job: Job, o: &ResampleOptions, parts: u32, slabs: u32, order: Order) -> Vec<u8> {
+fn staged_bytes(root: &Path, name: &str, job: Job, o: &Opts, parts: u32, slabs: u32, order: Order) -> Vec<u8> {
     let dir = root.join(format!("work-{name}"));
     let out = root.join(format!("{name}.ply"));
-    let o = ResampleOptions { parts, slabs, ..o.clone() };
-    plan_run(job, None, &out, &o, &dir).unwrap();
+    let o = o.clone().with(|o| { o.tuning.parts = parts; o.tuning.slabs = slabs; });
+    plan_run(&o.spec(job, &out), None, &o.tuning, &dir).unwrap();
     run_all_tasks(&dir, order);
     // Every task again: all no-ops, output unchanged.
     let plan = Plan::load(&dir).unwrap();
     for st in &plan.stages {
         for t in 0..st.tasks {
-            assert_eq!(run_task(&dir, &st.name, t, &TaskOptions::default(), &NoProgress).unwrap(), TaskOutcome::AlreadyDone);
+            assert_eq!(run_task(&dir, st.name, t, &TaskOptions::default(), &NoProgress).unwrap(), TaskOutcome::AlreadyDone);
         }
     }
     std::fs::read(&out).unwrap()
@@ -93,7 +95,7 @@ fn staged_resample_equals_one_process_for_any_parts_slabs_and_task_order() {
         assert!(got == want, "{parts} parts, {slabs} slabs, {order:?}: output bytes differ");
     }
     // The strict rule is a variant of the same stages.
-    let strict = ResampleOptions { signs: mint_core::signs::SignRule::Orient, ..opts(60_000) };
+    let strict = opts(60_000).with(|o| { o.spec.signs = mint_core::signs::SignRule::Orient; });
     resample(&input, &reference, &strict, &NoProgress).unwrap();
     let want = std::fs::read(&reference).unwrap();
     let got = staged_bytes(d.path(), "strict", job(), &strict, 4, 3, Order::Shuffled(3));
@@ -108,8 +110,8 @@ fn staged_bool_and_csg_equal_one_process() {
     let reference = d.path().join("ref.ply");
     boolean(BoolOp::Difference, &a, &b, &reference, &opts(50_000), &NoProgress).unwrap();
     let want = std::fs::read(&reference).unwrap();
-    let job = Job::Bool { op: "difference".into(), a: a.clone(), b: b.clone() };
-    let o = ResampleOptions { max_hole: None, ..opts(50_000) };
+    let job = Job::Bool { op: BoolOp::Difference, a: a.clone(), b: b.clone() };
+    let o = opts(50_000).with(|o| { o.spec.max_hole = None; });
     let got = staged_bytes(d.path(), "bool", job, &o, 3, 5, Order::Shuffled(5));
     assert!(got == want, "bool: output bytes differ");
 
@@ -137,7 +139,7 @@ fn parts_split_binary_stl_too_and_read_text_files_whole() {
         let plain = d.path().join(format!("plain-{ext}.ply"));
         resample(&other, &plain, &opts(40_000), &NoProgress).unwrap();
         let want_other = std::fs::read(&plain).unwrap();
-        let o = ResampleOptions { parts: 4, slabs: 3, work_dir: Some(d.path().join(format!("w-{ext}"))), ..opts(40_000) };
+        let o = opts(40_000).with(|o| { o.tuning.parts = 4; o.tuning.slabs = 3; o.tuning.work_dir = Some(d.path().join(format!("w-{ext}"))); });
         let out = d.path().join(format!("parts-{ext}.ply"));
         resample(&other, &out, &o, &NoProgress).unwrap();
         assert!(std::fs::read(&out).unwrap() == want_other, "{ext}: 4 parts differ from 1");
@@ -312,10 +314,10 @@ fn a_bad_work_directory_gets_one_line_and_no_output() {
     // A plan from another version.
     let plan_path = work.join("plan.json");
     let text = std::fs::read_to_string(&plan_path).unwrap();
-    let json = text.split_once('\n').unwrap().1;
-    let mut v: serde_json::Value = serde_json::from_str(json).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
     v["version"] = 999.into();
-    std::fs::write(&plan_path, mint_pipeline::workdir::checked_json(&v)).unwrap();
+    mint_pipeline::plan::seal(&mut v);
+    std::fs::write(&plan_path, serde_json::to_string(&v).unwrap()).unwrap();
     let (ok, err) = run("census", 0);
     assert!(!ok);
     one_line_error(&err, "a plan of format 999");
@@ -337,7 +339,7 @@ fn resample_with_a_work_directory_resumes_and_refuses_other_options() {
     let input = write_mesh(d.path(), "g.ply", |s| drop(mint_gen::genus(2, 80_000, s).unwrap()));
     let work = d.path().join("w");
     let out = d.path().join("o.ply");
-    let o = ResampleOptions { work_dir: Some(work.clone()), parts: 2, slabs: 3, ..opts(30_000) };
+    let o = opts(30_000).with(|o| { o.tuning.work_dir = Some(work.clone()); o.tuning.parts = 2; o.tuning.slabs = 3; });
     let s1 = resample(&input, &out, &o, &NoProgress).unwrap();
     assert_eq!((s1.tasks_resumed, s1.tasks_run), (0, 2 + 2 + 3 + 3 + 3 + 1));
     let bytes = std::fs::read(&out).unwrap();
@@ -350,11 +352,11 @@ fn resample_with_a_work_directory_resumes_and_refuses_other_options() {
     assert_eq!(s3.tasks_run, 1);
     assert!(std::fs::read(&out).unwrap() == bytes);
     // Another memory budget and thread count: fine (same bytes).
-    let s4 = resample(&input, &out, &ResampleOptions { mem_bytes: 64 << 20, threads: 1, ..o.clone() }, &NoProgress);
+    let s4 = resample(&input, &out, &o.clone().with(|o| { o.tuning.mem_bytes = 64 << 20; o.tuning.threads = 1; }), &NoProgress);
     assert!(s4.is_ok());
     // Other grid options: refused, naming the option.
-    let e = resample(&input, &out, &ResampleOptions { size: GridSize::Cells(31_000), ..o.clone() }, &NoProgress).unwrap_err().to_string();
+    let e = resample(&input, &out, &o.clone().with(|o| { o.spec.grid.size = GridSize::Cells(31_000); }), &NoProgress).unwrap_err().to_string();
     assert!(e.contains("cells") && e.contains("another work directory"), "{e}");
-    let e = resample(&input, &out, &ResampleOptions { slabs: 4, ..o.clone() }, &NoProgress).unwrap_err().to_string();
+    let e = resample(&input, &out, &o.clone().with(|o| { o.tuning.slabs = 4; }), &NoProgress).unwrap_err().to_string();
     assert!(e.contains("3 slabs"), "{e}");
 }

@@ -8,6 +8,7 @@ mod check_bounded;
 mod core_props;
 mod fuzz_replay;
 mod csg;
+mod layout;
 mod resample;
 mod robustness;
 mod same_bytes;

@@ -1,135 +1,217 @@
-//! The argument groups and option builders that several commands share:
-//! the job arguments of `resample`, `bool` and `csg` (also parsed by
-//! `mint stage plan` and `mint slurm`, as a `JobCommand`), their translation
-//! into library options and into a staged run's plan, and the in-memory
-//! mesh loader of the in-core commands. Command modules import from here;
-//! this module imports no command module.
+//! The one argument group of a run of the engine ([`RunArgs`], flattened
+//! into `resample`, `bool` and `csg`, and so into `mint stage plan` and
+//! `mint slurm` through [`JobCommand`]), the one builder of its
+//! [`RunSpec`] and [`Tuning`] ([`RunArgs::spec`], [`RunArgs::tuning`]), the
+//! report flags every command shares, the command line's view of the
+//! library's named choices ([`choice`]), and the in-memory mesh loader of
+//! the in-core commands. Command modules import from here; this module
+//! imports no command module.
 
 use crate::units::parse_bytes;
 use anyhow::{bail, Context, Result};
-use clap::{Args, Subcommand, ValueEnum};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+use clap::{Args, Subcommand};
+use mint_core::choice::Choice;
+use mint_core::expr::BoolOp;
+use mint_core::signs::SignRule;
 use mint_core::GridSize;
-use mint_io::WriteOptions;
-use mint_pipeline::{Job, Plan, ResampleOptions};
+use mint_pipeline::budget::MEM_HELP;
+use mint_pipeline::spec::defaults;
+use mint_pipeline::{Deref, GridSpec, Job, Plan, RunSpec, SlabAxis, Tuning, WriteSpec};
 use std::path::{Path, PathBuf};
 
+/// The command line's parser of a library choice: its names (from the
+/// library, never copied), listed by `--help` and in errors.
+pub fn choice<T: Choice>() -> impl TypedValueParser<Value = T> {
+    PossibleValuesParser::new(T::NAMES).map(|s| T::parse(&s).expect("a listed name"))
+}
+
+/// `--quiet`, for every command that reports.
+#[derive(Args, Debug, Clone, Copy, Default)]
+pub struct QuietArg {
+    /// No progress bars and no summary (errors and warnings are still printed).
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// `--json`, for every command that reports.
+#[derive(Args, Debug, Clone, Copy, Default)]
+pub struct JsonArg {
+    /// Print the summary as JSON on stdout (no progress bars).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `--quiet` and `--json` together.
+#[derive(Args, Debug, Clone, Copy, Default)]
+pub struct ReportArgs {
+    #[command(flatten)]
+    pub q: QuietArg,
+    #[command(flatten)]
+    pub j: JsonArg,
+}
+
+impl ReportArgs {
+    pub fn quiet(&self) -> bool {
+        self.q.quiet
+    }
+    pub fn json(&self) -> bool {
+        self.j.json
+    }
+    /// No progress bars: quiet, or JSON on stdout.
+    pub fn silent(&self) -> bool {
+        self.q.quiet || self.j.json
+    }
+}
+
+/// `--mem`, for every command with a memory budget.
+#[derive(Args, Debug, Clone, Copy, Default)]
+pub struct MemArg {
+    #[arg(long, value_parser = parse_bytes, help = MEM_HELP)]
+    pub mem: Option<u64>,
+}
+
+impl MemArg {
+    /// The budget in bytes: `--mem`, or the default of every command.
+    pub fn bytes(&self) -> u64 {
+        self.mem.unwrap_or_else(mint_pipeline::default_mem_bytes)
+    }
+}
+
+/// Every option of a run of the engine: what decides the output (the
+/// grid, the sign rule, the encoding: a [`RunSpec`]) and what does not
+/// (memory, threads, staging: a [`Tuning`]).
 #[derive(Args, Debug, Clone)]
-pub struct ResampleArgs {
-    /// Input mesh (PLY, OBJ, STL or OFF).
-    pub input: PathBuf,
-    /// Output mesh; the format follows the extension. Written to a temporary
-    /// file beside it and renamed at the end, so it never exists half-written.
-    pub output: PathBuf,
-    /// About this many cubic cells over the input's bounding box
+pub struct RunArgs {
+    /// About this many cubic cells over the bounding box
     /// (the output has very roughly 2-6 faces per surface cell).
-    #[arg(long, conflicts_with = "cell_size", required_unless_present = "cell_size")]
+    #[arg(long, conflicts_with = "cell_size", required_unless_present = "cell_size", value_parser = clap::value_parser!(u64).range(1..))]
     pub cells: Option<u64>,
     /// Cell edge length in input units (alternative to --cells).
-    #[arg(long)]
+    #[arg(long, value_name = "H", value_parser = parse_cell_size)]
     pub cell_size: Option<f64>,
-    /// Heap budget, e.g. 512M or 2G; it decides slab thickness, never the
-    /// input size [default: a quarter of RAM].
-    #[arg(long, value_parser = parse_bytes)]
-    pub mem: Option<u64>,
-    /// Worker threads [default: all cores]. The output is the same for any value.
-    #[arg(long, default_value_t = 0, hide_default_value = true)]
-    pub threads: usize,
-    /// Directory for temporary shards and spill files [default: the output's directory].
-    #[arg(long)]
-    pub tmp: Option<PathBuf>,
-    /// Axis along which the grid is cut into slabs.
-    #[arg(long, value_enum, default_value_t = AxisArg::Auto)]
-    pub axis: AxisArg,
-    /// Force slabs of K cell layers (for tests and tuning); without it, --mem decides.
-    #[arg(long, value_name = "K")]
-    pub slab: Option<u32>,
-    #[command(flatten)]
-    pub staged: StagedArgs,
+    /// Axis along which the grid is cut into slabs (auto: the longest).
+    #[arg(long, value_parser = choice::<SlabAxis>(), default_value_t = SlabAxis::Auto)]
+    pub axis: SlabAxis,
+    /// Shift the grid by fractions of a cell, e.g. 0.5,0,0 [default: 0,0,0].
+    #[arg(long, value_parser = parse_triple, hide = true, allow_hyphen_values = true)]
+    pub grid_offset: Option<[f64; 3]>,
     /// How crossing signs become inside/outside. auto: robust; picks union
     /// (orientation kept, overlapping scans merge) or parity (orientation
     /// ignored, for flipped faces) from a census of all grid lines, and
     /// always gives a closed surface, closing holes. orient: the original
-    /// paper's rule; cells that disagree are left open and counted.
-    #[arg(long, value_enum, default_value_t = SignsArg::Auto)]
-    pub signs: SignsArg,
-    /// Holes wider than K cells are left open, with a clean boundary loop
-    /// (robust sign rules only); smaller holes are closed.
-    #[arg(long, value_name = "K", default_value_t = 16)]
-    pub max_hole: u32,
-    /// Close every hole, whatever its size (for watertight output, e.g. 3D printing).
-    #[arg(long)]
-    pub close_all: bool,
-    /// Shift the grid by fractions of a cell, e.g. 0.5,0,0 [default: 0,0,0].
-    #[arg(long, value_parser = parse_triple, hide = true)]
-    pub grid_offset: Option<[f64; 3]>,
+    /// paper's rule; cells that disagree are left open and counted (for
+    /// bool and csg it applies to each mesh operand, and still closes).
+    #[arg(long, value_parser = choice::<SignRule>(), default_value_t = defaults::SIGNS)]
+    pub signs: SignRule,
     /// Write ASCII instead of binary (PLY/STL).
     #[arg(long)]
     pub ascii: bool,
     /// Write vertex coordinates as f64 instead of f32.
     #[arg(long)]
     pub double: bool,
-    /// No progress bars and no summary (errors are still printed).
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the summary as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
-    /// Also write OUT.png beside the output: the input and the output side
-    /// by side, under the same camera (see `mint render`).
-    #[arg(long)]
-    pub preview: bool,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BoolOpArg {
-    Union,
-    Intersection,
-    Difference,
-}
-
-/// Grid, memory and output options shared by `bool` and `csg`.
-#[derive(Args, Debug, Clone)]
-pub struct GridArgs {
-    /// About this many cubic cells over the result's bounding box.
-    #[arg(long, conflicts_with = "cell_size", required_unless_present = "cell_size")]
-    pub cells: Option<u64>,
-    /// Cell edge length (alternative to --cells).
-    #[arg(long)]
-    pub cell_size: Option<f64>,
-    /// Heap budget, e.g. 512M or 2G [default: a quarter of RAM].
-    #[arg(long, value_parser = parse_bytes)]
-    pub mem: Option<u64>,
+    #[command(flatten)]
+    pub mem: MemArg,
     /// Worker threads [default: all cores]. The output is the same for any value.
     #[arg(long, default_value_t = 0, hide_default_value = true)]
     pub threads: usize,
-    /// Directory for temporary files [default: the output's directory].
+    /// Directory for temporary shards and spill files [default: the output's directory].
     #[arg(long)]
     pub tmp: Option<PathBuf>,
-    /// Force slabs of K cell layers; without it, --mem decides.
+    /// Force slabs of K cell layers (for tests and tuning); without it, --mem decides.
     #[arg(long, value_name = "K")]
     pub slab: Option<u32>,
     #[command(flatten)]
     pub staged: StagedArgs,
-    /// Shift the grid by fractions of a cell, e.g. 0.5,0,0 [default: 0,0,0].
-    #[arg(long, value_parser = parse_triple, hide = true)]
-    pub grid_offset: Option<[f64; 3]>,
-    /// Also write OUT.png beside the output: the input meshes and the
-    /// result side by side, under the same camera (see `mint render`).
+    /// Also write OUT.png beside the output: the inputs and the output
+    /// side by side, under the same camera (see `mint render`).
     #[arg(long)]
     pub preview: bool,
-    /// No progress bars and no summary.
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the summary as JSON on stdout.
+    #[command(flatten)]
+    pub report: ReportArgs,
+}
+
+/// `--max-hole` and `--close-all` (resample only: booleans and CSG close
+/// every hole).
+#[derive(Args, Debug, Clone)]
+pub struct HoleArgs {
+    /// Holes wider than K cells are left open, with a clean boundary loop
+    /// (robust sign rules only); smaller holes are closed.
+    #[arg(long, value_name = "K", default_value_t = defaults::MAX_HOLE)]
+    pub max_hole: u32,
+    /// Close every hole, whatever its size (for watertight output, e.g. 3D printing).
     #[arg(long)]
-    pub json: bool,
+    pub close_all: bool,
+}
+
+impl RunArgs {
+    /// The run's spec: `job` into `output`, holes as `holes` says (booleans
+    /// and CSG close every hole).
+    pub fn spec(&self, job: Job, output: &Path, holes: Option<&HoleArgs>) -> Result<RunSpec> {
+        let size = match (self.cells, self.cell_size) {
+            (Some(n), None) => GridSize::Cells(n),
+            (None, Some(h)) => GridSize::CellSize(h),
+            _ => bail!("give exactly one of --cells N or --cell-size H"),
+        };
+        let mut spec = RunSpec::new(job, output, size);
+        spec.grid = GridSpec { size, axis: self.axis, offset: self.grid_offset.unwrap_or([0.0; 3]) };
+        spec.signs = self.signs;
+        spec.write = WriteSpec { ascii: self.ascii, double: self.double };
+        if let Some(h) = holes {
+            spec.max_hole = if h.close_all { None } else { Some(h.max_hole) };
+        }
+        Ok(spec.normalized())
+    }
+
+    /// The run's tuning.
+    pub fn tuning(&self) -> Tuning {
+        Tuning {
+            mem_bytes: self.mem.bytes(),
+            threads: self.threads,
+            deref: self.staged.deref,
+            tmp_dir: self.tmp.clone(),
+            slab_layers: self.slab,
+            work_dir: self.staged.work.clone(),
+            parts: self.staged.parts,
+            slabs: self.staged.slabs,
+        }
+    }
+}
+
+fn parse_cell_size(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(h) if h > 0.0 && h.is_finite() => Ok(h),
+        Ok(_) => Err("must be a positive number".into()),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+fn parse_triple(s: &str) -> Result<[f64; 3], String> {
+    let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|e| format!("'{s}': {e}"))?;
+    if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
+        return Err(format!("'{s}': expected three comma-separated finite numbers"));
+    }
+    Ok([v[0], v[1], v[2]])
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct ResampleArgs {
+    /// Input mesh (PLY, OBJ, STL, OFF, …; a PLY range image is triangulated first).
+    pub input: PathBuf,
+    /// Output mesh; the format follows the extension. Written to a temporary
+    /// file beside it and renamed at the end, so it never exists half-written.
+    pub output: PathBuf,
+    #[command(flatten)]
+    pub run: RunArgs,
+    #[command(flatten)]
+    pub holes: HoleArgs,
 }
 
 #[derive(Args, Debug, Clone)]
 pub struct BoolArgs {
     /// union, intersection or difference (A minus B).
-    #[arg(value_enum)]
-    pub op: BoolOpArg,
+    #[arg(value_parser = choice::<BoolOp>())]
+    pub op: BoolOp,
     /// First mesh (closed).
     pub a: PathBuf,
     /// Second mesh (closed).
@@ -137,7 +219,7 @@ pub struct BoolArgs {
     /// Output mesh.
     pub output: PathBuf,
     #[command(flatten)]
-    pub grid: GridArgs,
+    pub run: RunArgs,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -147,77 +229,7 @@ pub struct CsgArgs {
     /// Output mesh.
     pub output: PathBuf,
     #[command(flatten)]
-    pub grid: GridArgs,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SignsArg {
-    Auto,
-    Orient,
-    Union,
-    Parity,
-}
-
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum AxisArg {
-    Auto,
-    X,
-    Y,
-    Z,
-}
-
-fn parse_triple(s: &str) -> Result<[f64; 3], String> {
-    let v: Vec<f64> = s.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|e| format!("'{s}': {e}"))?;
-    if v.len() != 3 {
-        return Err(format!("'{s}': expected three comma-separated numbers"));
-    }
-    Ok([v[0], v[1], v[2]])
-}
-
-/// The library options of `mint resample`'s arguments.
-pub(crate) fn resample_options(a: &ResampleArgs) -> Result<ResampleOptions> {
-    let size = match (a.cells, a.cell_size) {
-        (Some(n), None) => {
-            if n == 0 {
-                bail!("--cells must be at least 1");
-            }
-            GridSize::Cells(n)
-        }
-        (None, Some(h)) => GridSize::CellSize(h),
-        _ => bail!("give exactly one of --cells N or --cell-size H"),
-    };
-    Ok(ResampleOptions {
-        size,
-        mem_bytes: a.mem.unwrap_or_else(default_mem),
-        threads: a.threads,
-        tmp_dir: a.tmp.clone(),
-        axis: match a.axis {
-            AxisArg::Auto => None,
-            AxisArg::X => Some(0),
-            AxisArg::Y => Some(1),
-            AxisArg::Z => Some(2),
-        },
-        slab_layers: a.slab,
-        grid_offset: a.grid_offset.unwrap_or([0.0; 3]),
-        write: WriteOptions { ascii: a.ascii, double: a.double, ..Default::default() },
-        max_listed: 100,
-        signs: match a.signs {
-            SignsArg::Auto => mint_core::signs::SignRule::Auto,
-            SignsArg::Orient => mint_core::signs::SignRule::Orient,
-            SignsArg::Union => mint_core::signs::SignRule::Union,
-            SignsArg::Parity => mint_core::signs::SignRule::Parity,
-        },
-        max_hole: if a.close_all { None } else { Some(a.max_hole) },
-        work_dir: a.staged.work.clone(),
-        parts: a.staged.parts,
-        slabs: a.staged.slabs,
-        deref: a.staged.deref.to_deref(),
-    })
-}
-
-/// The default heap budget: a quarter of RAM (2 GiB when RAM is unknown).
-pub(crate) fn default_mem() -> u64 {
-    mint_pipeline::default_mem_bytes()
+    pub run: RunArgs,
 }
 
 /// The mesh `mint resample` reads: the input itself, or, for a PLY range
@@ -260,28 +272,6 @@ pub fn load_mesh(path: &std::path::Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>
     Ok((whole.positions, whole.faces))
 }
 
-pub(crate) fn grid_options(g: &GridArgs) -> Result<ResampleOptions> {
-    let size = match (g.cells, g.cell_size) {
-        (Some(n), None) if n > 0 => GridSize::Cells(n),
-        (None, Some(h)) => GridSize::CellSize(h),
-        _ => bail!("give exactly one of --cells N (N >= 1) or --cell-size H"),
-    };
-    Ok(ResampleOptions {
-        size,
-        mem_bytes: g.mem.unwrap_or_else(default_mem),
-        threads: g.threads,
-        tmp_dir: g.tmp.clone(),
-        slab_layers: g.slab,
-        grid_offset: g.grid_offset.unwrap_or([0.0; 3]),
-        work_dir: g.staged.work.clone(),
-        parts: g.staged.parts,
-        slabs: g.staged.slabs,
-        deref: g.staged.deref.to_deref(),
-        max_hole: None,
-        ..Default::default()
-    })
-}
-
 /// The files a scene reads: the scene file and its meshes.
 pub(crate) fn scene_inputs<'a>(path: &'a std::path::Path, scene: &'a mint_pipeline::Scene) -> Vec<&'a std::path::Path> {
     let mut v = vec![path];
@@ -293,8 +283,9 @@ pub(crate) fn scene_inputs<'a>(path: &'a std::path::Path, scene: &'a mint_pipeli
     v
 }
 
-/// How a run is staged: the work directory that makes it resumable, and its
-/// split into parts and slabs (shared by resample, bool, csg, stage, slurm).
+/// How a run is staged: the work directory that makes it resumable, its
+/// split into parts and slabs, and how faces are dereferenced (shared by
+/// resample, bool, csg, stage, slurm). None of it changes the output.
 #[derive(Args, Debug, Clone, Default)]
 pub struct StagedArgs {
     /// Keep the run's stages in DIR: a run killed at any moment (crash,
@@ -307,11 +298,11 @@ pub struct StagedArgs {
     /// Split the reading of the input's faces into P parts (one task each;
     /// binary PLY and binary STL split, other formats are read whole by the
     /// first part). The output is the same for any P.
-    #[arg(long, value_name = "P", default_value_t = 1)]
+    #[arg(long, value_name = "P", default_value_t = defaults::PARTS, value_parser = clap::value_parser!(u32).range(1..=mint_pipeline::plan::MAX_TASKS as i64))]
     pub parts: u32,
     /// Split the grid into S slabs (one reconstruction task each). The
     /// output is the same for any S.
-    #[arg(long, value_name = "S", default_value_t = 1)]
+    #[arg(long, value_name = "S", default_value_t = defaults::SLABS, value_parser = clap::value_parser!(u32).range(1..=mint_pipeline::plan::MAX_TASKS as i64))]
     pub slabs: u32,
     /// How each face's vertex indices become positions. mmap: fetch them
     /// from the mapped vertex array (fast when neighbouring faces use
@@ -323,35 +314,8 @@ pub struct StagedArgs {
     /// not stay in memory (larger than 3/4 of MemAvailable or of the cgroup's
     /// limit); the summary says which ran and why. The output is the same for
     /// every choice.
-    #[arg(long, value_enum, default_value_t = DerefArg::Auto)]
-    pub deref: DerefArg,
-}
-
-/// `--deref`.
-#[derive(ValueEnum, Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub enum DerefArg {
-    #[default]
-    Auto,
-    Mmap,
-    Sort,
-}
-
-impl DerefArg {
-    pub(crate) fn to_deref(self) -> mint_pipeline::Deref {
-        match self {
-            DerefArg::Auto => mint_pipeline::Deref::Auto,
-            DerefArg::Mmap => mint_pipeline::Deref::Mmap,
-            DerefArg::Sort => mint_pipeline::Deref::Sort,
-        }
-    }
-
-    pub(crate) fn name(self) -> &'static str {
-        match self {
-            DerefArg::Auto => "auto",
-            DerefArg::Mmap => "mmap",
-            DerefArg::Sort => "sort",
-        }
-    }
+    #[arg(long, value_parser = choice::<Deref>(), default_value_t = Deref::Auto)]
+    pub deref: Deref,
 }
 
 /// The job of a staged run, with the options of the one-process command.
@@ -366,45 +330,146 @@ pub enum JobCommand {
     Csg(CsgArgs),
 }
 
-/// The job, its options and its output, from a job command's arguments.
-/// Range images are triangulated into the work directory first.
-pub(crate) fn job_of(c: &JobCommand) -> Result<(Job, ResampleOptions, PathBuf, bool, bool)> {
-    Ok(match c {
-        JobCommand::Resample(a) => {
-            let opts = resample_options(a)?;
-            let Some(work) = &a.staged.work else { bail!("a staged run needs --work DIR (a directory every task can reach)") };
-            crate::paths::check_output(&a.output, &[&a.input])?;
-            let (input, _) = resample_input(&a.input, Some(work), work)?;
-            (Job::Resample { input: abs(&input) }, opts, a.output.clone(), a.json, a.quiet)
+impl JobCommand {
+    /// The run's options.
+    pub fn run_args(&self) -> &RunArgs {
+        match self {
+            JobCommand::Resample(a) => &a.run,
+            JobCommand::Bool(a) => &a.run,
+            JobCommand::Csg(a) => &a.run,
         }
-        JobCommand::Bool(a) => {
-            let op = match a.op {
-                BoolOpArg::Union => "union",
-                BoolOpArg::Intersection => "intersection",
-                BoolOpArg::Difference => "difference",
+    }
+
+    /// The spec and tuning of a staged run of this job (`--work` required).
+    /// Range images are triangulated into the work directory first.
+    pub fn staged(&self) -> Result<(RunSpec, Tuning, PathBuf)> {
+        let r = self.run_args();
+        let Some(work) = r.staged.work.clone() else { bail!("a staged run needs --work DIR (a directory every task can reach)") };
+        let spec = match self {
+            JobCommand::Resample(a) => {
+                crate::paths::check_output(&a.output, &[&a.input])?;
+                let (input, _) = resample_input(&a.input, Some(&work), &work)?;
+                r.spec(Job::Resample { input }, &a.output, Some(&a.holes))?
+            }
+            JobCommand::Bool(a) => {
+                crate::paths::check_output(&a.output, &[&a.a, &a.b])?;
+                r.spec(Job::Bool { op: a.op, a: a.a.clone(), b: a.b.clone() }, &a.output, None)?
+            }
+            JobCommand::Csg(a) => {
+                let text = std::fs::read_to_string(&a.scene).with_context(|| format!("{}: cannot read the scene", a.scene.display()))?;
+                let scene = mint_pipeline::parse_scene(&text, &a.scene)?;
+                crate::paths::check_output(&a.output, &scene_inputs(&a.scene, &scene))?;
+                r.spec(Job::Csg { scene: a.scene.clone() }, &a.output, None)?
+            }
+        };
+        Ok((spec, r.tuning(), work))
+    }
+
+    /// The plan of a staged run of the job, written into its --work DIR,
+    /// and the directory.
+    pub fn plan(&self) -> Result<(Plan, PathBuf)> {
+        let (spec, tuning, dir) = self.staged()?;
+        let plan = mint_pipeline::plan_run(&spec, None, &tuning, &dir)?;
+        Ok((plan, dir))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::cli::{Cli, Command};
+    use clap::Parser;
+    use mint_core::choice::Choice;
+    use crate::cmd::stage::StageCommand;
+    use proptest::prelude::*;
+    use std::path::Path;
+
+    /// A tetrahedron, as the input of every planned run.
+    fn tetrahedron(dir: &Path, name: &str) -> std::path::PathBuf {
+        let p = dir.join(name);
+        std::fs::write(&p, "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n").unwrap();
+        p
+    }
+
+    /// Command-line words of a run: one of each option that decides the output or tunes it.
+    fn words() -> impl Strategy<Value = Vec<String>> {
+        let size = prop_oneof![(1u64..10_000_000).prop_map(|n| vec!["--cells".to_string(), n.to_string()]), (1e-6f64..1e3).prop_map(|h| vec!["--cell-size".to_string(), h.to_string()])];
+        let pick = |names: &'static [&'static str], flag: &'static str| proptest::option::of(proptest::sample::select(names)).prop_map(move |v| v.map_or(vec![], |v| vec![flag.to_string(), v.to_string()]));
+        let offset = proptest::option::of((-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0)).prop_map(|o| o.map_or(vec![], |(a, b, c)| vec!["--grid-offset".into(), format!("{a},{b},{c}")]));
+        let flags = (any::<bool>(), any::<bool>(), proptest::option::of(0u32..100), any::<bool>(), proptest::option::of(1u64..1 << 40), proptest::option::of(0usize..9), 1u32..5, 1u32..5, proptest::option::of(1u32..9));
+        (size, pick(mint_core::signs::SignRule::NAMES, "--signs"), pick(mint_pipeline::SlabAxis::NAMES, "--axis"), pick(mint_pipeline::Deref::NAMES, "--deref"), offset, flags).prop_map(
+            |(size, signs, axis, deref, offset, (ascii, double, max_hole, close_all, mem, threads, parts, slabs, slab))| {
+                let mut w: Vec<String> = [size, signs, axis, deref, offset].concat();
+                w.extend(ascii.then(|| "--ascii".to_string()));
+                w.extend(double.then(|| "--double".to_string()));
+                if let Some(k) = max_hole {
+                    w.extend(["--max-hole".to_string(), k.to_string()]);
+                }
+                w.extend(close_all.then(|| "--close-all".to_string()));
+                if let Some(m) = mem {
+                    w.extend(["--mem".to_string(), m.to_string()]);
+                }
+                if let Some(t) = threads {
+                    w.extend(["--threads".to_string(), t.to_string()]);
+                }
+                w.extend(["--parts".to_string(), parts.to_string(), "--slabs".to_string(), slabs.to_string()]);
+                if let Some(k) = slab {
+                    w.extend(["--slab".to_string(), k.to_string()]);
+                }
+                w
+            },
+        )
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+        /// The spec and tuning the CLI builds reach a task as they were:
+        /// command line -> plan.json -> `Plan::load`, which `mint stage run`
+        /// and every Slurm task call.
+        #[test]
+        fn a_spec_survives_the_cli_the_plan_and_a_task(words in words(), op in proptest::sample::select(mint_core::expr::BoolOp::NAMES), job in 0..2u8) {
+            let d = tempfile::tempdir().unwrap();
+            let a = tetrahedron(d.path(), "a.ply");
+            let b = tetrahedron(d.path(), "b.ply");
+            let work = d.path().join("work");
+            let mut argv: Vec<String> = vec!["mint".into(), "stage".into(), "plan".into()];
+            match job {
+                0 => argv.extend(["resample".into(), a.display().to_string()]),
+                _ => argv.extend(["bool".into(), op.to_string(), a.display().to_string(), b.display().to_string()]),
+            }
+            let bool_job = job != 0;
+            let words: Vec<String> = if bool_job {
+                // Booleans take no hole options.
+                let mut v = Vec::new();
+                let mut it = words.into_iter();
+                while let Some(w) = it.next() {
+                    match w.as_str() {
+                        "--close-all" => {}
+                        "--max-hole" => { it.next(); }
+                        _ => v.push(w),
+                    }
+                }
+                v
+            } else {
+                words
             };
-            crate::paths::check_output(&a.output, &[&a.a, &a.b])?;
-            (Job::Bool { op: op.into(), a: abs(&a.a), b: abs(&a.b) }, grid_options(&a.grid)?, a.output.clone(), a.grid.json, a.grid.quiet)
+            argv.push(d.path().join("out.ply").display().to_string());
+            argv.extend(words);
+            argv.extend(["--work".into(), work.display().to_string(), "--quiet".into()]);
+            let cli = Cli::try_parse_from(&argv).map_err(|e| TestCaseError::fail(format!("{argv:?}: {e}")))?;
+            let Command::Stage(StageCommand::Plan(job)) = cli.command else { panic!("not a plan") };
+            let (spec, tuning, dir) = job.staged().unwrap();
+            let planned = mint_pipeline::plan_run(&spec, None, &tuning, &dir).unwrap();
+            let task = mint_pipeline::Plan::load(&dir).unwrap();
+            prop_assert_eq!(&task, &planned);
+            // The spec arrives whole; its paths are made absolute for tasks elsewhere.
+            let want = mint_pipeline::RunSpec { job: spec.job.absolute(), output: mint_pipeline::spec::absolute(&spec.output), ..spec.clone() };
+            prop_assert_eq!(&task.spec, &want);
+            prop_assert_eq!(task.spec.max_hole.is_none(), bool_job || argv.iter().any(|w| w == "--close-all"));
+            // The tuning arrives whole, as the tasks' defaults.
+            prop_assert_eq!(&task.tuning, &mint_pipeline::Tuning { work_dir: Some(mint_pipeline::spec::absolute(&work)), ..tuning.clone() });
+            // And the same command plans the same run again.
+            let again = mint_pipeline::plan_run(&spec, None, &tuning, &dir).unwrap();
+            prop_assert_eq!(&again, &planned);
         }
-        JobCommand::Csg(a) => {
-            let text = std::fs::read_to_string(&a.scene).with_context(|| format!("{}: cannot read the scene", a.scene.display()))?;
-            let scene = mint_pipeline::parse_scene(&text, &a.scene)?;
-            crate::paths::check_output(&a.output, &scene_inputs(&a.scene, &scene))?;
-            (Job::Csg { scene: abs(&a.scene) }, grid_options(&a.grid)?, a.output.clone(), a.grid.json, a.grid.quiet)
-        }
-    })
-}
-
-/// `p` made absolute: tasks may run in another directory, on another machine.
-pub(crate) fn abs(p: &Path) -> PathBuf {
-    mint_pipeline::plan::absolute(p)
-}
-
-/// The plan of a staged run of the job (written into its --work DIR), the
-/// directory, and the job's --json and --quiet.
-pub(crate) fn plan_of(c: &JobCommand) -> Result<(Plan, PathBuf, bool, bool)> {
-    let (job, opts, output, json, quiet) = job_of(c)?;
-    let Some(dir) = opts.work_dir.clone() else { bail!("a staged run needs --work DIR (a directory every task can reach)") };
-    let plan = mint_pipeline::plan_run(job, None, &output, &opts, &dir)?;
-    Ok((plan, dir, json, quiet))
+    }
 }

@@ -3,7 +3,7 @@
 //! warning when the output is empty, and the check report (`check`, `demo`).
 
 use crate::alloc;
-use crate::jobs::GridArgs;
+use crate::jobs::ReportArgs;
 use crate::units::human_bytes;
 use anyhow::Result;
 
@@ -105,16 +105,16 @@ fn print_warnings(warnings: &[String]) {
     }
 }
 
-pub(crate) fn report(g: &GridArgs, s: &mint_pipeline::ResampleSummary) -> Result<()> {
+pub(crate) fn report(g: &ReportArgs, s: &mint_pipeline::ResampleSummary) -> Result<()> {
     let warnings = summary_warnings(s);
     print_warnings(&warnings);
-    if g.json {
+    if g.json() {
         let mut v = serde_json::to_value(s)?;
         v["warnings"] = warnings.into();
         v["peak_heap_bytes"] = alloc::peak_heap().into();
         v["peak_rss_bytes"] = alloc::peak_rss().into();
         println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !g.quiet {
+    } else if !g.quiet() {
         eprintln!("{} -> {}", s.input, s.output);
         eprintln!("  grid         {}x{}x{} cells of {:.6} ({} slabs)", s.grid_cells[0], s.grid_cells[1], s.grid_cells[2], s.cell_size, s.slabs);
         eprintln!("  input        {} mesh faces; operand signs: {}", s.input_faces, s.sign_rule);

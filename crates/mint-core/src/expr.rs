@@ -4,15 +4,16 @@
 //! and places each result vertex with [`result_vertex`]; booleans are the
 //! two-operand case.
 
-/// A boolean operator of [`Expr`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BoolOp {
-    /// Inside any child.
-    Union,
-    /// Inside every child.
-    Intersection,
-    /// Inside the first child and no other.
-    Difference,
+crate::choice! {
+    /// A boolean operator of [`Expr`].
+    pub enum BoolOp {
+        /// Inside any child.
+        Union => "union",
+        /// Inside every child.
+        Intersection => "intersection",
+        /// Inside the first child and no other.
+        Difference => "difference",
+    }
 }
 
 /// A CSG expression over numbered operands (n-ary, nesting).

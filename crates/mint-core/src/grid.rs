@@ -18,8 +18,9 @@
 /// World axis index, 0 = x, 1 = y, 2 = z.
 pub type Axis = usize;
 
-/// How the user sizes the grid.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// How the user sizes the grid. In a plan: `{"cells": N}` or `{"cell_size": H}`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum GridSize {
     /// About this many cells over the bounding box (cubic cells).
     Cells(u64),

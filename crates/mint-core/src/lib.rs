@@ -16,9 +16,11 @@
 //! - [`primitives`]: analytic solids that intersect grid lines exactly (for CSG);
 //! - [`in_core`]: the whole resampling in memory (strict, robust, hole protocol), for tests and small inputs;
 //! - [`rng`]: SplitMix64, the seeded generator shared by samplers and generators;
-//! - [`sink`]: the [`MeshSink`] trait through which meshes leave algorithms.
+//! - [`sink`]: the [`MeshSink`] trait through which meshes leave algorithms;
+//! - [`choice`]: closed sets of named values (sign rule, boolean operator…), named once for the command line and for plans.
 
 pub mod cells;
+pub mod choice;
 pub mod discretize;
 pub mod expr;
 pub mod grid;

@@ -39,17 +39,18 @@
 
 use crate::intercept::{Intercept, FAMILY_B};
 
-/// How intercept signs become node states.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SignRule {
-    /// The paper's rule: the face's orientation gives the sign.
-    Orient,
-    /// Winding number > 0 (orientation kept; overlaps merge).
-    Union,
-    /// Alternation along the line (orientation ignored).
-    Parity,
-    /// Union or Parity for the whole run, chosen by a census of lines.
-    Auto,
+crate::choice! {
+    /// How intercept signs become node states (`--signs`).
+    pub enum SignRule {
+        /// Union or Parity for the whole run, chosen by a census of lines.
+        Auto => "auto",
+        /// The paper's rule: the face's orientation gives the sign.
+        Orient => "orient",
+        /// Winding number > 0 (orientation kept; overlaps merge).
+        Union => "union",
+        /// Alternation along the line (orientation ignored).
+        Parity => "parity",
+    }
 }
 
 /// Counts of A and B lines by validity, summed over planes; decides Auto.

@@ -34,6 +34,7 @@
 //! positions are read through the file's memory map and are not counted.
 //! One vertex's incident faces must fit in memory.
 
+use crate::budget::Budget;
 use crate::error::PipelineError;
 use crate::progress::{Phase, Progress};
 use mint_io::{MeshReader, ReadOptions, TriangleChunk, VertexPositions};
@@ -164,11 +165,8 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     let mut reader = MeshReader::open(path, ReadOptions { chunk_triangles: FACE_CHUNK, spill_dir: Some(dir.to_path_buf()), resolve_positions: false })?;
     let positions = reader.positions();
     let nv = positions.len();
-    // Past about 512 MiB, more memory only slows the check: first-touch
-    // page faults on the buckets, and vertex blocks too large for the
-    // caches (100M faces: 9.7 s at 256M and 512M, 13 s at 1G, 14.5 s at
-    // 5.9G); spilled buckets come back from the page cache anyway.
-    let budget = opts.mem_bytes.clamp(16 << 20, 512 << 20);
+    // The check's shares of the budget (see `Budget::check`).
+    let budget = Budget::new(opts.mem_bytes, opts.threads);
     let mut stats = CheckStats::default();
 
     let trace = std::env::var_os("MINT_CHECK_TRACE").is_some();
@@ -180,7 +178,7 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     };
     // 1. Bounding box over every position (welding never changes it), and
     // the weld.
-    let (bbox, canonical, welded) = positions_pass(&positions, opts.weld, dir, budget, opts.threads.max(1), progress, &mut stats)?;
+    let (bbox, canonical, welded) = positions_pass(&positions, opts.weld, dir, &budget, opts.threads.max(1), progress, &mut stats)?;
 
     lap("weld");
     // 2. Faces, first pass: components, geometry, and for each block of
@@ -193,14 +191,13 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     let blocks = (nv as u64).div_ceil(block_vertices).max(1);
     stats.vertex_blocks = blocks;
     let id = |v: u32| canonical.as_ref().map_or(v, |c: &Vec<u32>| c[v as usize]);
-    // What the buckets may hold: the budget less what is kept per vertex
-    // from here on (union-find parents, two bit sets, the weld's map), and
-    // half of that, since judging a block and the allocator need room too.
+    // What is kept per vertex from here on: union-find parents, two bit
+    // sets, the weld's map.
     let per_vertex = nv as u64 * 4 + nv as u64 / 4 + canonical.as_ref().map_or(0, |_| nv as u64 * 4);
-    let buckets = (budget.saturating_sub(per_vertex) / 2).max(8 << 20);
+    let (buckets, collapsed) = (budget.check_face_buckets(per_vertex), budget.check_collapsed_buckets(per_vertex));
     let sink = |n: usize, t: usize| Sink {
         by_block: Buckets::new(dir, &format!("faces-{t}"), blocks as usize, buckets / n as u64),
-        collapsed: Buckets::new(dir, &format!("collapsed-{t}"), 64, buckets / 8 / n as u64),
+        collapsed: Buckets::new(dir, &format!("collapsed-{t}"), 64, collapsed / n as u64),
         block_shift,
     };
     let records = reader.triangle_records()?;
@@ -830,21 +827,22 @@ fn corners_and_vertices<I: Fn(u32) -> u32 + Sync>(
 /// positions into small buckets of `(hash, vertex)`; then each bucket's
 /// hashes go into a table that fits the caches, and only vertices whose
 /// hashes collide are compared by position.
-fn positions_pass(positions: &VertexPositions, hash: bool, dir: &Path, budget: u64, threads: usize, progress: &dyn Progress, stats: &mut CheckStats) -> Result<(Bbox, Option<Vec<u32>>, u64), PipelineError> {
+fn positions_pass(positions: &VertexPositions, hash: bool, dir: &Path, budget: &Budget, threads: usize, progress: &dyn Progress, stats: &mut CheckStats) -> Result<(Bbox, Option<Vec<u32>>, u64), PipelineError> {
     let nv = positions.len();
     // Buckets that each fit a sixteenth of the budget (a power of two, at
     // most 4096; few, so that spilling writes large pieces). The buckets
     // hold 5/8 of the budget, and each worker at most two buckets' worth.
-    let nb = (nv as u64 * 8).div_ceil((budget / 16).max(1)).clamp(1, 4096).next_power_of_two() as usize;
+    let nb = (nv as u64 * 8).div_ceil(budget.check_weld_bucket()).clamp(1, 4096).next_power_of_two() as usize;
     progress.start(WELD, nv as u64);
     let per = nv.div_ceil(threads as u32).max(1);
+    let weld_share = budget.check_weld_per_thread();
     type Part = Result<(Bbox, mint_store::BucketReader<Hashed>), StoreError>;
     let parts: Vec<Part> = std::thread::scope(|s| {
         let workers: Vec<_> = (0..threads as u32)
             .map(|t| {
                 s.spawn(move || {
                     let mut bbox = Bbox::empty();
-                    let mut keyed = Buckets::<Hashed>::new(dir, &format!("weld-{t}"), if hash { nb } else { 1 }, budget / 8 * 5 / threads as u64);
+                    let mut keyed = Buckets::<Hashed>::new(dir, &format!("weld-{t}"), if hash { nb } else { 1 }, weld_share);
                     let (v0, v1) = ((t * per).min(nv), ((t + 1) * per).min(nv));
                     for v in v0..v1 {
                         let p = positions.get(v);

@@ -16,10 +16,13 @@
 //! Memory: stage 1 is bounded by `--mem`; stage 2 holds the intermediate
 //! mesh and the simplifier's tables (measured in docs/PERFORMANCE.md).
 
-use crate::engine::resample;
+use crate::engine::run;
 use crate::error::PipelineError;
-use crate::options::{ResampleOptions, ResampleSummary};
-use crate::passes::surface_area;
+use crate::spec::{RunSpec, Tuning, WriteSpec};
+use crate::summary::ResampleSummary;
+use crate::passes::CHUNK_TRIANGLES;
+use mint_io::{MeshReader, TriangleChunk};
+use std::sync::Mutex;
 use crate::progress::Progress;
 use mint_core::grid::GridSize;
 use mint_io::{Format, MeshWriter, WriteOptions};
@@ -58,9 +61,12 @@ pub struct DecimateOptions {
     /// Largest error the simplifier may reach, relative to the extent
     /// (default 1: the face target decides).
     pub max_error: f32,
-    /// The resampling's options (memory, threads, work directory, parts…);
-    /// its grid size is chosen here.
-    pub resample: ResampleOptions,
+    /// How the output is written.
+    pub write: WriteSpec,
+    /// The resampling's tuning (memory, threads, work directory, parts…).
+    /// With a work directory the intermediate mesh is kept there too
+    /// (`intermediate.ply`), so that the same command resumes.
+    pub tuning: Tuning,
 }
 
 /// What a decimation did.
@@ -100,7 +106,7 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
     if o.target_faces < 4 {
         return Err(PipelineError::stage(output, format!("--faces {}: a closed surface needs at least 4 faces", o.target_faces)));
     }
-    let threads = if o.resample.threads == 0 { std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1) } else { o.resample.threads };
+    let threads = o.tuning.thread_count();
     // 1. Area, then the cell size for the intermediate target.
     let t = Instant::now();
     let (faces, area) = surface_area(input, threads, progress)?;
@@ -113,21 +119,29 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
     let h = (FACES_PER_AREA_CELL * area / m as f64).sqrt();
     // 2. Resample into a temporary file beside the output (or in tmp).
     let t = Instant::now();
-    let dir = o.resample.tmp_dir.clone().unwrap_or_else(|| output.parent().filter(|p| !p.as_os_str().is_empty()).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")));
-    let mid = tempfile::Builder::new().prefix(".mint-decimate-").suffix(".ply").tempfile_in(&dir).map_err(|source| PipelineError::Temp {
-        path: dir.clone(),
-        op: "creating the intermediate mesh",
-        source,
-    })?;
-    let ro = ResampleOptions { size: GridSize::CellSize(h), write: WriteOptions { double: true, ..Default::default() }, ..o.resample.clone() };
-    let rs = resample(input, mid.path(), &ro, progress)?;
+    let (mid_path, mid) = match &o.tuning.work_dir {
+        // Kept beside the resampling's stages: the same command resumes.
+        Some(w) => (w.join("intermediate.ply"), None),
+        None => {
+            let dir = o.tuning.tmp_dir.clone().unwrap_or_else(|| output.parent().filter(|p| !p.as_os_str().is_empty()).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")));
+            let mid = tempfile::Builder::new().prefix(".mint-decimate-").suffix(".ply").tempfile_in(&dir).map_err(|source| PipelineError::Temp {
+                path: dir.clone(),
+                op: "creating the intermediate mesh",
+                source,
+            })?;
+            (mid.path().to_path_buf(), Some(mid))
+        }
+    };
+    let mut spec = RunSpec::resample(input, &mid_path, GridSize::CellSize(h));
+    spec.write.double = true;
+    let rs = run(&spec, &o.tuning, progress)?;
     let seconds_resample = t.elapsed().as_secs_f64();
     // 3. In core: simplify and judge; 4. write.
     let t = Instant::now();
-    let (positions, tris) = mint_io::read_mesh(mid.path())?;
+    let (positions, tris) = mint_io::read_mesh(&mid_path)?;
     drop(mid);
     let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
-    let (sr, _, seconds_write) = simplify_and_write(input, output, format, &o.resample.write, positions, tris, &so, progress)?;
+    let (sr, _, seconds_write) = simplify_and_write(input, output, format, &o.write.options(None), positions, tris, &so, progress)?;
     // Reading the intermediate counts as simplifying.
     let seconds_simplify = t.elapsed().as_secs_f64() - seconds_write;
     Ok(DecimateSummary {
@@ -263,4 +277,48 @@ pub fn simplify_file(input: &Path, output: &Path, o: &SimplifyFileOptions, progr
         seconds_write,
         seconds_total: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// The total area of `path`'s triangles and their count, in one streaming
+/// pass (workers over fixed-size records when the file has them, else the
+/// reader), summed per chunk in chunk order (the same for any thread count).
+fn surface_area(path: &Path, threads: usize, progress: &dyn Progress) -> Result<(u64, f64), PipelineError> {
+    let read = mint_io::ReadOptions { chunk_triangles: CHUNK_TRIANGLES, spill_dir: None, resolve_positions: true };
+    let mut reader = MeshReader::open(path, read)?;
+    let area = |p: &[[f64; 3]; 3]| {
+        let (u, v) = ([p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]], [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]]);
+        let c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+        0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+    };
+    if let Some(records) = reader.triangle_records()? {
+        let n = records.len();
+        let chunks = n.div_ceil(CHUNK_TRIANGLES as u64);
+        progress.start(crate::progress::BOUNDS, n);
+        let sums = Mutex::new(vec![0.0f64; chunks as usize]);
+        crate::pool::for_each(threads, chunks, |_| (), |_, c| {
+            if progress.cancelled() {
+                return Err(PipelineError::Cancelled);
+            }
+            let (a, b) = (c * CHUNK_TRIANGLES as u64, ((c + 1) * CHUNK_TRIANGLES as u64).min(n));
+            let mut sum = 0.0;
+            records.visit(a, b, &mut |p: &[[f64; 3]; 3]| sum += area(p))?;
+            sums.lock().unwrap()[c as usize] = sum;
+            progress.advance(b - a);
+            Ok(())
+        })?;
+        crate::passes::check_cancel(progress)?;
+        progress.finish();
+        return Ok((n, sums.into_inner().unwrap().iter().sum()));
+    }
+    progress.start(crate::progress::BOUNDS, reader.info().face_count.unwrap_or(0));
+    let (mut faces, mut total) = (0u64, 0.0f64);
+    let mut chunk = TriangleChunk::new();
+    while reader.next_chunk(&mut chunk)? {
+        crate::passes::check_cancel(progress)?;
+        total += chunk.positions.iter().map(area).sum::<f64>();
+        faces += chunk.len() as u64;
+        progress.advance(chunk.len() as u64);
+    }
+    progress.finish();
+    Ok((faces, total))
 }

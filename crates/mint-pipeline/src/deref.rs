@@ -48,18 +48,23 @@ pub const JOIN: Phase = Phase::named("dereference: join");
 /// Assembling and discretizing face blocks (units: faces).
 pub const ASSEMBLE: Phase = Phase::named("discretize");
 
-/// How face corners are resolved to positions (`--deref`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Deref {
-    /// `sort` when sampled locality is poor and the positions are larger
-    /// than a cache; `mmap` otherwise.
-    #[default]
-    Auto,
-    /// Fetch positions from the mapped vertex array.
-    Mmap,
-    /// Lindstrom–Silva external dereferencing (see the module docs).
-    Sort,
+mint_core::choice! {
+    /// How face corners are resolved to positions (`--deref`).
+    pub enum Deref {
+        /// `sort` when sampled locality is poor and the positions are larger
+        /// than a cache; `mmap` otherwise.
+        Auto => "auto",
+        /// Fetch positions from the mapped vertex array.
+        Mmap => "mmap",
+        /// Lindstrom–Silva external dereferencing (see the module docs).
+        Sort => "sort",
+    }
+}
+
+impl Default for Deref {
+    fn default() -> Self {
+        Deref::Auto
+    }
 }
 
 /// What ran, and why (reported in the summary).
@@ -377,7 +382,7 @@ pub(crate) fn discretize_sorted(
     progress: &dyn Progress,
     xf: Option<&Transform>,
     spill_dir: &Path,
-    budget: u64,
+    budget: &crate::budget::Budget,
 ) -> Result<(u64, Vec<f64>, SortStats), PipelineError> {
     let tmp = tempfile::Builder::new()
         .prefix(".mint-deref-")
@@ -400,7 +405,7 @@ fn run<C: Coord>(
     progress: &dyn Progress,
     xf: Option<&Transform>,
     dir: &Path,
-    budget: u64,
+    budget: &crate::budget::Budget,
 ) -> Result<(u64, Vec<f64>, SortStats), PipelineError> {
     let threads = threads.max(1);
     let nv = positions.len() as u64;
@@ -418,7 +423,7 @@ fn run<C: Coord>(
     };
     let max_block = (total_faces.div_ceil(MAX_BUCKETS - 1).div_ceil(chunk) * chunk).max(chunk);
     let mut blocks = Blocks::new(max_block);
-    let scatter_budget = budget * 45 / 100 / threads as u64;
+    let scatter_budget = budget.sort_buckets_per_thread();
     let scatter: Vec<Mutex<Buckets<Corner>>> =
         (0..threads).map(|t| Mutex::new(Buckets::new(dir, &format!("corners-{t}"), vertex_blocks as usize, scatter_budget))).collect();
     let scatter_one = |b: &mut Buckets<Corner>, t: [u32; 3], block: u32, corner: &mut u32| -> Result<(), StoreError> {
@@ -447,42 +452,25 @@ fn run<C: Coord>(
                     blocks.add_chunk(((a + chunk).min(end) - a) as u32, a - first)
                 })
                 .collect();
-            let next = AtomicUsize::new(0);
-            let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
-            let stop = AtomicBool::new(false);
-            std::thread::scope(|s| {
-                for t in 0..threads {
-                    let (next, failed, stop, spans, scatter, scatter_one) = (&next, &failed, &stop, &spans, &scatter, &scatter_one);
-                    s.spawn(move || {
-                        let mut mine = scatter[t].lock().unwrap();
-                        loop {
-                            let c = next.fetch_add(1, Ordering::Relaxed);
-                            if c as u64 >= chunks || stop.load(Ordering::Relaxed) {
-                                return;
-                            }
-                            let (block, at) = spans[c];
-                            let a = first + c as u64 * chunk;
-                            let b = (a + chunk).min(end);
-                            let mut corner = (at * 3) as u32;
-                            let mut err: Option<StoreError> = None;
-                            let visited = records.visit_indices(a, b, |_, t| {
-                                if err.is_none() {
-                                    err = scatter_one(&mut mine, t, block, &mut corner).err();
-                                }
-                            });
-                            if let Some(e) = crate::passes::chunk_outcome(visited, err, progress) {
-                                failed.lock().unwrap().get_or_insert(e);
-                                stop.store(true, Ordering::Relaxed);
-                                return;
-                            }
-                            progress.advance(b - a);
-                        }
-                    });
+            // Each worker scatters into its own buckets (locked once a chunk).
+            crate::pool::for_each(threads, chunks, |t| &scatter[t], |mine, c| {
+                let mut mine = mine.lock().unwrap();
+                let (block, at) = spans[c as usize];
+                let a = first + c * chunk;
+                let b = (a + chunk).min(end);
+                let mut corner = (at * 3) as u32;
+                let mut err: Option<StoreError> = None;
+                let visited = records.visit_indices(a, b, |_, t| {
+                    if err.is_none() {
+                        err = scatter_one(&mut mine, t, block, &mut corner).err();
+                    }
+                });
+                if let Some(e) = crate::passes::chunk_outcome(visited, err, progress) {
+                    return Err(e);
                 }
-            });
-            if let Some(e) = failed.into_inner().unwrap() {
-                return Err(e);
-            }
+                progress.advance(b - a);
+                Ok(())
+            })?;
             nfaces = end.saturating_sub(first);
         }
         Faces::Reader(reader) => {
@@ -513,66 +501,50 @@ fn run<C: Coord>(
     let t0 = std::time::Instant::now();
 
     // 2. Join each vertex block with its corners.
-    let gather_budget = budget * 45 / 100 / threads as u64;
+    let gather_budget = budget.sort_buckets_per_thread();
     let gather: Vec<Mutex<Buckets<Resolved<C>>>> = (0..threads).map(|t| Mutex::new(Buckets::new(dir, &format!("positions-{t}"), face_blocks, gather_budget))).collect();
     progress.start(JOIN, vertex_blocks);
-    {
-        let next = AtomicUsize::new(0);
-        let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
-        let stop = AtomicBool::new(false);
-        std::thread::scope(|s| {
-            for t in 0..threads {
-                let (next, failed, stop, scatter, gather) = (&next, &failed, &stop, &scatter, &gather);
-                s.spawn(move || {
-                    let mut out = gather[t].lock().unwrap();
-                    let mut block: Vec<[f64; 3]> = Vec::with_capacity(block_vertices as usize);
-                    loop {
-                        let vb = next.fetch_add(1, Ordering::Relaxed) as u64;
-                        if vb >= vertex_blocks || stop.load(Ordering::Relaxed) {
+    // Each worker joins vertex blocks into its own gather buckets, with a
+    // block of positions as scratch.
+    crate::pool::for_each(
+        threads,
+        vertex_blocks,
+        |t| (&gather[t], Vec::<[f64; 3]>::with_capacity(block_vertices as usize)),
+        |(out, block), vb| {
+            let mut out = out.lock().unwrap();
+            let v0 = vb * block_vertices;
+            let v1 = (v0 + block_vertices).min(nv);
+            block.clear();
+            block.extend((v0..v1).map(|i| positions.get(i as u32)));
+            let mut err: Option<StoreError> = None;
+            for set in &scatter {
+                let bucket = set.lock().unwrap().take(vb as usize);
+                let read = bucket.read(|batch| {
+                    if err.is_some() {
+                        return;
+                    }
+                    for c in batch {
+                        let p = block[(c.v_block & ((1 << V_BITS) - 1)) as usize];
+                        if let Err(e) = out.push((c.v_block >> V_BITS) as usize, Resolved::<C>::new(c.corner, p)) {
+                            err = Some(e);
                             return;
                         }
-                        let v0 = vb * block_vertices;
-                        let v1 = (v0 + block_vertices).min(nv);
-                        block.clear();
-                        block.extend((v0..v1).map(|i| positions.get(i as u32)));
-                        let mut err: Option<StoreError> = None;
-                        for set in scatter {
-                            let bucket = set.lock().unwrap().take(vb as usize);
-                            let read = bucket.read(|batch| {
-                                if err.is_some() {
-                                    return;
-                                }
-                                for c in batch {
-                                    let p = block[(c.v_block & ((1 << V_BITS) - 1)) as usize];
-                                    if let Err(e) = out.push((c.v_block >> V_BITS) as usize, Resolved::<C>::new(c.corner, p)) {
-                                        err = Some(e);
-                                        return;
-                                    }
-                                }
-                            });
-                            if let Err(e) = read {
-                                err.get_or_insert(e);
-                            }
-                        }
-                        let e = match err {
-                            Some(e) => Some(PipelineError::from(e)),
-                            None if progress.cancelled() => Some(PipelineError::Cancelled),
-                            None => None,
-                        };
-                        if let Some(e) = e {
-                            failed.lock().unwrap().get_or_insert(e);
-                            stop.store(true, Ordering::Relaxed);
-                            return;
-                        }
-                        progress.advance(1);
                     }
                 });
+                if let Err(e) = read {
+                    err.get_or_insert(e);
+                }
             }
-        });
-        if let Some(e) = failed.into_inner().unwrap() {
-            return Err(e);
-        }
-    }
+            match err {
+                Some(e) => Err(PipelineError::from(e)),
+                None if progress.cancelled() => Err(PipelineError::Cancelled),
+                None => {
+                    progress.advance(1);
+                    Ok(())
+                }
+            }
+        },
+    )?;
     progress.finish();
     let mut spilled = 0;
     for set in scatter {

@@ -1,80 +1,59 @@
 //! The staged engine's drivers: one engine for `resample`, `bool` and
-//! `csg`, run either whole in one process ([`resample`], [`boolean`],
-//! [`csg`]: every stage's tasks in order, in a work directory that is
-//! temporary or kept with `work_dir` for resuming), or one task at a time
+//! `csg` (a [`RunSpec`]), run either whole in one process ([`run`],
+//! [`run_scene`]: every stage's tasks in order, in a work directory that is
+//! temporary or kept with `Tuning::work_dir` for resuming), or one task at a time
 //! by separate processes on any machines sharing the work directory
 //! ([`plan_run`], then [`run_task`] per task, [`status`] to watch; see the
 //! `slurm` module for a scheduler).
 //!
 //! Both paths run the same task code (`stages`), so their output bytes are
 //! the same. A resumed run (same work directory) checks that the inputs'
-//! fingerprints and the options match the plan, keeps every finished task
+//! fingerprints and the spec match the plan, keeps every finished task
 //! and runs the rest.
 
 use crate::error::PipelineError;
-use crate::options::{ResampleOptions, ResampleSummary};
+use crate::summary::{ResampleSummary, MAX_LISTED};
 use crate::passes::check_cancel;
-use crate::plan::{bool_op_name, Fingerprint, Job, OperandPlan, Plan};
+use crate::plan::{Fingerprint, OperandPlan, Plan, Stage};
 use crate::progress::Progress;
 use crate::scene::{Operand, Scene};
+use crate::spec::{Job, RunSpec, Tuning};
 use crate::stages::{run_stage_task, Ctx, DiscretizeResult};
-use crate::workdir::{checked_json, disk_bytes, is_done, task_dir, temp_tasks, write_atomic, TaskBuild, PLAN_FILE};
-use mint_core::expr::BoolOp;
+use crate::workdir::{disk_bytes, is_done, task_dir, temp_tasks, TaskBuild, PLAN_FILE};
 use mint_core::signs::SignRule;
-use mint_io::Format;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// Resamples `input` into `output` on the grid `opts.size`.
-pub fn resample(input: &Path, output: &Path, opts: &ResampleOptions, progress: &dyn Progress) -> Result<ResampleSummary, PipelineError> {
-    run_job(Job::Resample { input: input.to_path_buf() }, None, output, opts, progress)
+/// Runs `spec` whole in this process, in `tuning.work_dir` (kept, and
+/// resumed when it holds the same run) or a temporary directory.
+pub fn run(spec: &RunSpec, tuning: &Tuning, progress: &dyn Progress) -> Result<ResampleSummary, PipelineError> {
+    run_job(spec, None, tuning, progress)
 }
 
-/// `A op B` for two mesh files (`mint bool`).
-pub fn boolean(op: BoolOp, a: &Path, b: &Path, output: &Path, opts: &ResampleOptions, progress: &dyn Progress) -> Result<ResampleSummary, PipelineError> {
-    let job = Job::Bool { op: bool_op_name(op).into(), a: a.to_path_buf(), b: b.to_path_buf() };
-    run_job(job, None, output, &ResampleOptions { max_hole: None, ..opts.clone() }, progress)
+/// Runs a CSG `spec` whose scene is already parsed (`scene`), so that the
+/// scene file is not read again.
+pub fn run_scene(spec: &RunSpec, scene: &Scene, tuning: &Tuning, progress: &dyn Progress) -> Result<ResampleSummary, PipelineError> {
+    run_job(spec, Some(scene.clone()), tuning, progress)
 }
 
-/// Evaluates `scene` (read from the file `scene_name`, when it is one) on
-/// the grid `opts.size` into `output`.
-pub fn csg(scene: &Scene, scene_name: &str, output: &Path, opts: &ResampleOptions, progress: &dyn Progress) -> Result<ResampleSummary, PipelineError> {
-    let job = Job::Csg { scene: PathBuf::from(scene_name) };
-    run_job(job, Some(scene.clone()), output, &ResampleOptions { max_hole: None, ..opts.clone() }, progress)
-}
-
-fn threads_of(n: usize) -> usize {
-    if n == 0 {
-        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
-    } else {
-        n
-    }
-}
-
-/// Checks the options that can be checked before any work.
-fn check_output(output: &Path) -> Result<(), PipelineError> {
-    Format::from_path(output)?;
-    Ok(())
-}
-
-/// Writes the plan of `job` into `dir` (created if needed). A directory
+/// Writes the plan of `spec` into `dir` (created if needed). A directory
 /// that already holds the same run's plan is kept as it is (its finished
 /// tasks stay); one that holds another run's is refused.
-pub fn plan_run(job: Job, scene: Option<Scene>, output: &Path, opts: &ResampleOptions, dir: &Path) -> Result<Plan, PipelineError> {
-    check_output(output)?;
+pub fn plan_run(spec: &RunSpec, scene: Option<Scene>, tuning: &Tuning, dir: &Path) -> Result<Plan, PipelineError> {
+    spec.validate()?;
     let scene = match scene {
         Some(s) => s,
-        None => job.scene()?,
+        None => spec.job.scene()?,
     };
-    let plan = Plan::new(job, &scene, output, opts)?;
+    let plan = Plan::new(spec, &scene, tuning)?;
     std::fs::create_dir_all(dir).map_err(|source| PipelineError::Temp { path: dir.to_path_buf(), op: "creating the work directory", source })?;
     if dir.join(PLAN_FILE).exists() {
         let stored = Plan::load(dir)?;
         plan.check_same_run(&stored, dir)?;
         return Ok(stored);
     }
-    write_atomic(&dir.join(PLAN_FILE), &checked_json(&plan))?;
+    plan.save(dir)?;
     Ok(plan)
 }
 
@@ -85,24 +64,37 @@ pub enum TaskOutcome {
     AlreadyDone,
 }
 
-/// Options of one task's process.
+/// What one task's process changes of the plan's [`Tuning`] (`None`:
+/// the plan's). None of it changes the output.
 #[derive(Debug, Clone, Default)]
 pub struct TaskOptions {
     /// Worker threads; 0: all cores.
-    pub threads: usize,
-    /// Heap budget; `None`: the plan's.
+    pub threads: Option<usize>,
+    /// Heap budget.
     pub mem_bytes: Option<u64>,
     /// How discretize tasks dereference faces.
-    pub deref: crate::deref::Deref,
+    pub deref: Option<crate::deref::Deref>,
+}
+
+impl TaskOptions {
+    /// The plan's tuning with these changes.
+    pub fn apply(&self, plan: &Tuning) -> Tuning {
+        Tuning {
+            threads: self.threads.unwrap_or(plan.threads),
+            mem_bytes: self.mem_bytes.unwrap_or(plan.mem_bytes),
+            deref: self.deref.unwrap_or(plan.deref),
+            ..plan.clone()
+        }
+    }
 }
 
 /// Runs task `task` of `stage` of the plan in `dir`, in this process. A
 /// finished task is a no-op. Fails with one line when the plan is of
 /// another version, an input changed, or a stage before is incomplete.
-pub fn run_task(dir: &Path, stage: &str, task: u32, topts: &TaskOptions, progress: &dyn Progress) -> Result<TaskOutcome, PipelineError> {
+pub fn run_task(dir: &Path, stage: Stage, task: u32, topts: &TaskOptions, progress: &dyn Progress) -> Result<TaskOutcome, PipelineError> {
     let plan = Plan::load(dir)?;
     let Some(pos) = plan.stages.iter().position(|s| s.name == stage) else {
-        let names: Vec<&str> = plan.stages.iter().map(|s| s.name.as_str()).collect();
+        let names: Vec<&str> = plan.stages.iter().map(|s| s.name.dir_name()).collect();
         return Err(PipelineError::stage(dir, format!("this plan has no stage '{stage}' (its stages: {})", names.join(", "))));
     };
     let n = plan.stages[pos].tasks;
@@ -113,7 +105,7 @@ pub fn run_task(dir: &Path, stage: &str, task: u32, topts: &TaskOptions, progres
         return Ok(TaskOutcome::AlreadyDone);
     }
     for before in &plan.stages[..pos] {
-        let missing: Vec<u32> = (0..before.tasks).filter(|&t| !is_done(dir, &before.name, t)).collect();
+        let missing: Vec<u32> = (0..before.tasks).filter(|&t| !is_done(dir, before.name, t)).collect();
         if !missing.is_empty() {
             let list: Vec<String> = missing.iter().take(8).map(|t| t.to_string()).collect();
             return Err(PipelineError::stage(
@@ -131,10 +123,9 @@ pub fn run_task(dir: &Path, stage: &str, task: u32, topts: &TaskOptions, progres
         }
     }
     verify_inputs(&plan)?;
-    let scene = plan.job.scene()?;
-    let mem = topts.mem_bytes.unwrap_or(plan.tuning.mem_bytes);
-    let mut ctx = Ctx::new(dir, plan, scene, threads_of(topts.threads), mem, progress);
-    ctx.deref = topts.deref;
+    let scene = plan.spec.job.scene()?;
+    let tuning = topts.apply(&plan.tuning);
+    let ctx = Ctx::new(dir, plan, scene, &tuning, progress);
     run_one(&ctx, stage, task)?;
     Ok(TaskOutcome::Ran)
 }
@@ -153,7 +144,7 @@ fn verify_inputs(plan: &Plan) -> Result<(), PipelineError> {
     Ok(())
 }
 
-fn run_one(ctx: &Ctx, stage: &str, task: u32) -> Result<(), PipelineError> {
+fn run_one(ctx: &Ctx, stage: Stage, task: u32) -> Result<(), PipelineError> {
     let build = TaskBuild::begin(&ctx.dir, stage, task)?;
     let result = run_stage_task(ctx, stage, task, &build)?;
     check_cancel(ctx.progress)?;
@@ -161,16 +152,16 @@ fn run_one(ctx: &Ctx, stage: &str, task: u32) -> Result<(), PipelineError> {
 }
 
 /// Runs a whole job in this process; see the module docs.
-fn run_job(job: Job, scene: Option<Scene>, output: &Path, opts: &ResampleOptions, progress: &dyn Progress) -> Result<ResampleSummary, PipelineError> {
+fn run_job(spec: &RunSpec, scene: Option<Scene>, tuning: &Tuning, progress: &dyn Progress) -> Result<ResampleSummary, PipelineError> {
     let t_start = Instant::now();
-    check_output(output)?;
-    let threads = threads_of(opts.threads);
-    let tmp_root = match &opts.tmp_dir {
+    spec.validate()?;
+    let output = &spec.output;
+    let tmp_root = match &tuning.tmp_dir {
         Some(d) => d.clone(),
         None => output.parent().filter(|p| !p.as_os_str().is_empty()).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")),
     };
     let _temp;
-    let dir = match &opts.work_dir {
+    let dir = match &tuning.work_dir {
         Some(d) => d.clone(),
         None => {
             let t = tempfile::Builder::new().prefix(".mint-work-").tempdir_in(&tmp_root).map_err(|source| PipelineError::Temp {
@@ -185,50 +176,54 @@ fn run_job(job: Job, scene: Option<Scene>, output: &Path, opts: &ResampleOptions
     };
     let scene = match scene {
         Some(s) => s,
-        None => job.scene()?,
+        None => spec.job.scene()?,
     };
-    let plan = plan_run(job, Some(scene.clone()), output, opts, &dir)?;
+    let plan = plan_run(spec, Some(scene.clone()), tuning, &dir)?;
     // Task directories abandoned by a process that died.
     for stage in &plan.stages {
-        for t in temp_tasks(&dir, &stage.name) {
+        for t in temp_tasks(&dir, stage.name) {
             let _ = std::fs::remove_dir_all(t);
         }
     }
     // The output was removed after a finished run: write it again.
-    if is_done(&dir, "write", 0) && !plan.output.exists() {
-        let _ = std::fs::remove_dir_all(task_dir(&dir, "write", 0));
+    if is_done(&dir, Stage::Write, 0) && !plan.spec.output.exists() {
+        let _ = std::fs::remove_dir_all(task_dir(&dir, Stage::Write, 0));
     }
     let stages = plan.stages.clone();
-    let mut ctx = Ctx::new(&dir, plan, scene, threads, opts.mem_bytes, progress);
-    ctx.deref = opts.deref;
+    let ctx = Ctx::new(&dir, plan, scene, tuning, progress);
     let (mut ran, mut resumed) = (0u64, 0u64);
     let mut seconds = std::collections::HashMap::new();
     for stage in &stages {
         let t = Instant::now();
         for task in 0..stage.tasks {
-            if is_done(&dir, &stage.name, task) {
+            if is_done(&dir, stage.name, task) {
                 resumed += 1;
                 continue;
             }
-            run_one(&ctx, &stage.name, task)?;
+            run_one(&ctx, stage.name, task)?;
             ran += 1;
         }
         check_cancel(progress)?;
-        seconds.insert(stage.name.clone(), t.elapsed().as_secs_f64());
+        seconds.insert(stage.name, t.elapsed().as_secs_f64());
     }
     let mut s = summarize(&ctx)?;
-    let sec = |n: &str| seconds.get(n).copied().unwrap_or(0.0);
+    set_stage_seconds(&mut s, &seconds);
     s.output = output.display().to_string();
-    s.seconds_bounds = sec("bounds");
-    s.seconds_discretize = sec("discretize");
-    s.seconds_census = sec("census");
-    s.seconds_reconstruct = sec("reconstruct") + sec("reopen");
-    s.seconds_write = sec("write");
     s.seconds_total = t_start.elapsed().as_secs_f64();
-    s.work_dir = opts.work_dir.as_ref().map(|d| d.display().to_string());
+    s.work_dir = tuning.work_dir.as_ref().map(|d| d.display().to_string());
     s.tasks_run = ran;
     s.tasks_resumed = resumed;
     Ok(s)
+}
+
+/// The summary's seconds per phase, from seconds per stage.
+fn set_stage_seconds(s: &mut ResampleSummary, seconds: &std::collections::HashMap<Stage, f64>) {
+    let sec = |n: Stage| seconds.get(&n).copied().unwrap_or(0.0);
+    s.seconds_bounds = sec(Stage::Bounds);
+    s.seconds_discretize = sec(Stage::Discretize);
+    s.seconds_census = sec(Stage::Census);
+    s.seconds_reconstruct = sec(Stage::Reconstruct) + sec(Stage::Reopen);
+    s.seconds_write = sec(Stage::Write);
 }
 
 /// The summary of a finished run, from its tasks' results.
@@ -236,8 +231,8 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
     let plan = &ctx.plan;
     let grid = ctx.grid()?;
     let mut s = ResampleSummary {
-        input: plan.job.name(),
-        output: plan.output.display().to_string(),
+        input: plan.spec.job.name(),
+        output: plan.spec.output.display().to_string(),
         threads: ctx.threads,
         grid_cells: grid.dims,
         cell_size: grid.cell,
@@ -268,11 +263,11 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
     }
     s.deref = derefs.join("; ");
     let (rules, census) = ctx.rules()?;
-    if let Job::Resample { .. } = plan.job {
+    if let Job::Resample { .. } = plan.spec.job {
         let vol = ctx.faces_and_volume(0)?.1;
         s.input_signed_volume = vol * grid.cell.powi(3);
         s.orientation_inverted = vol < 0.0;
-        s.sign_rule = format!("{:?}", rules[0]).to_lowercase();
+        s.sign_rule = rules[0].to_string();
         (s.census_lines, s.census_winding_valid, s.census_odd) = (census[0].lines, census[0].winding_valid, census[0].odd);
     } else {
         let names: Vec<String> = ctx
@@ -282,7 +277,7 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
             .zip(rules)
             .map(|(op, r)| match op {
                 Operand::Primitive(_) => "exact".to_string(),
-                Operand::Mesh { .. } => format!("{r:?}").to_lowercase(),
+                Operand::Mesh { .. } => r.to_string(),
             })
             .collect();
         s.sign_rule = names.join(",");
@@ -293,7 +288,7 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
     s.open_cells = open.as_ref().map_or(0, |o| o.len() as u64);
     let (mut kept, mut removed) = (0, 0);
     let mut loose: Vec<(u32, u32)> = Vec::new();
-    for t in 0..plan.tasks("reconstruct") {
+    for t in 0..plan.tasks(Stage::Reconstruct) {
         let (stage, r) = ctx.final_slab(t)?;
         if let Some(sum) = r.loose_file {
             let offset = s.output_vertices;
@@ -311,7 +306,7 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
         s.output_faces += r.faces;
         s.active_cells += r.active_cells;
         s.non_canonical_cells += r.non_canonical_cells;
-        let room = plan.options.max_listed.saturating_sub(s.non_canonical_list.len());
+        let room = MAX_LISTED.saturating_sub(s.non_canonical_list.len());
         s.non_canonical_list.extend(r.non_canonical_list.iter().take(room));
         kept += r.filter_kept;
         removed += r.filter_removed;
@@ -336,10 +331,10 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
 /// from the plan's writing to each stage's last task.
 pub fn summarize_dir(dir: &Path, progress: &dyn Progress) -> Result<ResampleSummary, PipelineError> {
     let plan = Plan::load(dir)?;
-    let scene = plan.job.scene()?;
-    let mem = plan.tuning.mem_bytes;
+    let scene = plan.spec.job.scene()?;
+    let tuning = Tuning { threads: 1, ..plan.tuning.clone() };
     let stages = plan.stages.clone();
-    let ctx = Ctx::new(dir, plan, scene, 1, mem, progress);
+    let ctx = Ctx::new(dir, plan, scene, &tuning, progress);
     let mut s = summarize(&ctx)?;
     // Wall times of a run whose tasks ran elsewhere: from the plan's
     // writing to each stage's last finished task (directory times).
@@ -348,16 +343,11 @@ pub fn summarize_dir(dir: &Path, progress: &dyn Progress) -> Result<ResampleSumm
         let mut prev = start;
         let mut secs = std::collections::HashMap::new();
         for st in &stages {
-            let end = (0..st.tasks).filter_map(|t| mtime(&task_dir(dir, &st.name, t))).max().unwrap_or(prev).max(prev);
-            secs.insert(st.name.clone(), end.duration_since(prev).map_or(0.0, |d| d.as_secs_f64()));
+            let end = (0..st.tasks).filter_map(|t| mtime(&task_dir(dir, st.name, t))).max().unwrap_or(prev).max(prev);
+            secs.insert(st.name, end.duration_since(prev).map_or(0.0, |d| d.as_secs_f64()));
             prev = end;
         }
-        let sec = |n: &str| secs.get(n).copied().unwrap_or(0.0);
-        s.seconds_bounds = sec("bounds");
-        s.seconds_discretize = sec("discretize");
-        s.seconds_census = sec("census");
-        s.seconds_reconstruct = sec("reconstruct") + sec("reopen");
-        s.seconds_write = sec("write");
+        set_stage_seconds(&mut s, &secs);
         s.seconds_total = prev.duration_since(start).map_or(0.0, |d| d.as_secs_f64());
     }
     s.work_dir = Some(dir.display().to_string());
@@ -368,7 +358,7 @@ pub fn summarize_dir(dir: &Path, progress: &dyn Progress) -> Result<ResampleSumm
 /// One stage's progress in a work directory.
 #[derive(Debug, Clone, Serialize)]
 pub struct StageStatus {
-    pub name: String,
+    pub name: Stage,
     pub tasks: u32,
     pub done: u32,
     /// Task directories being written (or abandoned by a process that died).
@@ -397,21 +387,21 @@ pub fn status(dir: &Path) -> Result<RunStatus, PipelineError> {
     let plan = Plan::load(dir)?;
     let mut stages = Vec::new();
     for st in &plan.stages {
-        let done = (0..st.tasks).filter(|&t| is_done(dir, &st.name, t)).count() as u32;
-        let running = temp_tasks(dir, &st.name).len() as u32;
+        let done = (0..st.tasks).filter(|&t| is_done(dir, st.name, t)).count() as u32;
+        let running = temp_tasks(dir, st.name).len() as u32;
         stages.push(StageStatus {
-            name: st.name.clone(),
+            name: st.name,
             tasks: st.tasks,
             done,
             running,
             left: st.tasks - done,
-            bytes: disk_bytes(&dir.join(&st.name)),
+            bytes: disk_bytes(&dir.join(st.name.dir_name())),
         });
     }
     Ok(RunStatus {
         dir: dir.display().to_string(),
-        job: plan.job.name(),
-        output: plan.output.display().to_string(),
+        job: plan.spec.job.name(),
+        output: plan.spec.output.display().to_string(),
         parts: plan.parts,
         slabs: plan.slabs,
         complete: stages.iter().all(|s| s.left == 0),

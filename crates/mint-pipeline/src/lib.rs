@@ -7,10 +7,14 @@
 //! - [`engine`]: the drivers: a whole run in one process ([`resample`],
 //!   [`boolean`], [`csg`]), or one task at a time ([`plan_run`],
 //!   [`run_task`], [`status`]) for resuming and for clusters;
-//! - [`plan`]: what a run is (job, options, fingerprints, stages);
+//! - [`spec`]: the one description of a run: what decides the output
+//!   ([`RunSpec`]) and what does not ([`Tuning`]), with every default;
+//! - [`budget`]: the memory budget and every share of it;
+//! - [`plan`]: a staged run in its work directory (spec, fingerprints, stages);
 //! - [`stages`]: the tasks of each stage and the reduces between stages;
 //! - [`passes`]: the parallel passes inside a task (bounds, discretize,
 //!   slab planning, ordered reconstruction);
+//! - [`pool`]: the one worker pool (numbered items, first error wins);
 //! - [`deref`]: how faces' vertex indices become positions (memory map,
 //!   or Lindstrom–Silva dereferencing by distribution sort);
 //! - [`workdir`]: task directories, atomic commits, checksums;
@@ -21,26 +25,31 @@
 //! - [`decimate`](mod@decimate): resampling to an intermediate size, then
 //!   quadric edge collapse (f64) to a face target.
 
+pub mod budget;
 pub mod check;
 pub mod decimate;
 pub mod deref;
 pub mod engine;
 pub mod error;
-pub mod options;
 pub mod passes;
 pub mod plan;
+pub mod pool;
 pub mod progress;
 pub mod scene;
 pub mod slurm;
+pub mod spec;
 pub mod stages;
+pub mod summary;
 pub mod workdir;
 
 pub use check::{check_file, CheckOptions, CheckStats};
 pub use decimate::{decimate, simplify_file, DecimateOptions, DecimateSummary, SimplifyFileOptions, SimplifySummary};
-pub use engine::{boolean, csg, plan_run, resample, run_task, status, summarize_dir, RunStatus, StageStatus, TaskOptions, TaskOutcome};
+pub use budget::{default_mem_bytes, Budget};
+pub use engine::{plan_run, run, run_scene, run_task, status, summarize_dir, RunStatus, StageStatus, TaskOptions, TaskOutcome};
 pub use deref::Deref;
 pub use error::PipelineError;
-pub use options::{default_mem_bytes, ResampleOptions, ResampleSummary};
-pub use plan::{Job, Plan};
+pub use plan::{Plan, Stage};
+pub use spec::{GridSpec, Job, RunSpec, SlabAxis, Tuning, WriteSpec};
+pub use summary::ResampleSummary;
 pub use progress::{NoProgress, Phase, Progress};
 pub use scene::{parse_scene, Scene, SceneError};

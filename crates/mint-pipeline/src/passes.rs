@@ -31,8 +31,6 @@ const READ_AHEAD: u64 = 48;
 /// Estimated heap bytes per stored record while its slab is reconstructed:
 /// the record, its vertex, about two faces, active-cell ids, and slack.
 pub const BYTES_PER_RECORD_IN_SLAB: u64 = 128;
-/// Heap kept aside for channels, chunk buffers and shard write buffers.
-pub const FIXED_RESERVE: u64 = 48 << 20;
 
 pub(crate) fn check_cancel(progress: &dyn Progress) -> Result<(), PipelineError> {
     if progress.cancelled() {
@@ -245,62 +243,44 @@ pub(crate) fn discretize_direct(
     let local = LocalMap::new(grid);
     let chunk = CHUNK_TRIANGLES as u64;
     let chunks = end.saturating_sub(first).div_ceil(chunk);
-    let next = AtomicU64::new(0);
-    let stop = std::sync::atomic::AtomicBool::new(false);
-    let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
     let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
     progress.start(crate::progress::DISCRETIZE, end.saturating_sub(first));
     let mut volumes = vec![0.0f64; chunks as usize];
-    let written: Result<(), StoreError> = std::thread::scope(|s| {
-        for _ in 0..threads {
-            let rec_tx = rec_tx.clone();
-            let (next, stop, failed, local) = (&next, &stop, &failed, &local);
-            s.spawn(move || loop {
-                let c = next.fetch_add(1, Ordering::Relaxed);
-                if c >= chunks || stop.load(Ordering::Relaxed) {
-                    return;
-                }
-                if progress.cancelled() {
-                    failed.lock().unwrap().get_or_insert(PipelineError::Cancelled);
-                    stop.store(true, Ordering::Relaxed);
-                    return;
-                }
-                let (a, b) = (first + c * chunk, (first + (c + 1) * chunk).min(end));
-                // Keep the disk busy READ_AHEAD chunks ahead of the workers
-                // (each worker asks for the chunk that far past its own).
-                let ahead = a + READ_AHEAD * chunk;
-                records.read_ahead(ahead, (ahead + chunk).min(end));
-                let mut recs = Vec::with_capacity(1024);
-                let mut volume = 0.0;
-                let visited = match (grid.slab_axis, xf) {
-                    (0, None) => visit_chunk::<0>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
-                    (1, None) => visit_chunk::<1>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
-                    (_, None) => visit_chunk::<2>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
-                    (_, Some(t)) => visit_chunk::<3>(&ChunkJob { records, a, b, local, xf: Some(t), nb, progress }, &mut recs, &mut volume),
-                };
-                match visited {
-                    Ok(true) => {}
-                    Ok(false) => {
-                        failed.lock().unwrap().get_or_insert(PipelineError::Cancelled);
-                        stop.store(true, Ordering::Relaxed);
-                        return;
-                    }
-                    Err(e) => {
-                        failed.lock().unwrap().get_or_insert(e.into());
-                        stop.store(true, Ordering::Relaxed);
-                        return;
-                    }
-                }
-                progress.advance(b - a);
-                if rec_tx.send((c as usize, recs, volume)).is_err() {
-                    return; // the writer stopped on an error
-                }
-            });
-        }
-        drop(rec_tx);
-        write_chunks(rec_rx, &mut volumes, store, &stop)
-    });
-    if let Some(e) = failed.into_inner().unwrap() {
+    let local = &local;
+    let (failed, written) = crate::pool::run(
+        threads,
+        chunks,
+        move |_| rec_tx.clone(),
+        |rec_tx, c| {
+            if progress.cancelled() {
+                return Err(PipelineError::Cancelled);
+            }
+            let (a, b) = (first + c * chunk, (first + (c + 1) * chunk).min(end));
+            // Keep the disk busy READ_AHEAD chunks ahead of the workers
+            // (each worker asks for the chunk that far past its own).
+            let ahead = a + READ_AHEAD * chunk;
+            records.read_ahead(ahead, (ahead + chunk).min(end));
+            let mut recs = Vec::with_capacity(1024);
+            let mut volume = 0.0;
+            let visited = match (grid.slab_axis, xf) {
+                (0, None) => visit_chunk::<0>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
+                (1, None) => visit_chunk::<1>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
+                (_, None) => visit_chunk::<2>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
+                (_, Some(t)) => visit_chunk::<3>(&ChunkJob { records, a, b, local, xf: Some(t), nb, progress }, &mut recs, &mut volume),
+            };
+            match visited {
+                Ok(true) => {}
+                Ok(false) => return Err(PipelineError::Cancelled),
+                Err(e) => return Err(e.into()),
+            }
+            progress.advance(b - a);
+            // A closed channel: the writer stopped on an error and raised `stop`.
+            let _ = rec_tx.send((c as usize, recs, volume));
+            Ok(())
+        },
+        |stop| write_chunks(rec_rx, &mut volumes, store, stop),
+    );
+    if let Some(e) = failed {
         return Err(e);
     }
     written?;
@@ -822,60 +802,4 @@ mod tests {
         // Both kinds of triangle were met.
         assert!(rejected > 1000 && rejected < 3 * 100_000 - 1000, "{rejected}");
     }
-}
-
-/// The total area of `path`'s triangles and their count, in one streaming
-/// pass (workers over fixed-size records when the file has them, else the
-/// reader), summed per chunk in chunk order (the same for any thread count).
-pub(crate) fn surface_area(path: &Path, threads: usize, progress: &dyn Progress) -> Result<(u64, f64), PipelineError> {
-    let read = mint_io::ReadOptions { chunk_triangles: CHUNK_TRIANGLES, spill_dir: None, resolve_positions: true };
-    let mut reader = MeshReader::open(path, read)?;
-    let area = |p: &[[f64; 3]; 3]| {
-        let (u, v) = ([p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]], [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]]);
-        let c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
-        0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
-    };
-    if let Some(records) = reader.triangle_records()? {
-        let n = records.len();
-        let chunks = n.div_ceil(CHUNK_TRIANGLES as u64);
-        progress.start(crate::progress::BOUNDS, n);
-        let next = AtomicU64::new(0);
-        let sums = Mutex::new(vec![0.0f64; chunks as usize]);
-        let failed: Mutex<Option<mint_io::Error>> = Mutex::new(None);
-        std::thread::scope(|s| {
-            for _ in 0..threads {
-                s.spawn(|| loop {
-                    let c = next.fetch_add(1, Ordering::Relaxed);
-                    if c >= chunks || progress.cancelled() || failed.lock().unwrap().is_some() {
-                        return;
-                    }
-                    let (a, b) = (c * CHUNK_TRIANGLES as u64, ((c + 1) * CHUNK_TRIANGLES as u64).min(n));
-                    let mut sum = 0.0;
-                    if let Err(e) = records.visit(a, b, &mut |p: &[[f64; 3]; 3]| sum += area(p)) {
-                        failed.lock().unwrap().get_or_insert(e);
-                        return;
-                    }
-                    sums.lock().unwrap()[c as usize] = sum;
-                    progress.advance(b - a);
-                });
-            }
-        });
-        if let Some(e) = failed.into_inner().unwrap() {
-            return Err(e.into());
-        }
-        check_cancel(progress)?;
-        progress.finish();
-        return Ok((n, sums.into_inner().unwrap().iter().sum()));
-    }
-    progress.start(crate::progress::BOUNDS, reader.info().face_count.unwrap_or(0));
-    let (mut faces, mut total) = (0u64, 0.0f64);
-    let mut chunk = TriangleChunk::new();
-    while reader.next_chunk(&mut chunk)? {
-        check_cancel(progress)?;
-        total += chunk.positions.iter().map(area).sum::<f64>();
-        faces += chunk.len() as u64;
-        progress.advance(chunk.len() as u64);
-    }
-    progress.finish();
-    Ok((faces, total))
 }

@@ -1,9 +1,9 @@
-//! The plan of a staged run (`DIR/plan.json`): what to evaluate (a
-//! [`Job`]: one mesh, a boolean of two, or a CSG scene), on which grid
-//! options, split into how many parts and slabs, the fingerprints of every
-//! input file, and the stages in order with their task counts. Every task
-//! count is known here, before any work, so that a whole run can be
-//! submitted to a scheduler at once.
+//! The plan of a staged run (`DIR/plan.json`): the run's [`RunSpec`] as
+//! it is (what decides the output), its [`Tuning`] (the defaults of its
+//! tasks), its split into parts and slabs, the fingerprints of every input
+//! file, and the stages in order with their task counts. Every task count
+//! is known here, before any work, so that a whole run can be submitted to
+//! a scheduler at once.
 //!
 //! The grid itself is not in the plan: it follows from the input's bounds,
 //! which the first stage computes in parallel; every later task reduces the
@@ -11,154 +11,33 @@
 //! are a fixed number of layer ranges, drawn from the discretize stage's
 //! per-plane counts by one deterministic rule (equal shares of records).
 //!
-//! A plan from another mint version, or one whose inputs or options differ
-//! from the command's, is refused with one line.
+//! `plan.json` is plain JSON (`jq` and Python's `json.load` read it) with
+//! its checksum inside: `crc32` is the CRC-32 of the compact JSON of every
+//! other field, keys sorted. A plan of another format version or mint
+//! version, a damaged or edited one, a missing field or an unknown value
+//! anywhere is refused with one line naming the file and the field; a
+//! plan's claims (stages, task counts) are checked against what its spec,
+//! parts and slabs imply before any task trusts them.
 
 use crate::error::PipelineError;
-use crate::options::ResampleOptions;
-use crate::scene::{parse_scene, Operand, Scene};
-use crate::workdir::{read_checked_json, PLAN_FILE};
-use mint_core::grid::GridSize;
-use mint_core::expr::{BoolOp, Expr};
-use mint_core::signs::SignRule;
+use crate::scene::{Operand, Scene};
+use crate::spec::{Job, RunSpec, Tuning};
+pub use crate::workdir::Stage;
+use crate::workdir::{write_atomic, PLAN_FILE};
 use mint_io::{MeshReader, ReadOptions};
 use serde::{Deserialize, Serialize};
+use serde_json::Value;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
 
+pub use crate::spec::absolute;
+
 /// The plan format's version; a plan of another version is refused.
-pub const PLAN_VERSION: u32 = 1;
+/// 2: plain JSON with the checksum inside, the run spec embedded as it is.
+pub const PLAN_VERSION: u32 = 2;
 const PLAN_FORMAT: &str = "mint stage plan";
-
-/// What a run evaluates.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "lowercase")]
-pub enum Job {
-    /// Resample one mesh.
-    Resample { input: PathBuf },
-    /// `a op b` for two meshes; `op` is union, intersection or difference.
-    Bool { op: String, a: PathBuf, b: PathBuf },
-    /// A CSG scene file.
-    Csg { scene: PathBuf },
-}
-
-impl Job {
-    /// The scene this job evaluates.
-    pub fn scene(&self) -> Result<Scene, PipelineError> {
-        let mesh = |p: &Path| Operand::Mesh { path: p.to_path_buf(), transform: Default::default() };
-        Ok(match self {
-            Job::Resample { input } => Scene { expr: Expr::Operand(0), operands: vec![mesh(input)] },
-            Job::Bool { op, a, b } => {
-                let op = bool_op(op).ok_or_else(|| PipelineError::stage(a, format!("unknown boolean '{op}'")))?;
-                Scene { expr: Expr::Op(op, vec![Expr::Operand(0), Expr::Operand(1)]), operands: vec![mesh(a), mesh(b)] }
-            }
-            Job::Csg { scene } => {
-                let text = std::fs::read_to_string(scene)
-                    .map_err(|source| PipelineError::Temp { path: scene.clone(), op: "reading the scene", source })?;
-                parse_scene(&text, scene)?
-            }
-        })
-    }
-
-    /// How the summary names the input.
-    pub fn name(&self) -> String {
-        match self {
-            Job::Resample { input } => input.display().to_string(),
-            Job::Bool { op, a, b } => format!("{} {op} {}", a.display(), b.display()),
-            Job::Csg { scene } => scene.display().to_string(),
-        }
-    }
-
-    /// The file errors about the whole job are reported against.
-    pub fn path(&self) -> PathBuf {
-        match self {
-            Job::Resample { input } => input.clone(),
-            Job::Bool { a, .. } => a.clone(),
-            Job::Csg { scene } => scene.clone(),
-        }
-    }
-}
-
-/// `union`, `intersection` or `difference`.
-pub fn bool_op(name: &str) -> Option<BoolOp> {
-    match name {
-        "union" => Some(BoolOp::Union),
-        "intersection" => Some(BoolOp::Intersection),
-        "difference" => Some(BoolOp::Difference),
-        _ => None,
-    }
-}
-
-/// The name of a boolean operation, as [`bool_op`] reads it.
-pub fn bool_op_name(op: BoolOp) -> &'static str {
-    match op {
-        BoolOp::Union => "union",
-        BoolOp::Intersection => "intersection",
-        BoolOp::Difference => "difference",
-    }
-}
-
-/// The options that decide the output bytes (a resumed run must match).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct PlanOptions {
-    pub cells: Option<u64>,
-    pub cell_size: Option<f64>,
-    /// Slab axis 0, 1, 2 (x, y, z), or `None` for the longest.
-    pub axis: Option<usize>,
-    pub grid_offset: [f64; 3],
-    /// auto, orient, union or parity.
-    pub signs: String,
-    pub max_hole: Option<u32>,
-    pub ascii: bool,
-    pub double: bool,
-    pub max_listed: usize,
-}
-
-impl PlanOptions {
-    pub(crate) fn from_options(o: &ResampleOptions) -> PlanOptions {
-        let (cells, cell_size) = match o.size {
-            GridSize::Cells(n) => (Some(n), None),
-            GridSize::CellSize(h) => (None, Some(h)),
-        };
-        PlanOptions {
-            cells,
-            cell_size,
-            axis: o.axis,
-            grid_offset: o.grid_offset,
-            signs: format!("{:?}", o.signs).to_lowercase(),
-            max_hole: o.max_hole,
-            ascii: o.write.ascii,
-            double: o.write.double,
-            max_listed: o.max_listed,
-        }
-    }
-
-    pub fn size(&self) -> GridSize {
-        match (self.cells, self.cell_size) {
-            (Some(n), _) => GridSize::Cells(n),
-            (None, Some(h)) => GridSize::CellSize(h),
-            (None, None) => GridSize::Cells(1_000_000),
-        }
-    }
-
-    pub fn sign_rule(&self) -> SignRule {
-        match self.signs.as_str() {
-            "orient" => SignRule::Orient,
-            "union" => SignRule::Union,
-            "parity" => SignRule::Parity,
-            _ => SignRule::Auto,
-        }
-    }
-}
-
-/// Settings that do not change the output (a resumed run may change them).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Tuning {
-    /// Default heap budget of a task, in bytes.
-    pub mem_bytes: u64,
-    /// Sub-slab thickness forced on slab tasks (`--slab`).
-    pub slab_layers: Option<u32>,
-}
+/// The most parts or slabs a run may be split into.
+pub const MAX_TASKS: u32 = 1 << 16;
 
 /// What identifies an input file: path, size, modification time, and a
 /// CRC-32 of its first 64 KiB, its last 4 KiB and eight 4 KiB blocks spread
@@ -209,23 +88,20 @@ pub enum OperandPlan {
 
 /// One stage and its task count.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct StagePlan {
-    pub name: String,
+    pub name: Stage,
     pub tasks: u32,
 }
 
-/// The stage names, in the order they run.
-pub const STAGES: [&str; 6] = ["bounds", "discretize", "census", "reconstruct", "reopen", "write"];
-
 /// A staged run's plan; see the module docs.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Plan {
     pub format: String,
     pub version: u32,
     pub mint_version: String,
-    pub job: Job,
-    pub output: PathBuf,
-    pub options: PlanOptions,
+    pub spec: RunSpec,
     pub parts: u32,
     pub slabs: u32,
     pub inputs: Vec<Fingerprint>,
@@ -234,20 +110,74 @@ pub struct Plan {
     pub tuning: Tuning,
 }
 
-/// An absolute path, without resolving links (so that the plan names what
-/// the user named, from any machine that mounts it at the same place).
-pub fn absolute(p: &Path) -> PathBuf {
-    std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf())
+/// The stages of a run of `spec` in `parts` and `slabs`, with their tasks.
+fn stages_of(spec: &RunSpec, has_mesh: bool, parts: u32, slabs: u32) -> Vec<StagePlan> {
+    let strict = spec.strict();
+    let mut stages = vec![StagePlan { name: Stage::Bounds, tasks: parts }, StagePlan { name: Stage::Discretize, tasks: parts }];
+    if has_mesh && !strict {
+        stages.push(StagePlan { name: Stage::Census, tasks: slabs });
+    }
+    stages.push(StagePlan { name: Stage::Reconstruct, tasks: slabs });
+    if !strict && spec.max_hole.is_some() {
+        stages.push(StagePlan { name: Stage::Reopen, tasks: slabs });
+    }
+    stages.push(StagePlan { name: Stage::Write, tasks: 1 });
+    stages
+}
+
+/// The checksum of a plan's JSON value (every field but `crc32`).
+fn crc_of(v: &Value) -> String {
+    let mut v = v.clone();
+    if let Some(o) = v.as_object_mut() {
+        o.remove("crc32");
+    }
+    format!("{:08x}", crc32fast::hash(serde_json::to_string(&v).expect("JSON values serialize").as_bytes()))
+}
+
+/// Sets `v`'s `crc32` to the checksum of its other fields (also for
+/// tests that edit a plan on purpose).
+pub fn seal(v: &mut Value) {
+    let crc = crc_of(v);
+    if let Some(o) = v.as_object_mut() {
+        o.insert("crc32".into(), Value::String(crc));
+    }
+}
+
+/// The first place where `a` and `b` differ, as a dotted path, with both values.
+fn first_difference(a: &Value, b: &Value, path: &str) -> Option<(String, Value, Value)> {
+    match (a, b) {
+        (Value::Object(x), Value::Object(y)) => {
+            for (k, va) in x {
+                let p = if path.is_empty() { k.clone() } else { format!("{path}.{k}") };
+                match y.get(k) {
+                    Some(vb) => {
+                        if let Some(d) = first_difference(va, vb, &p) {
+                            return Some(d);
+                        }
+                    }
+                    None => return Some((p, va.clone(), Value::Null)),
+                }
+            }
+            None
+        }
+        _ if a == b => None,
+        _ => Some((path.to_string(), a.clone(), b.clone())),
+    }
 }
 
 impl Plan {
-    /// Plans `job` (whose scene is `scene`) into `output`.
-    pub fn new(job: Job, scene: &Scene, output: &Path, opts: &ResampleOptions) -> Result<Plan, PipelineError> {
-        let parts = opts.parts.max(1);
-        let slabs = opts.slabs.max(1);
+    /// Plans `spec` (whose scene is `scene`) with `tuning`'s parts and slabs.
+    pub fn new(spec: &RunSpec, scene: &Scene, tuning: &Tuning) -> Result<Plan, PipelineError> {
+        let spec = RunSpec { job: spec.job.absolute(), output: absolute(&spec.output), ..spec.normalized() };
+        let (parts, slabs) = (tuning.parts.max(1), tuning.slabs.max(1));
+        for (what, n) in [("--parts", parts), ("--slabs", slabs)] {
+            if n > MAX_TASKS {
+                return Err(PipelineError::stage(&spec.output, format!("{what} {n}: at most {MAX_TASKS}")));
+            }
+        }
         let mut operands = Vec::new();
         let mut files: Vec<PathBuf> = Vec::new();
-        if let Job::Csg { scene } = &job {
+        if let Job::Csg { scene } = &spec.job {
             if scene.is_file() {
                 files.push(scene.clone());
             }
@@ -257,79 +187,136 @@ impl Plan {
                 Operand::Primitive(_) => OperandPlan::Primitive,
                 Operand::Mesh { path, .. } => {
                     let r = MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false })?;
-                    if !files.contains(path) {
+                    let path = absolute(path);
+                    if !files.contains(&path) {
                         files.push(path.clone());
                     }
-                    OperandPlan::Mesh { path: path.clone(), vertices: r.vertex_count() as u64, split_faces: r.splittable_records() }
+                    OperandPlan::Mesh { path, vertices: r.vertex_count() as u64, split_faces: r.splittable_records() }
                 }
             });
         }
         let inputs = files.iter().map(|f| Fingerprint::of(f)).collect::<Result<Vec<_>, _>>()?;
-        let options = PlanOptions::from_options(opts);
-        let strict = matches!(job, Job::Resample { .. }) && options.sign_rule() == SignRule::Orient;
         let has_mesh = operands.iter().any(|o| matches!(o, OperandPlan::Mesh { .. }));
-        let mut stages = vec![StagePlan { name: "bounds".into(), tasks: parts }, StagePlan { name: "discretize".into(), tasks: parts }];
-        if has_mesh && !strict {
-            stages.push(StagePlan { name: "census".into(), tasks: slabs });
-        }
-        stages.push(StagePlan { name: "reconstruct".into(), tasks: slabs });
-        if !strict && options.max_hole.is_some() {
-            stages.push(StagePlan { name: "reopen".into(), tasks: slabs });
-        }
-        stages.push(StagePlan { name: "write".into(), tasks: 1 });
+        let stages = stages_of(&spec, has_mesh, parts, slabs);
+        let work_dir = tuning.work_dir.as_deref().map(absolute);
         Ok(Plan {
             format: PLAN_FORMAT.into(),
             version: PLAN_VERSION,
             mint_version: env!("CARGO_PKG_VERSION").into(),
-            job,
-            output: absolute(output),
-            options,
+            spec,
             parts,
             slabs,
             inputs,
             operands,
             stages,
-            tuning: Tuning { mem_bytes: opts.mem_bytes, slab_layers: opts.slab_layers },
+            tuning: Tuning { work_dir, parts, slabs, ..tuning.clone() },
         })
     }
 
     /// Tasks of `stage` (0 when the plan has no such stage).
-    pub fn tasks(&self, stage: &str) -> u32 {
+    pub fn tasks(&self, stage: Stage) -> u32 {
         self.stages.iter().find(|s| s.name == stage).map_or(0, |s| s.tasks)
     }
 
-    pub fn has_stage(&self, stage: &str) -> bool {
+    pub fn has_stage(&self, stage: Stage) -> bool {
         self.stages.iter().any(|s| s.name == stage)
     }
 
     /// True for a strict `--signs orient` resampling (the paper's rule).
     pub fn strict(&self) -> bool {
-        matches!(self.job, Job::Resample { .. }) && self.options.sign_rule() == SignRule::Orient
+        self.spec.strict()
     }
 
-    /// Reads `DIR/plan.json`, refusing a plan of another version.
+    /// The plan's text: pretty JSON with its checksum.
+    pub fn to_json(&self) -> String {
+        let mut v = serde_json::to_value(self).expect("plans serialize");
+        seal(&mut v);
+        serde_json::to_string_pretty(&v).expect("JSON values serialize") + "\n"
+    }
+
+    /// Writes the plan to `DIR/plan.json`, atomically.
+    pub fn save(&self, dir: &Path) -> Result<(), PipelineError> {
+        write_atomic(&dir.join(PLAN_FILE), self.to_json().as_bytes())
+    }
+
+    /// Reads `DIR/plan.json`; see the module docs for what is refused.
     pub fn load(dir: &Path) -> Result<Plan, PipelineError> {
         let path = dir.join(PLAN_FILE);
         if !path.is_file() {
             return Err(PipelineError::stage(dir, "no plan.json: not a work directory (make one with `mint stage plan`)"));
         }
-        let v: serde_json::Value = read_checked_json(&path)?;
-        let (format, version, by) = (v["format"].as_str(), v["version"].as_u64(), v["mint_version"].as_str().unwrap_or("?"));
-        if format != Some(PLAN_FORMAT) || version != Some(PLAN_VERSION as u64) || by != env!("CARGO_PKG_VERSION") {
-            return Err(PipelineError::stage(
-                &path,
-                format!(
-                    "a plan of format {} written by mint {by}; this is mint {} (plan format {PLAN_VERSION}): finish the run with that version, or plan it again in a new directory",
-                    version.map_or("?".to_string(), |v| v.to_string()),
-                    env!("CARGO_PKG_VERSION")
-                ),
-            ));
+        let bytes = std::fs::read(&path).map_err(|source| PipelineError::Temp { path: path.clone(), op: "reading", source })?;
+        Plan::parse(&bytes, &path)
+    }
+
+    /// Reads a plan from `bytes` (the file `path`).
+    pub fn parse(bytes: &[u8], path: &Path) -> Result<Plan, PipelineError> {
+        let refuse = |what: String| PipelineError::stage(path, what);
+        let other_version = |version: &str, by: &str| {
+            refuse(format!(
+                "a plan of format {version} written by mint {by}; this is mint {} (plan format {PLAN_VERSION}): finish the run with that version, or plan it again in a new directory",
+                env!("CARGO_PKG_VERSION")
+            ))
+        };
+        if bytes.starts_with(b"crc32 ") {
+            return Err(other_version("1", "0.1.0 or older"));
         }
-        serde_json::from_value(v).map_err(|e| PipelineError::stage(&path, format!("unreadable plan ({e})")))
+        let v: Value = serde_json::from_slice(bytes).map_err(|e| refuse(format!("not a plan: unreadable JSON ({e})")))?;
+        if !v.is_object() {
+            return Err(refuse("not a plan: not a JSON object".into()));
+        }
+        let (format, version, by) = (v["format"].as_str(), v["version"].as_u64(), v["mint_version"].as_str().unwrap_or("?"));
+        if format != Some(PLAN_FORMAT) {
+            return Err(refuse(format!("not a plan: field 'format' is {}, not \"{PLAN_FORMAT}\"", v["format"])));
+        }
+        if version != Some(PLAN_VERSION as u64) || by != env!("CARGO_PKG_VERSION") {
+            return Err(other_version(&version.map_or("?".to_string(), |v| v.to_string()), by));
+        }
+        match v["crc32"].as_str() {
+            None => return Err(refuse("damaged plan: field 'crc32' is missing; plan the run again in a new directory".into())),
+            Some(c) if c != crc_of(&v) => {
+                return Err(refuse("damaged or edited plan (checksum mismatch); plan the run again in a new directory".into()))
+            }
+            _ => {}
+        }
+        let mut body = v;
+        body.as_object_mut().expect("an object").remove("crc32");
+        let plan: Plan = serde_path_to_error::deserialize(body).map_err(|e| {
+            let field = e.path().to_string();
+            refuse(format!("field '{field}': {}", e.into_inner()))
+        })?;
+        plan.check_claims(path)?;
+        Ok(plan)
+    }
+
+    /// Checks what the plan claims against what its own spec implies.
+    fn check_claims(&self, path: &Path) -> Result<(), PipelineError> {
+        let refuse = |what: String| Err(PipelineError::stage(path, format!("{what}; plan the run again in a new directory")));
+        for (what, n) in [("parts", self.parts), ("slabs", self.slabs)] {
+            if n == 0 || n > MAX_TASKS {
+                return refuse(format!("field '{what}': {n} is not in 1..={MAX_TASKS}"));
+            }
+        }
+        let scene_operands = match &self.spec.job {
+            Job::Resample { .. } => Some((1, "resample")),
+            Job::Bool { .. } => Some((2, "bool")),
+            Job::Csg { .. } => None,
+        };
+        if let Some((n, kind)) = scene_operands.filter(|(n, _)| *n != self.operands.len()) {
+            return refuse(format!("field 'operands': {} operands for a {kind} job (it has {n})", self.operands.len()));
+        }
+        let has_mesh = self.operands.iter().any(|o| matches!(o, OperandPlan::Mesh { .. }));
+        if self.stages != stages_of(&self.spec, has_mesh, self.parts, self.slabs) {
+            return refuse("field 'stages': not the stages its spec, parts and slabs imply".into());
+        }
+        if let Err(e) = self.spec.validate() {
+            return refuse(format!("field 'spec': {e}"));
+        }
+        Ok(())
     }
 
     /// Checks that this (freshly made) plan describes the same run as the
-    /// stored `other`: same job, output, options, split and input files.
+    /// stored `other`: same spec, split and input files.
     pub fn check_same_run(&self, other: &Plan, dir: &Path) -> Result<(), PipelineError> {
         let what = if self.inputs != other.inputs {
             let changed = self.inputs.iter().zip(&other.inputs).find(|(a, b)| a != b).map(|(a, _)| a.path.display().to_string());
@@ -337,23 +324,111 @@ impl Plan {
                 Some(p) => format!("the input {p} is not the file this run was planned for (size, time or content changed)"),
                 None => "the run was planned for other input files".to_string(),
             }
-        } else if self.job != other.job || self.operands != other.operands {
+        } else if self.spec.job != other.spec.job || self.operands != other.operands {
             "the run was planned for another job (inputs or scene)".to_string()
-        } else if self.output != other.output {
-            format!("the run was planned to write {}", other.output.display())
-        } else if self.options != other.options {
-            let a = serde_json::to_value(&self.options).unwrap();
-            let b = serde_json::to_value(&other.options).unwrap();
-            let key = a.as_object().unwrap().iter().find(|(k, v)| b.get(k.as_str()) != Some(v)).map(|(k, _)| k.clone()).unwrap_or_default();
-            format!("the run was planned with other options ({key}: {} there, {} here)", b[&key], a[&key])
+        } else if self.spec.output != other.spec.output {
+            format!("the run was planned to write {}", other.spec.output.display())
+        } else if self.spec != other.spec {
+            let a = serde_json::to_value(&self.spec).expect("specs serialize");
+            let b = serde_json::to_value(&other.spec).expect("specs serialize");
+            let (key, here, there) = first_difference(&a, &b, "spec").unwrap_or_default();
+            format!("the run was planned with other options ({key}: {there} there, {here} here)")
         } else if (self.parts, self.slabs) != (other.parts, other.slabs) {
             format!("the run was planned with {} parts and {} slabs", other.parts, other.slabs)
         } else {
             return Ok(());
         };
-        Err(PipelineError::stage(
-            dir.join(PLAN_FILE),
-            format!("{what}; use another work directory, or remove this one to start over"),
-        ))
+        Err(PipelineError::stage(dir.join(PLAN_FILE), format!("{what}; use another work directory, or remove this one to start over")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mint_core::grid::GridSize;
+
+    fn plan() -> Plan {
+        let spec = RunSpec::resample("/data/in.ply", "/data/out.ply", GridSize::Cells(1000));
+        let (parts, slabs) = (3, 2);
+        let operands = vec![OperandPlan::Mesh { path: "/data/in.ply".into(), vertices: 4, split_faces: Some(4) }];
+        Plan {
+            format: PLAN_FORMAT.into(),
+            version: PLAN_VERSION,
+            mint_version: env!("CARGO_PKG_VERSION").into(),
+            stages: stages_of(&spec, true, parts, slabs),
+            spec,
+            parts,
+            slabs,
+            inputs: vec![Fingerprint { path: "/data/in.ply".into(), size: 100, mtime_ns: 1, sample_crc32: 2 }],
+            operands,
+            tuning: Tuning { parts, slabs, ..Default::default() },
+        }
+    }
+
+    /// `plan.json` edited by `f`, resealed unless `reseal` is false, then read.
+    fn edited(f: impl FnOnce(&mut Value), reseal: bool) -> Result<Plan, String> {
+        let mut v: Value = serde_json::from_str(&plan().to_json()).unwrap();
+        f(&mut v);
+        if reseal {
+            seal(&mut v);
+        }
+        Plan::parse(serde_json::to_string_pretty(&v).unwrap().as_bytes(), Path::new("w/plan.json")).map_err(|e| e.to_string())
+    }
+
+    fn refused(f: impl FnOnce(&mut Value), needles: &[&str]) {
+        let e = edited(f, true).unwrap_err();
+        assert!(!e.contains('\n') && e.starts_with("w/plan.json: "), "not one line naming the file: {e}");
+        for n in needles {
+            assert!(e.contains(n), "'{n}' not in: {e}");
+        }
+    }
+
+    #[test]
+    fn a_plan_is_plain_json_and_reads_back_as_it_was() {
+        let p = plan();
+        let text = p.to_json();
+        let v: Value = serde_json::from_str(&text).unwrap();
+        assert_eq!(v["spec"]["signs"], "auto");
+        assert_eq!(v["stages"][2]["name"], "census");
+        assert_eq!(v["crc32"].as_str().unwrap().len(), 8);
+        assert_eq!(Plan::parse(text.as_bytes(), Path::new("plan.json")).unwrap(), p);
+    }
+
+    #[test]
+    fn unknown_values_and_missing_fields_are_refused_by_name() {
+        refused(|v| v["spec"]["signs"] = "sideways".into(), &["field 'spec.signs'", "unknown value 'sideways'", "auto, orient, union, parity"]);
+        refused(|v| v["stages"][1]["name"] = "polish".into(), &["field 'stages[1].name'", "unknown value 'polish'"]);
+        refused(|v| v["spec"]["job"]["kind"] = "melt".into(), &["field 'spec.job.kind'", "melt"]);
+        refused(|v| v["spec"]["grid"]["axis"] = "w".into(), &["field 'spec.grid.axis'", "unknown value 'w'"]);
+        refused(|v| v["tuning"]["deref"] = "guess".into(), &["field 'tuning.deref'", "unknown value 'guess'"]);
+        refused(|v| drop(v["spec"]["grid"].as_object_mut().unwrap().remove("size")), &["field 'spec.grid'", "missing field `size`"]);
+        refused(|v| drop(v.as_object_mut().unwrap().remove("tuning")), &["missing field `tuning`"]);
+        refused(|v| v["spec"]["colour"] = true.into(), &["field 'spec.colour'", "unknown field `colour`"]);
+        refused(|v| v["spec"]["grid"]["size"] = serde_json::json!({"cells": 0}), &["field 'spec'", "--cells must be at least 1"]);
+    }
+
+    #[test]
+    fn claims_a_spec_does_not_imply_are_refused() {
+        // The stall of a crafted plan: four billion tasks in one stage.
+        refused(|v| v["stages"][5]["tasks"] = u32::MAX.into(), &["field 'stages'", "not the stages its spec, parts and slabs imply"]);
+        refused(|v| v["stages"].as_array_mut().unwrap().truncate(2), &["field 'stages'"]);
+        refused(|v| v["parts"] = 0.into(), &["field 'parts'", "not in 1..="]);
+        refused(|v| v["slabs"] = (MAX_TASKS + 1).into(), &["field 'slabs'"]);
+        refused(|v| v["operands"].as_array_mut().unwrap().clear(), &["field 'operands'", "0 operands for a resample job"]);
+    }
+
+    #[test]
+    fn damaged_edited_and_old_plans_are_refused() {
+        let e = edited(|v| v["spec"]["max_hole"] = 3.into(), false).unwrap_err();
+        assert!(e.contains("damaged or edited plan (checksum mismatch)"), "{e}");
+        let e = edited(|v| drop(v.as_object_mut().unwrap().remove("crc32")), false).unwrap_err();
+        assert!(e.contains("field 'crc32' is missing"), "{e}");
+        refused(|v| v["version"] = 1.into(), &["a plan of format 1"]);
+        refused(|v| v["format"] = "something else".into(), &["not a plan: field 'format'"]);
+        let old = b"crc32 0badf00d\n{\"format\": \"mint stage plan\"}\n";
+        let e = Plan::parse(old, Path::new("w/plan.json")).unwrap_err().to_string();
+        assert!(e.contains("a plan of format 1") && !e.contains('\n'), "{e}");
+        let e = Plan::parse(b"{\"format\": ", Path::new("w/plan.json")).unwrap_err().to_string();
+        assert!(e.contains("not a plan: unreadable JSON"), "{e}");
     }
 }

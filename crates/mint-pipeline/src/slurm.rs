@@ -22,74 +22,29 @@ pub struct SlurmOptions {
     pub mint: PathBuf,
     /// Extra sbatch options (partition, account, time…), one per element.
     pub sbatch_args: Vec<String>,
-    /// Extra options of `mint stage run` (e.g. `--threads 4 --mem 4G`).
+    /// Extra options of `mint stage run` (e.g. `--threads 4`); the
+    /// plan's tuning gives every task its memory and dereferencing.
     pub task_args: Vec<String>,
 }
 
 /// One stage's job array.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct StageJob {
-    pub stage: String,
+    pub stage: crate::plan::Stage,
     pub tasks: u32,
     pub script: PathBuf,
     /// The job id sbatch printed (`None` until submitted).
     pub job_id: Option<String>,
 }
 
-/// Splits a shell-like option string on blanks, honouring single and
-/// double quotes and backslashes (no expansions).
+/// Splits a shell-like option string as a POSIX shell would (quotes and
+/// backslashes; no expansions).
 pub fn split_args(s: &str) -> Result<Vec<String>, String> {
-    let mut out = Vec::new();
-    let mut cur = String::new();
-    let mut have = false;
-    let mut chars = s.chars();
-    while let Some(c) = chars.next() {
-        match c {
-            '\'' => {
-                have = true;
-                loop {
-                    match chars.next() {
-                        Some('\'') => break,
-                        Some(x) => cur.push(x),
-                        None => return Err(format!("unclosed ' in \"{s}\"")),
-                    }
-                }
-            }
-            '"' => {
-                have = true;
-                loop {
-                    match chars.next() {
-                        Some('"') => break,
-                        Some('\\') => cur.push(chars.next().ok_or_else(|| format!("trailing \\ in \"{s}\""))?),
-                        Some(x) => cur.push(x),
-                        None => return Err(format!("unclosed \" in \"{s}\"")),
-                    }
-                }
-            }
-            '\\' => {
-                have = true;
-                cur.push(chars.next().ok_or_else(|| format!("trailing \\ in \"{s}\""))?);
-            }
-            c if c.is_whitespace() => {
-                if have {
-                    out.push(std::mem::take(&mut cur));
-                    have = false;
-                }
-            }
-            c => {
-                have = true;
-                cur.push(c);
-            }
-        }
-    }
-    if have {
-        out.push(cur);
-    }
-    Ok(out)
+    shell_words::split(s).map_err(|e| format!("{e} in \"{s}\""))
 }
 
 fn quote(s: &str) -> String {
-    format!("'{}'", s.replace('\'', r"'\''"))
+    shell_words::quote(s).into_owned()
 }
 
 /// Writes `DIR/slurm/NN-STAGE.sbatch` for every stage of the plan.
@@ -114,7 +69,7 @@ pub fn write_scripts(dir: &Path, plan: &Plan, o: &SlurmOptions) -> Result<Vec<St
              #SBATCH --open-mode=append\n\
              set -eu\n\
              exec {mint} stage run {dirq} {name} \"$SLURM_ARRAY_TASK_ID\" --quiet{sep}{extra}\n",
-            name = st.name,
+            name = st.name.dir_name(),
             n = st.tasks,
             plan = dir.join(crate::workdir::PLAN_FILE).display(),
             script = script.display(),
@@ -126,7 +81,7 @@ pub fn write_scripts(dir: &Path, plan: &Plan, o: &SlurmOptions) -> Result<Vec<St
             extra = extra.join(" "),
         );
         write_atomic(&script, text.as_bytes())?;
-        jobs.push(StageJob { stage: st.name.clone(), tasks: st.tasks, script, job_id: None });
+        jobs.push(StageJob { stage: st.name, tasks: st.tasks, script, job_id: None });
     }
     Ok(jobs)
 }
@@ -229,6 +184,7 @@ mod tests {
 
     #[test]
     fn quoting_survives_single_quotes() {
-        assert_eq!(quote("a'b"), r"'a'\''b'");
+        let q = quote("a'b c");
+        assert_eq!(split_args(&q).unwrap(), ["a'b c"]);
     }
 }

@@ -30,8 +30,10 @@
 
 use crate::error::PipelineError;
 use crate::deref::{choose, prefetch_pays, discretize_sorted, Deref, DerefChoice, Faces, SortStats};
-use crate::passes::{bounds, check_cancel, discretize_all, discretize_direct, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, CHUNK_TRIANGLES, FIXED_RESERVE};
-use crate::plan::{OperandPlan, Plan};
+use crate::budget::Budget;
+use crate::passes::{bounds, check_cancel, discretize_all, discretize_direct, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, CHUNK_TRIANGLES};
+use crate::plan::{OperandPlan, Plan, Stage};
+use crate::spec::Tuning;
 use crate::progress::Progress;
 use crate::scene::{Operand, Scene};
 use crate::workdir::{read_records, read_result, FileSum, SumWriter, TaskBuild};
@@ -44,7 +46,7 @@ use mint_core::expr::{BoolOp, Expr};
 use mint_core::robust::{census_plane, reconstruct_slab_solids};
 use mint_core::signs::{LineCensus, RepairStats, SignRule};
 use mint_core::{FilterStats, Intercept};
-use mint_io::{Format, MeshReader, MeshWriter, ReadOptions, WriteOptions};
+use mint_io::{Format, MeshReader, MeshWriter, ReadOptions};
 use mint_store::{ShardManifest, ShardSet, ShardWriter};
 use serde::{Deserialize, Serialize};
 use std::sync::OnceLock as OnceCell;
@@ -132,16 +134,19 @@ pub struct WriteResult {
     pub faces: u64,
 }
 
-/// Everything a task needs: the plan, its scene, this process's threads and
-/// budget, and the reduces, each computed at most once.
+/// Everything a task needs: the plan, its scene, this process's tuning
+/// (threads, budget, dereferencing), and the reduces, each computed at most
+/// once.
 pub struct Ctx<'a> {
     pub dir: PathBuf,
     pub plan: Plan,
     pub scene: Scene,
     pub threads: usize,
-    pub mem_bytes: u64,
+    pub budget: Budget,
     /// How discretize tasks dereference faces (does not change the output).
     pub deref: Deref,
+    /// Sub-slab thickness forced by `--slab` (does not change the output).
+    pub slab_layers: Option<u32>,
     pub progress: &'a dyn Progress,
     grid: OnceCell<Grid>,
     parts: OnceCell<Vec<DiscretizeResult>>,
@@ -161,14 +166,16 @@ pub fn part_range(n: u64, parts: u32, i: u32, chunk: u64) -> (u64, u64) {
 }
 
 impl<'a> Ctx<'a> {
-    pub fn new(dir: &Path, plan: Plan, scene: Scene, threads: usize, mem_bytes: u64, progress: &'a dyn Progress) -> Ctx<'a> {
+    pub fn new(dir: &Path, plan: Plan, scene: Scene, tuning: &Tuning, progress: &'a dyn Progress) -> Ctx<'a> {
+        let threads = tuning.thread_count().max(1);
         Ctx {
             dir: dir.to_path_buf(),
             plan,
             scene,
-            threads: threads.max(1),
-            mem_bytes,
-            deref: Deref::Auto,
+            threads,
+            budget: Budget::new(tuning.mem_bytes, threads),
+            deref: tuning.deref,
+            slab_layers: tuning.slab_layers,
             progress,
             grid: OnceCell::new(),
             parts: OnceCell::new(),
@@ -178,7 +185,7 @@ impl<'a> Ctx<'a> {
     }
 
     fn name(&self) -> PathBuf {
-        self.plan.job.path()
+        self.plan.spec.job.path()
     }
 
     fn transform(&self, j: usize) -> Option<&Transform> {
@@ -192,16 +199,6 @@ impl<'a> Ctx<'a> {
         ReadOptions { chunk_triangles: CHUNK_TRIANGLES, spill_dir: Some(self.dir.clone()), resolve_positions: false }
     }
 
-    /// Heap budget of a sorted dereference.
-    fn sort_budget(&self) -> u64 {
-        self.mem_bytes.saturating_sub(FIXED_RESERVE).max(16 << 20)
-    }
-
-    /// Heap budget of one sub-slab in flight.
-    fn slab_budget(&self) -> u64 {
-        self.mem_bytes.saturating_sub(FIXED_RESERVE) / (self.threads as u64 + 2)
-    }
-
     // ----- reduces -----
 
     /// The grid, from every bounds task's boxes.
@@ -211,8 +208,8 @@ impl<'a> Ctx<'a> {
         }
         let n = self.scene.operands.len();
         let mut leaf: Vec<Option<([f64; 3], [f64; 3])>> = vec![None; n];
-        for t in 0..self.plan.tasks("bounds") {
-            let r: BoundsResult = read_result(&self.dir, "bounds", t)?;
+        for t in 0..self.plan.tasks(Stage::Bounds) {
+            let r: BoundsResult = read_result(&self.dir, Stage::Bounds, t)?;
             for (j, b) in r.operands.iter().enumerate().take(n) {
                 if let Some([l, h]) = b {
                     let e = leaf[j].get_or_insert(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]));
@@ -248,8 +245,8 @@ impl<'a> Ctx<'a> {
                 }
             }
         }
-        let o = &self.plan.options;
-        let grid = Grid::around(lo, hi, o.size(), o.grid_offset, o.axis).map_err(|source| PipelineError::Grid { path: self.name(), source })?;
+        let g = &self.plan.spec.grid;
+        let grid = Grid::around(lo, hi, g.size, g.offset, g.axis.index()).map_err(|source| PipelineError::Grid { path: self.name(), source })?;
         Ok(self.grid.get_or_init(|| grid))
     }
 
@@ -259,8 +256,8 @@ impl<'a> Ctx<'a> {
             return Ok(p);
         }
         let mut v = Vec::new();
-        for t in 0..self.plan.tasks("discretize") {
-            v.push(read_result::<DiscretizeResult>(&self.dir, "discretize", t)?);
+        for t in 0..self.plan.tasks(Stage::Discretize) {
+            v.push(read_result::<DiscretizeResult>(&self.dir, Stage::Discretize, t)?);
         }
         for (j, op) in self.scene.operands.iter().enumerate() {
             if let Operand::Mesh { path, .. } = op {
@@ -277,7 +274,7 @@ impl<'a> Ctx<'a> {
         let mut set = ShardSet::new();
         for (t, r) in self.parts()?.iter().enumerate() {
             if let Some(Some(m)) = r.operands.get(j) {
-                set.push(crate::workdir::task_dir(&self.dir, "discretize", t as u32).join(format!("op-{j}")), m.shards.clone());
+                set.push(crate::workdir::task_dir(&self.dir, Stage::Discretize, t as u32).join(format!("op-{j}")), m.shards.clone());
             }
         }
         Ok(set)
@@ -334,9 +331,9 @@ impl<'a> Ctx<'a> {
         }
         let n = self.scene.operands.len();
         let mut census = vec![Census::default(); n];
-        if self.plan.has_stage("census") {
-            for t in 0..self.plan.tasks("census") {
-                let r: CensusResult = read_result(&self.dir, "census", t)?;
+        if self.plan.has_stage(Stage::Census) {
+            for t in 0..self.plan.tasks(Stage::Census) {
+                let r: CensusResult = read_result(&self.dir, Stage::Census, t)?;
                 for (j, c) in r.operands.iter().enumerate().take(n) {
                     if let Some(c) = c {
                         census[j].lines += c.lines;
@@ -346,7 +343,7 @@ impl<'a> Ctx<'a> {
                 }
             }
         }
-        let asked = self.plan.options.sign_rule();
+        let asked = self.plan.spec.signs;
         let strict = self.plan.strict();
         let rules = self
             .scene
@@ -370,12 +367,12 @@ impl<'a> Ctx<'a> {
         if let Some(o) = self.open.get() {
             return Ok(o);
         }
-        let result = match self.plan.options.max_hole {
-            Some(k) if self.plan.has_stage("reopen") => {
+        let result = match self.plan.spec.max_hole {
+            Some(k) if self.plan.has_stage(Stage::Reopen) => {
                 let mut cells: Vec<u64> = Vec::new();
-                for t in 0..self.plan.tasks("reconstruct") {
-                    let r: ReconstructResult = read_result(&self.dir, "reconstruct", t)?;
-                    let path = crate::workdir::task_dir(&self.dir, "reconstruct", t).join("holes.bin");
+                for t in 0..self.plan.tasks(Stage::Reconstruct) {
+                    let r: ReconstructResult = read_result(&self.dir, Stage::Reconstruct, t)?;
+                    let path = crate::workdir::task_dir(&self.dir, Stage::Reconstruct, t).join("holes.bin");
                     if let Some(sum) = r.holes_file {
                         read_records::<8>(&path, sum, |b| {
                             cells.push(u64::from_le_bytes(*b));
@@ -393,14 +390,14 @@ impl<'a> Ctx<'a> {
 
     /// The stage whose result slab `t` keeps, and that result: `reopen`'s
     /// when it reconstructed the slab again, else `reconstruct`'s.
-    pub fn final_slab(&self, t: u32) -> Result<(&'static str, ReconstructResult), PipelineError> {
-        if self.plan.has_stage("reopen") {
-            let r: ReconstructResult = read_result(&self.dir, "reopen", t)?;
+    pub fn final_slab(&self, t: u32) -> Result<(Stage, ReconstructResult), PipelineError> {
+        if self.plan.has_stage(Stage::Reopen) {
+            let r: ReconstructResult = read_result(&self.dir, Stage::Reopen, t)?;
             if !r.reused {
-                return Ok(("reopen", r));
+                return Ok((Stage::Reopen, r));
             }
         }
-        Ok(("reconstruct", read_result(&self.dir, "reconstruct", t)?))
+        Ok((Stage::Reconstruct, read_result(&self.dir, Stage::Reconstruct, t)?))
     }
 
     /// Every operand's raw intercepts for planes `k0 ..= k1` (the last one
@@ -432,12 +429,12 @@ impl<'a> Ctx<'a> {
         if a >= b {
             return Ok(Vec::new());
         }
-        let mut budget = self.slab_budget();
+        let mut budget = self.budget.slab_in_flight();
         if self.threads > 1 {
             let bytes = counts[a as usize..=b as usize].iter().sum::<u64>() * BYTES_PER_RECORD_IN_SLAB;
             budget = budget.min((bytes / (4 * self.threads as u64)).max(MIN_SUB_SLAB_BYTES));
         }
-        Ok(plan_slabs(&counts, a, b, self.plan.tuning.slab_layers, budget))
+        Ok(plan_slabs(&counts, a, b, self.slab_layers, budget))
     }
 
     /// Warms every reduce a slab task needs, so that worker threads only read.
@@ -497,15 +494,14 @@ fn expr_bounds(e: &Expr, leaf: &[([f64; 3], [f64; 3])]) -> ([f64; 3], [f64; 3]) 
 // ----- the stages -----
 
 /// Runs task `task` of `stage` into `build`; returns the result to commit.
-pub fn run_stage_task(ctx: &Ctx, stage: &str, task: u32, build: &TaskBuild) -> Result<serde_json::Value, PipelineError> {
+pub fn run_stage_task(ctx: &Ctx, stage: Stage, task: u32, build: &TaskBuild) -> Result<serde_json::Value, PipelineError> {
     let v = match stage {
-        "bounds" => serde_json::to_value(bounds_task(ctx, task)?),
-        "discretize" => serde_json::to_value(discretize_task(ctx, task, build.path())?),
-        "census" => serde_json::to_value(census_task(ctx, task)?),
-        "reconstruct" => serde_json::to_value(reconstruct_task(ctx, task, build.path(), false)?),
-        "reopen" => serde_json::to_value(reconstruct_task(ctx, task, build.path(), true)?),
-        "write" => serde_json::to_value(write_task(ctx)?),
-        _ => return Err(PipelineError::stage(&ctx.dir, format!("no stage '{stage}'"))),
+        Stage::Bounds => serde_json::to_value(bounds_task(ctx, task)?),
+        Stage::Discretize => serde_json::to_value(discretize_task(ctx, task, build.path())?),
+        Stage::Census => serde_json::to_value(census_task(ctx, task)?),
+        Stage::Reconstruct => serde_json::to_value(reconstruct_task(ctx, task, build.path(), false)?),
+        Stage::Reopen => serde_json::to_value(reconstruct_task(ctx, task, build.path(), true)?),
+        Stage::Write => serde_json::to_value(write_task(ctx)?),
     };
     Ok(v.expect("results serialize"))
 }
@@ -577,7 +573,7 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
             let mut writer = ShardWriter::create(&make_dir(&dir)?, ns + 1);
             let run = if choice.sort {
                 let faces = Faces::Records { records, first: range.0, end: range.1 };
-                discretize_sorted(faces, &positions, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, ctx.sort_budget()).map(|(n, v, st)| {
+                discretize_sorted(faces, &positions, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, &ctx.budget).map(|(n, v, st)| {
                     sort_stats = Some(st);
                     (n, v)
                 })
@@ -601,7 +597,7 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
                 let mut writer = ShardWriter::create(&make_dir(&dir)?, ns + 1);
                 let r = if choice.sort {
                     let positions = reader.positions();
-                    let (n, v, st) = discretize_sorted(Faces::Reader(&mut reader), &positions, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, ctx.sort_budget())?;
+                    let (n, v, st) = discretize_sorted(Faces::Reader(&mut reader), &positions, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, &ctx.budget)?;
                     sort_stats = Some(st);
                     (n, v)
                 } else {
@@ -664,10 +660,10 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<Re
     } else {
         None
     };
-    let collect_holes = !reopen && ctx.plan.has_stage("reopen");
+    let collect_holes = !reopen && ctx.plan.has_stage(Stage::Reopen);
     let mut holes = if collect_holes { Some(SumWriter::create(out.join("holes.bin"))?) } else { None };
     let mut hole_cells = 0u64;
-    let max_listed = ctx.plan.options.max_listed;
+    let max_listed = crate::summary::MAX_LISTED;
     let subs = ctx.sub_slabs(a, b)?;
     let counts = ctx.plane_counts()?;
     let mut r = ReconstructResult { layers: [a, b], sub_slabs: subs.len() as u64, ..Default::default() };
@@ -716,7 +712,7 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<Re
         for f in &res.faces {
             let mut bytes = [0u8; 12];
             for d in 0..3 {
-                let id = u32::try_from(f[d] as u64 + r.vertices).map_err(|_| PipelineError::stage(&ctx.plan.output, "more than 2^32 output vertices in one slab; use more slabs"))?;
+                let id = u32::try_from(f[d] as u64 + r.vertices).map_err(|_| PipelineError::stage(&ctx.plan.spec.output, "more than 2^32 output vertices in one slab; use more slabs"))?;
                 bytes[4 * d..4 * d + 4].copy_from_slice(&id.to_le_bytes());
             }
             ffile.write(&bytes)?;
@@ -826,16 +822,15 @@ pub fn boundary_of(loose: &[(u32, u32)]) -> (u64, u64) {
 }
 
 fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
-    let output = &ctx.plan.output;
+    let output = &ctx.plan.spec.output;
     let format = Format::from_path(output)?;
-    let o = &ctx.plan.options;
-    let write = WriteOptions { ascii: o.ascii, double: o.double, spill_dir: Some(ctx.dir.clone()) };
-    let slabs: Vec<(&str, ReconstructResult)> = (0..ctx.plan.tasks("reconstruct")).map(|t| ctx.final_slab(t)).collect::<Result<_, _>>()?;
+    let write = ctx.plan.spec.write.options(Some(ctx.dir.clone()));
+    let slabs: Vec<(Stage, ReconstructResult)> = (0..ctx.plan.tasks(Stage::Reconstruct)).map(|t| ctx.final_slab(t)).collect::<Result<_, _>>()?;
     let total_faces: u64 = slabs.iter().map(|(_, s)| s.faces).sum();
     let mut writer = MeshWriter::create(output, format, write)?;
     ctx.progress.start(crate::progress::WRITE, total_faces);
     for (t, (stage, s)) in slabs.iter().enumerate() {
-        let path = crate::workdir::task_dir(&ctx.dir, stage, t as u32).join("vertices.bin");
+        let path = crate::workdir::task_dir(&ctx.dir, *stage, t as u32).join("vertices.bin");
         read_records::<24>(&path, s.vertices_file.unwrap_or(FileSum { len: 0, crc32: 0 }), |b| {
             let c = |d: usize| f64::from_le_bytes(b[8 * d..8 * d + 8].try_into().unwrap());
             let v = [c(0), c(1), c(2)];
@@ -850,7 +845,7 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
     let mut offset = 0u64;
     let mut written = 0u64;
     for (t, (stage, s)) in slabs.iter().enumerate() {
-        let path = crate::workdir::task_dir(&ctx.dir, stage, t as u32).join("faces.bin");
+        let path = crate::workdir::task_dir(&ctx.dir, *stage, t as u32).join("faces.bin");
         read_records::<12>(&path, s.faces_file.unwrap_or(FileSum { len: 0, crc32: 0 }), |b| {
             let id = |d: usize| (u32::from_le_bytes(b[4 * d..4 * d + 4].try_into().unwrap()) as u64 + offset) as u32;
             writer.write_face([id(0), id(1), id(2)])?;

@@ -1,7 +1,7 @@
 //! The work directory of a staged run, and how a task's result gets there.
 //!
 //! ```text
-//! DIR/plan.json                     the plan (see `plan`)
+//! DIR/plan.json                     the plan: plain JSON, its checksum inside (see `plan`)
 //! DIR/<stage>/<task>/result.json    a finished task: "crc32 XXXXXXXX" line, then JSON
 //! DIR/<stage>/<task>/...            its data files (shards, vertices, faces, hole cells)
 //! DIR/<stage>/.<task>.tmp-<pid>-<n> a task being written (or abandoned by a dead process)
@@ -25,14 +25,33 @@ use std::fs::File;
 use std::io::{BufReader, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
 
+mint_core::choice! {
+    /// A stage of the engine, in the order they run (see `stages`).
+    pub enum Stage {
+        Bounds => "bounds",
+        Discretize => "discretize",
+        Census => "census",
+        Reconstruct => "reconstruct",
+        Reopen => "reopen",
+        Write => "write",
+    }
+}
+
+impl Stage {
+    /// The stage's directory name inside the work directory.
+    pub fn dir_name(self) -> &'static str {
+        mint_core::choice::Choice::name(self)
+    }
+}
+
 /// The plan's file name inside the work directory.
 pub const PLAN_FILE: &str = "plan.json";
 /// A finished task's result file.
 pub const RESULT_FILE: &str = "result.json";
 
 /// The directory of a finished task.
-pub fn task_dir(dir: &Path, stage: &str, task: u32) -> PathBuf {
-    dir.join(stage).join(format!("{task:05}"))
+pub fn task_dir(dir: &Path, stage: Stage, task: u32) -> PathBuf {
+    dir.join(stage.dir_name()).join(format!("{task:05}"))
 }
 
 fn io<'a>(path: &'a Path, op: &'static str) -> impl FnOnce(std::io::Error) -> PipelineError + 'a {
@@ -83,13 +102,13 @@ pub fn read_checked_json<T: DeserializeOwned>(path: &Path) -> Result<T, Pipeline
 }
 
 /// True when the task's directory holds a result.
-pub fn is_done(dir: &Path, stage: &str, task: u32) -> bool {
+pub fn is_done(dir: &Path, stage: Stage, task: u32) -> bool {
     task_dir(dir, stage, task).join(RESULT_FILE).is_file()
 }
 
 /// Reads a finished task's result; one line naming the task when it is
 /// missing or damaged.
-pub fn read_result<T: DeserializeOwned>(dir: &Path, stage: &str, task: u32) -> Result<T, PipelineError> {
+pub fn read_result<T: DeserializeOwned>(dir: &Path, stage: Stage, task: u32) -> Result<T, PipelineError> {
     let path = task_dir(dir, stage, task).join(RESULT_FILE);
     if !path.is_file() {
         return Err(PipelineError::stage(
@@ -110,8 +129,8 @@ pub struct TaskBuild {
 
 impl TaskBuild {
     /// Starts writing task `task` of `stage`.
-    pub fn begin(dir: &Path, stage: &str, task: u32) -> Result<TaskBuild, PipelineError> {
-        let stage_dir = dir.join(stage);
+    pub fn begin(dir: &Path, stage: Stage, task: u32) -> Result<TaskBuild, PipelineError> {
+        let stage_dir = dir.join(stage.dir_name());
         std::fs::create_dir_all(&stage_dir).map_err(io(&stage_dir, "creating the stage directory"))?;
         let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.subsec_nanos()).unwrap_or(0);
         let tmp = stage_dir.join(format!(".{task:05}.tmp-{}-{nanos}", std::process::id()));
@@ -244,8 +263,8 @@ pub fn disk_bytes(path: &Path) -> u64 {
 
 /// Temporary task directories present in a stage (tasks being written, or
 /// abandoned by a process that died).
-pub fn temp_tasks(dir: &Path, stage: &str) -> Vec<PathBuf> {
-    let Ok(rd) = std::fs::read_dir(dir.join(stage)) else { return Vec::new() };
+pub fn temp_tasks(dir: &Path, stage: Stage) -> Vec<PathBuf> {
+    let Ok(rd) = std::fs::read_dir(dir.join(stage.dir_name())) else { return Vec::new() };
     let mut v: Vec<PathBuf> = rd.flatten().map(|e| e.path()).filter(|p| p.file_name().is_some_and(|n| n.to_string_lossy().contains(".tmp-"))).collect();
     v.sort();
     v

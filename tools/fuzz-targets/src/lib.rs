@@ -409,16 +409,14 @@ pub fn resample(data: &[u8]) {
     let input = input_file("ply", ply.as_bytes());
     let output = scratch().join("out.ply");
     let _ = std::fs::remove_file(&output);
-    let opts = mint_pipeline::ResampleOptions {
-        size: mint_core::GridSize::Cells(cells),
-        threads: 1,
-        mem_bytes: 64 << 20,
-        tmp_dir: Some(scratch()),
-        signs: rule,
-        max_hole: None,
-        ..Default::default()
+    let spec_of = |input: &std::path::Path, output: &std::path::Path| {
+        let mut s = mint_pipeline::RunSpec::resample(input, output, mint_core::GridSize::Cells(cells));
+        s.signs = rule;
+        s.max_hole = None;
+        s
     };
-    match mint_pipeline::resample(&input, &output, &opts, &mint_pipeline::NoProgress) {
+    let opts = mint_pipeline::Tuning { threads: 1, mem_bytes: 64 << 20, tmp_dir: Some(scratch()), ..Default::default() };
+    match mint_pipeline::run(&spec_of(&input, &output), &opts, &mint_pipeline::NoProgress) {
         Err(e) => {
             let s = e.to_string();
             assert!(!s.trim().is_empty() && !s.contains('\n'), "error not one line: {s:?}");
@@ -428,8 +426,8 @@ pub fn resample(data: &[u8]) {
             // Dereferencing by sort gives the same bytes.
             let want = std::fs::read(&output).unwrap();
             let sorted = scratch().join("again.ply");
-            let o = mint_pipeline::ResampleOptions { deref: mint_pipeline::Deref::Sort, mem_bytes: 1, ..opts.clone() };
-            mint_pipeline::resample(&input, &sorted, &o, &mint_pipeline::NoProgress).unwrap_or_else(|e| panic!("--deref sort failed where mmap did not: {e}"));
+            let o = mint_pipeline::Tuning { deref: mint_pipeline::Deref::Sort, mem_bytes: 1, ..opts.clone() };
+            mint_pipeline::run(&spec_of(&input, &sorted), &o, &mint_pipeline::NoProgress).unwrap_or_else(|e| panic!("--deref sort failed where mmap did not: {e}"));
             assert!(std::fs::read(&sorted).unwrap() == want, "--deref sort gives other bytes than mmap");
             // The same mesh as binary PLY: its fixed-size records take the
             // direct path (on this CPU perhaps its AVX2 compilation), the
@@ -448,7 +446,7 @@ pub fn resample(data: &[u8]) {
             }
             let binary = input_file("bin.ply", &bin);
             let direct = scratch().join("again.bin.ply");
-            mint_pipeline::resample(&binary, &direct, &opts, &mint_pipeline::NoProgress).unwrap_or_else(|e| panic!("the binary copy failed where the text file did not: {e}"));
+            mint_pipeline::run(&spec_of(&binary, &direct), &opts, &mint_pipeline::NoProgress).unwrap_or_else(|e| panic!("the binary copy failed where the text file did not: {e}"));
             assert!(std::fs::read(&direct).unwrap() == want, "the binary copy (direct path) gives other bytes than the text file");
             let (pos, faces) = mint_io::read_mesh(&output).unwrap_or_else(|e| panic!("the output does not read back: {e}"));
             let rep = mint_mesh::try_check(&pos, &faces).unwrap_or_else(|e| panic!("output fails the index check: {e}"));

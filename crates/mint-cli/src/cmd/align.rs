@@ -3,6 +3,7 @@
 //! convention (Stanford .conf or MeshLab .aln, by extension; scan paths are
 //! relative to the set file). Calls `mint_range::align::align_file`.
 
+use crate::jobs::{JsonArg};
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 use mint_range::align::align_file;
@@ -90,9 +91,8 @@ pub struct AlignArgs {
     /// they stop earlier once the poses stop moving.
     #[arg(long, default_value_t = AlignOptions::default().global_rounds)]
     pub global_rounds: usize,
-    /// Print the report as JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub json: JsonArg,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -126,9 +126,9 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
         global_rounds: a.global_rounds,
         ..Default::default()
     };
-    let s = align_file(&a.set, &a.out_set, &opts, &crate::progress::Bars::new(a.json))?;
+    let s = align_file(&a.set, &a.out_set, &opts, &crate::progress::Bars::new(a.json.json))?;
     let (r, secs, register_secs) = (&s.result, s.seconds, s.register_seconds);
-    if a.json {
+    if a.json.json {
         let v = serde_json::json!({ "set": a.set.display().to_string(), "out_set": a.out_set.display().to_string(), "global": opts.global, "distance": r.distance, "start_distance": r.start_distance, "seconds": secs, "register_seconds": register_secs, "peak_heap_bytes": crate::alloc::peak_heap(), "rounds": r.rounds, "scans": r.reports, "pairs": r.pairs });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {

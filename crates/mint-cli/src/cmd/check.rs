@@ -4,7 +4,7 @@
 //! `mint_pipeline::check_file` (and `mint_mesh::self_intersections` for
 //! `--self-intersections`).
 
-use crate::jobs::{default_mem, load_mesh};
+use crate::jobs::{load_mesh, JsonArg, MemArg, QuietArg};
 use crate::progress::Bars;
 use crate::summary::print_check;
 use crate::units::human_bytes;
@@ -16,9 +16,8 @@ use std::path::PathBuf;
 pub struct CheckArgs {
     /// Mesh file.
     pub file: PathBuf,
-    /// Print the report as JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub json: JsonArg,
     /// Exit with code 3 when the mesh is not watertight (for scripts).
     #[arg(long)]
     pub strict: bool,
@@ -33,27 +32,25 @@ pub struct CheckArgs {
     /// texture seams, which would otherwise read as boundaries everywhere.
     #[arg(long)]
     pub no_weld: bool,
-    /// Heap budget, e.g. 512M or 2G [default: a quarter of RAM]. The check
-    /// keeps a few bytes per vertex in memory and sends each face's corners
-    /// to buckets that spill to disk past this budget, so a mesh of any size
-    /// can be checked (--self-intersections is in memory, though).
-    #[arg(long, value_parser = crate::units::parse_bytes)]
-    pub mem: Option<u64>,
+    /// The check keeps a few bytes per vertex in memory and sends each
+    /// face's corners to buckets that spill to disk past --mem, so a mesh of
+    /// any size can be checked (--self-intersections is in memory, though).
+    #[command(flatten)]
+    pub mem: MemArg,
     /// Directory for spill files [default: the system temp dir].
     #[arg(long)]
     pub tmp: Option<PathBuf>,
     /// Worker threads [default: all cores]. The report is the same for any value.
     #[arg(long, default_value_t = 0, hide_default_value = true)]
     pub threads: usize,
-    /// No progress bars.
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub quiet: QuietArg,
 }
 
 pub(crate) fn cmd_check(a: CheckArgs) -> Result<()> {
     let threads = if a.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { a.threads };
-    let opts = mint_pipeline::CheckOptions { mem_bytes: a.mem.unwrap_or_else(default_mem), weld: !a.no_weld, tmp_dir: a.tmp.clone(), threads, list_boundary: 0 };
-    let (r, stats) = mint_pipeline::check_file(&a.file, &opts, &Bars::new(a.quiet || a.json))?;
+    let opts = mint_pipeline::CheckOptions { mem_bytes: a.mem.bytes(), weld: !a.no_weld, tmp_dir: a.tmp.clone(), threads, list_boundary: 0 };
+    let (r, stats) = mint_pipeline::check_file(&a.file, &opts, &Bars::new(a.quiet.quiet || a.json.json))?;
     let sx = if a.self_intersections {
         let (mut positions, mut faces) = load_mesh(&a.file)?;
         if !a.no_weld {
@@ -63,10 +60,10 @@ pub(crate) fn cmd_check(a: CheckArgs) -> Result<()> {
     } else {
         None
     };
-    if !a.json && !a.quiet && stats.bytes_spilled > 0 {
+    if !a.json.json && !a.quiet.quiet && stats.bytes_spilled > 0 {
         eprintln!("  ({} of positions and corners spilled to disk to stay within --mem)", human_bytes(stats.bytes_spilled));
     }
-    if a.json {
+    if a.json.json {
         let mut v = serde_json::to_value(&r)?;
         v["file"] = a.file.display().to_string().into();
         v["spilled_bytes"] = stats.bytes_spilled.into();

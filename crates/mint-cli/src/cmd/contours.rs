@@ -5,6 +5,7 @@
 //! or `mint_contour::run::reconstruct_sections` on the stacks of
 //! `mint_contour::rtstruct` (DICOM).
 
+use crate::jobs::{QuietArg, JsonArg};
 use crate::alloc;
 use crate::contour_report::{report, status, write_options, write_stats};
 use crate::units::human_bytes;
@@ -104,12 +105,10 @@ pub struct ContoursArgs {
     /// --all-rois, {"rois": [one status per ROI]}.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
-    /// No summary (errors and warnings are still printed).
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the summary as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub quiet: QuietArg,
+    #[command(flatten)]
+    pub json: JsonArg,
 }
 
 /// Is `path` a DICOM file: by content, or by a `.dcm` name (so that a
@@ -206,12 +205,12 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
         crate::paths::check_output(st, &[&a.input, &output])?;
     }
     let method = contour_method(&a, false)?;
-    let s = run::reconstruct_file(&a.input, &output, method, write_options(a.ascii, a.double), &crate::progress::Bars::new(a.quiet || a.json))?;
+    let s = run::reconstruct_file(&a.input, &output, method, write_options(a.ascii, a.double), &crate::progress::Bars::new(a.quiet.quiet || a.json.json))?;
     let line = contours_line(&s, &a.input.display().to_string(), &output);
     if a.preview {
-        crate::preview::write_preview(&[output.as_path()], &output, a.quiet || a.json, &crate::progress::Bars::new(a.quiet || a.json))?;
+        crate::preview::write_preview(&[output.as_path()], &output, a.quiet.quiet || a.json.json, &crate::progress::Bars::new(a.quiet.quiet || a.json.json))?;
     }
-    report(&s, &a.stats, a.quiet, a.json, line)
+    report(&s, &a.stats, a.quiet.quiet, a.json.json, line)
 }
 
 /// `mint contours` on a DICOM RT structure set: --list-rois, --roi or
@@ -220,10 +219,10 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
     let set = rtstruct::StructureSet::read(&a.input)?;
     let sopts = rtstruct::StackOptions::default();
     if a.list_rois {
-        return list_rois(&set, sopts, a.json);
+        return list_rois(&set, sopts, a.json.json);
     }
     let method = contour_method(&a, true)?;
-    let quiet = a.quiet || a.json;
+    let quiet = a.quiet.quiet || a.json.json;
     if let Some(name) = &a.roi {
         let output = a.output.clone().expect("clap requires the output");
         crate::paths::check_output(&output, &[&a.input])?;
@@ -239,7 +238,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
         if a.preview {
             crate::preview::write_preview(&[output.as_path()], &output, quiet, &crate::progress::Bars::new(quiet))?;
         }
-        return report(&s, &a.stats, a.quiet, a.json, line);
+        return report(&s, &a.stats, a.quiet.quiet, a.json.json, line);
     }
     let Some(dir) = &a.all_rois else {
         bail!(
@@ -281,7 +280,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
     if let Some(p) = &a.stats {
         write_stats(p, &v)?;
     }
-    if a.json {
+    if a.json.json {
         println!("{}", serde_json::to_string_pretty(&v)?);
     }
     if a.preview && !written.is_empty() {
@@ -300,7 +299,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
 /// One ROI into `output`; the ROI goes into the run's parameters.
 fn rebuild_roi(a: &ContoursArgs, set: &rtstruct::StructureSet, roi: &rtstruct::Roi, sopts: rtstruct::StackOptions, method: Method, output: &Path) -> Result<RunStats> {
     let (frame, sections) = roi.stack(&set.path, sopts)?;
-    let bars = crate::progress::Bars::new(a.quiet || a.json);
+    let bars = crate::progress::Bars::new(a.quiet.quiet || a.json.json);
     let mut s = run::reconstruct_sections(&a.input, frame, &sections, output, method, write_options(a.ascii, a.double), &bars)?;
     s.parameters.insert("roi".into(), run::Value::Text(roi.name.clone()));
     s.parameters.insert("roi_number".into(), run::Value::Int(roi.number.max(0) as u64));

@@ -2,6 +2,7 @@
 //! streaming, with a progress bar and Ctrl-C. Calls
 //! `mint_io::convert_cancellable`.
 
+use crate::jobs::{QuietArg};
 use crate::progress::Bars;
 use crate::units::human_bytes;
 use anyhow::{Context, Result};
@@ -24,14 +25,13 @@ pub struct ConvertArgs {
     /// Directory for temporary spill files [default: the system temp dir].
     #[arg(long)]
     pub tmp: Option<PathBuf>,
-    /// No progress bars.
-    #[arg(long, short)]
-    pub quiet: bool,
+    #[command(flatten)]
+    pub quiet: QuietArg,
 }
 
 pub(crate) fn cmd_convert(a: ConvertArgs) -> Result<()> {
     crate::paths::check_output(&a.output, &[&a.input])?;
-    let bars = Bars::new(a.quiet);
+    let bars = Bars::new(a.quiet.quiet);
     use mint_pipeline::{Phase, Progress};
     bars.start(Phase::named("convert"), 0);
     let read = mint_io::ReadOptions { spill_dir: a.tmp.clone(), ..Default::default() };
@@ -44,7 +44,7 @@ pub(crate) fn cmd_convert(a: ConvertArgs) -> Result<()> {
     })
     .with_context(|| format!("converting {} to {}", a.input.display(), a.output.display()))?;
     bars.finish();
-    if !a.quiet {
+    if !a.quiet.quiet {
         eprintln!(
             "converted {} ({:?}) -> {} ({:?}): {} vertices, {} triangles, {}",
             a.input.display(),

@@ -1,29 +1,34 @@
 //! `mint csg`: meshes a CSG scene (JSON: primitives and meshes, booleans,
 //! transforms) on one grid, out of core. Calls `mint_pipeline::parse_scene`
-//! and `mint_pipeline::csg`; the arguments (`CsgArgs`, shared with
+//! and `mint_pipeline::run_scene`; the arguments (`CsgArgs`, shared with
 //! `mint stage plan csg` and `mint slurm csg`) live in `jobs`.
 
-use crate::jobs::{grid_options, scene_inputs, CsgArgs};
+use crate::jobs::{scene_inputs, CsgArgs};
 use crate::preview::write_preview;
 use crate::progress::Bars;
 use crate::summary::report;
 use anyhow::{Context, Result};
+use mint_pipeline::Job;
 
 pub(crate) fn cmd_csg(a: CsgArgs) -> Result<()> {
-    let opts = grid_options(&a.grid)?;
     crate::paths::check_output(&a.output, &[&a.scene])?;
     let text = std::fs::read_to_string(&a.scene).with_context(|| format!("{}: cannot read the scene", a.scene.display()))?;
     let scene = mint_pipeline::parse_scene(&text, &a.scene)?;
     crate::paths::check_output(&a.output, &scene_inputs(&a.scene, &scene))?;
-    let bars = Bars::new(a.grid.quiet || a.grid.json);
-    let s = mint_pipeline::csg(&scene, &a.scene.display().to_string(), &a.output, &opts, &bars)?;
-    if a.grid.preview {
-        let mut meshes: Vec<&std::path::Path> = scene.operands.iter().filter_map(|o| match o {
-            mint_pipeline::scene::Operand::Mesh { path, .. } => Some(path.as_path()),
-            _ => None,
-        }).collect();
+    let spec = a.run.spec(Job::Csg { scene: a.scene.clone() }, &a.output, None)?;
+    let bars = Bars::new(a.run.report.silent());
+    let s = mint_pipeline::run_scene(&spec, &scene, &a.run.tuning(), &bars)?;
+    if a.run.preview {
+        let mut meshes: Vec<&std::path::Path> = scene
+            .operands
+            .iter()
+            .filter_map(|o| match o {
+                mint_pipeline::scene::Operand::Mesh { path, .. } => Some(path.as_path()),
+                _ => None,
+            })
+            .collect();
         meshes.push(a.output.as_path());
-        write_preview(&meshes, &a.output, a.grid.quiet || a.grid.json, &bars)?;
+        write_preview(&meshes, &a.output, a.run.report.silent(), &bars)?;
     }
-    report(&a.grid, &s)
+    report(&a.run.report, &s)
 }

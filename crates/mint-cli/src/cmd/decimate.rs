@@ -3,13 +3,12 @@
 //! simplification. Calls `mint_pipeline::decimate`.
 
 use crate::alloc;
-use crate::jobs::default_mem;
+use crate::jobs::{JsonArg, MemArg, QuietArg};
 use crate::preview::{preview_path, write_before_after};
 use crate::progress::Bars;
-use crate::units::{human_bytes, parse_bytes};
+use crate::units::human_bytes;
 use anyhow::Result;
 use clap::Args;
-use mint_pipeline::ResampleOptions;
 use std::path::PathBuf;
 
 #[derive(Args, Debug)]
@@ -28,9 +27,9 @@ pub struct DecimateArgs {
     /// [default: 1, i.e. the face target decides].
     #[arg(long, value_name = "E", default_value_t = 1.0)]
     pub error: f32,
-    /// Heap budget of the out-of-core stage, e.g. 2G [default: a quarter of RAM].
-    #[arg(long, value_parser = parse_bytes)]
-    pub mem: Option<u64>,
+    /// The budget of the out-of-core stage.
+    #[command(flatten)]
+    pub mem: MemArg,
     /// Worker threads [default: all cores].
     #[arg(long, default_value_t = 0, hide_default_value = true)]
     pub threads: usize,
@@ -43,12 +42,10 @@ pub struct DecimateArgs {
     /// Also write OUT.png beside the output: input and output side by side.
     #[arg(long)]
     pub preview: bool,
-    /// No progress bars and no summary.
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the summary as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub quiet: QuietArg,
+    #[command(flatten)]
+    pub json: JsonArg,
 }
 
 pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
@@ -56,24 +53,25 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
     if a.preview {
         crate::paths::check_output(&preview_path(&a.output), &[&a.input])?;
     }
-    let mem = a.mem.unwrap_or_else(default_mem);
+    let mem = a.mem.bytes();
     let o = mint_pipeline::DecimateOptions {
         target_faces: a.faces,
         intermediate_faces: a.intermediate,
         max_error: a.error,
-        resample: ResampleOptions { mem_bytes: mem, threads: a.threads, tmp_dir: a.tmp.clone(), work_dir: a.work.clone(), ..Default::default() },
+        write: Default::default(),
+        tuning: mint_pipeline::Tuning { mem_bytes: mem, threads: a.threads, tmp_dir: a.tmp.clone(), work_dir: a.work.clone(), ..Default::default() },
     };
-    let bars = Bars::new(a.quiet || a.json);
+    let bars = Bars::new(a.quiet.quiet || a.json.json);
     let s = mint_pipeline::decimate(&a.input, &a.output, &o, &bars)?;
     if a.preview {
-        write_before_after(&a.input, &a.output, a.quiet || a.json, &bars)?;
+        write_before_after(&a.input, &a.output, a.quiet.quiet || a.json.json, &bars)?;
     }
-    if a.json {
+    if a.json.json {
         let mut v = serde_json::to_value(&s)?;
         v["mem_budget_bytes"] = mem.into();
         v["peak_heap_bytes"] = alloc::peak_heap().into();
         println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !a.quiet {
+    } else if !a.quiet.quiet {
         eprintln!("decimated {} -> {}", s.input, s.output);
         eprintln!("  input        {} faces, area {:.6}", s.input_faces, s.input_area);
         eprintln!("  resampled    {} faces (asked {}), cells of {:.6}, {}", s.intermediate_faces, s.intermediate_faces_asked, s.cell_size, if s.intermediate_watertight { "watertight" } else { "NOT watertight" });

@@ -5,7 +5,7 @@
 
 use crate::cmd::gen::{cmd_gen, GenArgs, OrderArg, Shape};
 use crate::cmd::resample::resample_and_report;
-use crate::jobs::{load_mesh, AxisArg, ResampleArgs, SignsArg, StagedArgs};
+use crate::jobs::{load_mesh, ResampleArgs};
 use crate::progress::Bars;
 use crate::summary::print_check;
 use anyhow::{bail, Context, Result};
@@ -45,29 +45,17 @@ pub(crate) fn cmd_demo(a: DemoArgs) -> Result<()> {
     let input = dir.join("demo-genus3.ply");
     let output = dir.join("demo-genus3-resampled.ply");
     eprintln!("1/3 generating a genus-3 solid with about {} faces: {}", a.faces, input.display());
-    cmd_gen(GenArgs { shape: Shape::Genus, output: input.clone(), faces: a.faces, seed: 1, genus: 3, ascii: false, order: OrderArg::InOrder, json: false })?;
+    cmd_gen(GenArgs { shape: Shape::Genus, output: input.clone(), faces: a.faces, seed: 1, genus: 3, ascii: false, order: OrderArg::InOrder, json: Default::default() })?;
     eprintln!("2/3 resampling it on about {} cells", a.cells);
-    let s = resample_and_report(ResampleArgs {
-        input: input.clone(),
-        output: output.clone(),
-        cells: Some(a.cells),
-        cell_size: None,
-        mem: None,
-        threads: 0,
-        tmp: None,
-        axis: AxisArg::Auto,
-        slab: None,
-        staged: StagedArgs::default(),
-        signs: SignsArg::Auto,
-        max_hole: 16,
-        close_all: false,
-        grid_offset: None,
-        ascii: false,
-        double: false,
-        quiet: false,
-        json: false,
-        preview: false,
-    })?;
+    // The very arguments `mint resample IN OUT --cells N` parses to.
+    #[derive(clap::Parser)]
+    struct Resample {
+        #[command(flatten)]
+        a: ResampleArgs,
+    }
+    let words = ["resample".into(), input.clone().into_os_string(), output.clone().into_os_string(), "--cells".into(), a.cells.to_string().into()];
+    let r = <Resample as clap::Parser>::try_parse_from(words).context("the demo's resample arguments")?;
+    let s = resample_and_report(&r.a)?;
     eprintln!("3/3 checking the output");
     let (positions, faces) = load_mesh(&output)?;
     let r = mint_mesh::try_check(&positions, &faces)?;

@@ -2,7 +2,7 @@
 //! both directions (mean, RMS, max). Calls
 //! `mint_mesh::try_symmetric_distance` on the meshes read into memory.
 
-use crate::jobs::load_mesh;
+use crate::jobs::{load_mesh, JsonArg};
 use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -19,9 +19,8 @@ pub struct DistanceArgs {
     /// Seed of the sample positions.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Print the result as JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub json: JsonArg,
 }
 
 pub(crate) fn cmd_distance(a: DistanceArgs) -> Result<()> {
@@ -29,7 +28,7 @@ pub(crate) fn cmd_distance(a: DistanceArgs) -> Result<()> {
     let mb = load_mesh(&a.b)?;
     let (ab, ba) = mint_mesh::try_symmetric_distance((&ma.0, &ma.1), (&mb.0, &mb.1), a.samples, a.seed)
         .with_context(|| format!("distance between {} and {}", a.a.display(), a.b.display()))?;
-    if a.json {
+    if a.json.json {
         let v = serde_json::json!({ "a": a.a.display().to_string(), "b": a.b.display().to_string(), "a_to_b": ab, "b_to_a": ba });
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {

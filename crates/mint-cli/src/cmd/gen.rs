@@ -4,6 +4,7 @@
 //! of `mint_gen` (`sphere`, `torus`, `genus`, `components`, `scan_like`,
 //! `torus_shuffled`, `shuffle_mesh`); `mint demo` runs it through `cmd_gen`.
 
+use crate::jobs::{JsonArg};
 use crate::units::human_bytes;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
@@ -50,9 +51,8 @@ pub struct GenArgs {
     /// shapes are shuffled in memory, up to 50M faces).
     #[arg(long, value_enum, default_value_t = OrderArg::InOrder)]
     pub order: OrderArg,
-    /// Print what was generated as JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub json: JsonArg,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -99,7 +99,7 @@ pub(crate) fn cmd_gen(a: GenArgs) -> Result<()> {
         std::fs::write(&tmp, serde_json::to_string_pretty(d)?).with_context(|| format!("{}: writing the defect list", tmp.display()))?;
         std::fs::rename(&tmp, &side).with_context(|| format!("{}: renaming the defect list", side.display()))?;
     }
-    if a.json {
+    if a.json.json {
         println!("{}", serde_json::to_string_pretty(&generated)?);
     } else {
         eprintln!(

@@ -1,6 +1,7 @@
 //! `mint info`: a mesh file's format, counts, elements and properties, from
 //! its header alone (the body is not read). Calls `mint_io::read_info`.
 
+use crate::jobs::{JsonArg};
 use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
@@ -9,14 +10,13 @@ use std::path::PathBuf;
 pub struct InfoArgs {
     /// Mesh file.
     pub file: PathBuf,
-    /// Print as JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub json: JsonArg,
 }
 
 pub(crate) fn cmd_info(a: InfoArgs) -> Result<()> {
     let info = mint_io::read_info(&a.file)?;
-    if a.json {
+    if a.json.json {
         let v = serde_json::json!({
             "file": a.file.display().to_string(),
             "format": format!("{:?}", info.format),

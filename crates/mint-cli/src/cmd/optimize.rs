@@ -3,6 +3,7 @@
 //! boundary (Dangl's normal optimizer); no vertex moves. Calls
 //! `mint_contour::run::optimize_file`.
 
+use crate::jobs::{QuietArg, JsonArg};
 use crate::contour_report::{report, write_options};
 use anyhow::Result;
 use clap::Args;
@@ -29,12 +30,10 @@ pub struct OptimizeArgs {
     /// Write the status file (time, counts, parameters) as JSON here.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
-    /// No summary (errors are still printed).
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the summary as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub quiet: QuietArg,
+    #[command(flatten)]
+    pub json: JsonArg,
 }
 
 pub fn cmd_optimize(a: OptimizeArgs) -> Result<()> {
@@ -58,5 +57,5 @@ pub fn cmd_optimize(a: OptimizeArgs) -> Result<()> {
         d.regions_kept,
         d.collinear_dropped
     );
-    report(&s, &a.stats, a.quiet, a.json, line)
+    report(&s, &a.stats, a.quiet.quiet, a.json.json, line)
 }

@@ -3,6 +3,7 @@
 //! wireframe, boundary edges). Calls `mint_render::render_files` (and
 //! `mint_pipeline::check_file` for `--show-boundary`).
 
+use crate::jobs::{QuietArg, JsonArg, MemArg};
 use crate::progress::Bars;
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
@@ -38,18 +39,16 @@ pub struct RenderArgs {
     /// first 10 million per mesh.
     #[arg(long)]
     pub show_boundary: bool,
-    /// Heap budget of --show-boundary's check, e.g. 512M [default: a quarter of RAM].
-    #[arg(long, value_parser = crate::units::parse_bytes)]
-    pub mem: Option<u64>,
+    /// The budget of --show-boundary's check.
+    #[command(flatten)]
+    pub mem: MemArg,
     /// Worker threads [default: all cores]. The picture is the same for any value.
     #[arg(long, default_value_t = 0, hide_default_value = true)]
     pub threads: usize,
-    /// No progress bars and no summary.
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the summary as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub quiet: QuietArg,
+    #[command(flatten)]
+    pub json: JsonArg,
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -103,17 +102,17 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         crate::paths::check_not_input(output, &[r.as_path()])?;
     }
     let threads = if a.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { a.threads };
-    let bars = Bars::new(a.quiet || a.json);
+    let bars = Bars::new(a.quiet.quiet || a.json.json);
     let mut marks = Vec::new();
     let mut boundary_edges = Vec::new();
     if a.show_boundary {
         const MOST: usize = 10_000_000;
         for input in inputs {
-            let opts = mint_pipeline::CheckOptions { mem_bytes: a.mem.unwrap_or_else(crate::jobs::default_mem), weld: true, tmp_dir: None, threads, list_boundary: MOST };
+            let opts = mint_pipeline::CheckOptions { mem_bytes: a.mem.bytes(), weld: true, tmp_dir: None, threads, list_boundary: MOST };
             let (report, stats) = mint_pipeline::check_file(input, &opts, &bars)?;
             let positions = mint_io::MeshReader::open(input, mint_io::ReadOptions::default())?.positions();
             marks.push(stats.boundary.iter().map(|&[v, w]| [positions.get(v), positions.get(w)]).collect::<Vec<_>>());
-            if report.boundary_edges as usize > MOST && !a.quiet {
+            if report.boundary_edges as usize > MOST && !a.quiet.quiet {
                 eprintln!("warning: {}: {} boundary edges; drawing the first {MOST}", input.display(), report.boundary_edges);
             }
             boundary_edges.push(report.boundary_edges);
@@ -121,13 +120,13 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     }
     let o = mint_render::RenderOptions { width: a.size.0, height: a.size.1, view, threads, distance_to, wireframe: a.wireframe, marks };
     let s = mint_render::render_files(&refs, output, &o, &bars)?;
-    if a.json {
+    if a.json.json {
         let mut v = serde_json::to_value(&s)?;
         if a.show_boundary {
             v["boundary_edges"] = boundary_edges.clone().into();
         }
         println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !a.quiet {
+    } else if !a.quiet.quiet {
         eprintln!("rendered {} triangles -> {} ({}x{}, {} pixels covered) in {:.2}s", s.triangles, s.output, s.width, s.height, s.covered_pixels, s.seconds);
         if a.show_boundary {
             let list: Vec<String> = boundary_edges.iter().map(u64::to_string).collect();

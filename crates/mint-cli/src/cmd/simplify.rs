@@ -2,6 +2,7 @@
 //! that fits in memory: weld, quadric edge collapse (f64) to a face
 //! target, check, write. Calls `mint_pipeline::simplify_file`.
 
+use crate::jobs::{QuietArg, JsonArg};
 use crate::alloc;
 use crate::progress::Bars;
 use crate::units::human_bytes;
@@ -33,12 +34,10 @@ pub struct SimplifyArgs {
     /// Write vertex coordinates as f64 instead of f32.
     #[arg(long)]
     pub double: bool,
-    /// No summary.
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the summary as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub quiet: QuietArg,
+    #[command(flatten)]
+    pub json: JsonArg,
 }
 
 pub(crate) fn cmd_simplify(a: SimplifyArgs) -> Result<()> {
@@ -49,13 +48,13 @@ pub(crate) fn cmd_simplify(a: SimplifyArgs) -> Result<()> {
         weld: !a.no_weld,
         write: WriteOptions { ascii: a.ascii, double: a.double, ..Default::default() },
     };
-    let bars = Bars::new(a.quiet || a.json);
+    let bars = Bars::new(a.quiet.quiet || a.json.json);
     let s = mint_pipeline::simplify_file(&a.input, &a.output, &o, &bars)?;
-    if a.json {
+    if a.json.json {
         let mut v = serde_json::to_value(&s)?;
         v["peak_heap_bytes"] = alloc::peak_heap().into();
         println!("{}", serde_json::to_string_pretty(&v)?);
-    } else if !a.quiet {
+    } else if !a.quiet.quiet {
         eprintln!("simplified {} -> {}", s.input, s.output);
         eprintln!("  input        {} faces, {} vertices ({} welded), {}", s.input_faces, s.input_vertices, s.welded_vertices, if s.input_watertight { "watertight" } else { "not watertight" });
         eprintln!("  output       {} faces (target {}), {} vertices, error {:.2e} of the extent", s.output_faces, s.target_faces, s.output_vertices, s.simplify_error);

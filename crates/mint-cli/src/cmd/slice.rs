@@ -2,6 +2,7 @@
 //! planar contours (a .pro profile): test data for `mint contours`, and
 //! cross-sections for users. Calls `mint_contour::run::slice_file`.
 
+use crate::jobs::{QuietArg, JsonArg};
 use crate::contour_report::report;
 use anyhow::Result;
 use clap::{Args, ValueEnum};
@@ -32,12 +33,10 @@ pub struct SliceArgs {
     /// Write the status file (time, counts, parameters) as JSON here.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
-    /// No summary (errors are still printed).
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the summary as JSON on stdout.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub quiet: QuietArg,
+    #[command(flatten)]
+    pub json: JsonArg,
 }
 
 pub fn cmd_slice(a: SliceArgs) -> Result<()> {
@@ -46,7 +45,7 @@ pub fn cmd_slice(a: SliceArgs) -> Result<()> {
         crate::paths::check_output(st, &[&a.input, &a.output])?;
     }
     let axis = a.axis as usize;
-    let s = run::slice_file(&a.input, &a.output, a.sections, axis, &crate::progress::Bars::new(a.quiet || a.json))?;
+    let s = run::slice_file(&a.input, &a.output, a.sections, axis, &crate::progress::Bars::new(a.quiet.quiet || a.json.json))?;
     let MethodStats::Slice(d) = &s.details else { unreachable!() };
     let line = format!(
         "sliced {} -> {}: {} of {} planes met the mesh, {} contours, {} vertices ({} open chains closed, {} contours dropped)",
@@ -59,5 +58,5 @@ pub fn cmd_slice(a: SliceArgs) -> Result<()> {
         d.chains_closed,
         d.contours_dropped
     );
-    report(&s, &a.stats, a.quiet, a.json, line)
+    report(&s, &a.stats, a.quiet.quiet, a.json.json, line)
 }

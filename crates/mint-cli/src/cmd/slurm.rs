@@ -3,7 +3,7 @@
 //! arrays that depend on each other, and on request followed to the end.
 //! Calls `mint_pipeline::slurm::{write_scripts, submit, wait}`.
 
-use crate::jobs::{abs, job_of, plan_of, DerefArg, JobCommand};
+use crate::jobs::JobCommand;
 use crate::progress::Bars;
 use crate::summary::print_resample_summary;
 use anyhow::{Context, Result};
@@ -29,22 +29,15 @@ pub struct SlurmArgs {
 }
 
 pub fn cmd_slurm(a: SlurmArgs) -> Result<()> {
-    let (plan, dir, json, quiet) = plan_of(&a.job)?;
+    let (plan, dir) = a.job.plan()?;
+    let (json, quiet) = (a.job.run_args().report.json(), a.job.run_args().report.quiet());
     // Jobs run wherever Slurm starts them: name the work directory absolutely.
-    let dir = abs(&dir);
+    let dir = mint_pipeline::spec::absolute(&dir);
     let mint = std::env::current_exe().context("finding the mint executable")?;
+    // Every task reads its memory budget and dereferencing from the plan.
     let mut task_args = Vec::new();
     if let Some(n) = a.task_threads {
         task_args.extend(["--threads".to_string(), n.to_string()]);
-    }
-    task_args.extend(["--mem".to_string(), plan.tuning.mem_bytes.to_string()]);
-    let deref = match job_of(&a.job)?.1.deref {
-        mint_pipeline::Deref::Auto => DerefArg::Auto,
-        mint_pipeline::Deref::Mmap => DerefArg::Mmap,
-        mint_pipeline::Deref::Sort => DerefArg::Sort,
-    };
-    if deref != DerefArg::Auto {
-        task_args.extend(["--deref".to_string(), deref.name().to_string()]);
     }
     let sbatch_args = match &a.sbatch {
         Some(s) => slurm::split_args(s).map_err(|e| anyhow::anyhow!("--sbatch: {e}"))?,

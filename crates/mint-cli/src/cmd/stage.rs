@@ -5,12 +5,13 @@
 //! Calls `mint_pipeline::plan_run`, `run_task`, `status` and
 //! `summarize_dir`.
 
-use crate::jobs::{default_mem, plan_of, DerefArg, JobCommand};
+use crate::jobs::{choice, JobCommand, JsonArg, QuietArg};
 use crate::progress::Bars;
 use crate::summary::print_resample_summary;
 use crate::units::{human_bytes, parse_bytes};
 use anyhow::Result;
 use clap::{Args, Subcommand};
+use mint_pipeline::{Deref, Stage};
 use std::path::PathBuf;
 
 #[derive(Subcommand, Debug)]
@@ -28,50 +29,48 @@ pub enum StageCommand {
 pub struct RunArgs {
     /// The work directory (holding plan.json).
     pub dir: PathBuf,
-    /// The stage: bounds, discretize, census, holes, reconstruct or write
-    /// (`mint stage status DIR` lists this plan's).
-    pub stage: String,
+    /// The stage (`mint stage status DIR` lists this plan's).
+    #[arg(value_parser = choice::<Stage>())]
+    pub stage: Stage,
     /// The task number, from 0.
     pub task: u32,
-    /// Worker threads [default: all cores]. The output is the same for any value.
-    #[arg(long, default_value_t = 0, hide_default_value = true)]
-    pub threads: usize,
+    /// Worker threads, 0 for all cores [default: the plan's]. The output is the same for any value.
+    #[arg(long)]
+    pub threads: Option<usize>,
     /// Heap budget of this task [default: the plan's].
     #[arg(long, value_parser = parse_bytes)]
     pub mem: Option<u64>,
-    /// How a discretize task dereferences faces (see `mint resample --help`).
-    #[arg(long, value_enum, default_value_t = DerefArg::Auto)]
-    pub deref: DerefArg,
-    /// No progress bars; one line when the task is done.
-    #[arg(long, short)]
-    pub quiet: bool,
+    /// How a discretize task dereferences faces (see `mint resample --help`) [default: the plan's].
+    #[arg(long, value_parser = choice::<Deref>())]
+    pub deref: Option<Deref>,
+    #[command(flatten)]
+    pub quiet: QuietArg,
 }
 
 #[derive(Args, Debug)]
 pub struct StatusArgs {
     /// The work directory.
     pub dir: PathBuf,
-    /// Print as JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub json: JsonArg,
 }
 
 pub fn cmd_stage(c: StageCommand) -> Result<()> {
     match c {
         StageCommand::Plan(job) => {
-            let (plan, dir, _, quiet) = plan_of(&job)?;
-            println!("{}", serde_json::to_string_pretty(&plan)?);
-            if !quiet {
+            let (plan, dir) = job.plan()?;
+            print!("{}", plan.to_json());
+            if !job.run_args().report.quiet() {
                 let tasks: Vec<String> = plan.stages.iter().map(|s| format!("{} {}", s.name, s.tasks)).collect();
-                eprintln!("planned {} in {} ({} tasks: {})", plan.job.name(), dir.display(), plan.stages.iter().map(|s| s.tasks).sum::<u32>(), tasks.join(", "));
+                eprintln!("planned {} in {} ({} tasks: {})", plan.spec.job.name(), dir.display(), plan.stages.iter().map(|s| s.tasks).sum::<u32>(), tasks.join(", "));
             }
             Ok(())
         }
         StageCommand::Run(a) => {
-            let bars = Bars::new(a.quiet);
+            let bars = Bars::new(a.quiet.quiet);
             let t = std::time::Instant::now();
-            let topts = mint_pipeline::TaskOptions { threads: a.threads, mem_bytes: a.mem, deref: a.deref.to_deref() };
-            let outcome = mint_pipeline::run_task(&a.dir, &a.stage, a.task, &topts, &bars)?;
+            let topts = mint_pipeline::TaskOptions { threads: a.threads, mem_bytes: a.mem, deref: a.deref };
+            let outcome = mint_pipeline::run_task(&a.dir, a.stage, a.task, &topts, &bars)?;
             match outcome {
                 mint_pipeline::TaskOutcome::AlreadyDone => eprintln!("{} {}: already done", a.stage, a.task),
                 mint_pipeline::TaskOutcome::Ran => eprintln!(
@@ -82,15 +81,16 @@ pub fn cmd_stage(c: StageCommand) -> Result<()> {
                     human_bytes(crate::alloc::peak_heap())
                 ),
             }
-            if a.stage == "write" && !a.quiet {
+            if a.stage == Stage::Write && !a.quiet.quiet {
                 let s = mint_pipeline::summarize_dir(&a.dir, &bars)?;
-                print_resample_summary(&s, false, false, default_mem())?;
+                let plan = mint_pipeline::Plan::load(&a.dir)?;
+                print_resample_summary(&s, false, false, a.mem.unwrap_or(plan.tuning.mem_bytes))?;
             }
             Ok(())
         }
         StageCommand::Status(a) => {
             let st = mint_pipeline::status(&a.dir)?;
-            if a.json {
+            if a.json.json {
                 println!("{}", serde_json::to_string_pretty(&st)?);
             } else {
                 print_status(&st);

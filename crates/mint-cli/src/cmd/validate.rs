@@ -2,6 +2,7 @@
 //! resolved, which checks indices and coordinates, and reports the read
 //! speed. Reads through `mint_io::MeshReader`.
 
+use crate::jobs::{QuietArg, JsonArg};
 use crate::progress::Bars;
 use anyhow::{bail, Result};
 use clap::Args;
@@ -14,19 +15,17 @@ pub struct ValidateArgs {
     /// Directory for temporary spill files (ASCII input) [default: the system temp dir].
     #[arg(long)]
     pub tmp: Option<PathBuf>,
-    /// No progress bars.
-    #[arg(long, short)]
-    pub quiet: bool,
-    /// Print the result as JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub quiet: QuietArg,
+    #[command(flatten)]
+    pub json: JsonArg,
 }
 
 pub(crate) fn cmd_validate(a: ValidateArgs) -> Result<()> {
     use mint_pipeline::{Phase, Progress};
     let t = std::time::Instant::now();
     let mut reader = mint_io::MeshReader::open(&a.file, mint_io::ReadOptions { spill_dir: a.tmp.clone(), ..Default::default() })?;
-    let bars = Bars::new(a.quiet || a.json);
+    let bars = Bars::new(a.quiet.quiet || a.json.json);
     bars.start(Phase::named("validate"), reader.info().face_count.unwrap_or(0));
     let mut chunk = mint_io::TriangleChunk::default();
     let mut triangles = 0u64;
@@ -51,7 +50,7 @@ pub(crate) fn cmd_validate(a: ValidateArgs) -> Result<()> {
     let bytes = std::fs::metadata(&a.file).map(|m| m.len()).unwrap_or(0);
     let tps = triangles as f64 / secs.max(1e-9);
     let mbs = bytes as f64 / 1e6 / secs.max(1e-9);
-    if a.json {
+    if a.json.json {
         let v = serde_json::json!({
             "file": a.file.display().to_string(), "vertices": reader.vertex_count(), "triangles": triangles,
             "seconds": secs, "triangles_per_second": tps, "mb_per_second": mbs, "checksum": checksum,

@@ -2,6 +2,7 @@
 //! zippering and consensus geometry or by signed-distance voting on one
 //! grid. Calls `mint_range::merge_file`.
 
+use crate::jobs::{JsonArg, MemArg};
 use anyhow::Result;
 use clap::{Args, ValueEnum};
 use mint_range::grid_merge::GridMergeOptions;
@@ -41,12 +42,12 @@ pub struct ZipperArgs {
     /// Grid method: cell edge length in scan units (instead of --cells).
     #[arg(long)]
     pub cell_size: Option<f64>,
-    /// Memory for scans held at once, e.g. 256M or 2G. Scans are read
-    /// from their files when needed and the most recently used kept within
-    /// this; with less than the whole set, scans are read more than once
-    /// (the output is the same). The model and the grid come on top.
-    #[arg(long, value_parser = crate::units::parse_bytes, default_value = "1G")]
-    pub mem: u64,
+    /// Scans are read from their files when needed and the most recently
+    /// used kept within --mem; with less than the whole set, scans are read
+    /// more than once (the output is the same). The model and the grid come
+    /// on top.
+    #[command(flatten)]
+    pub mem: MemArg,
     /// Grid method: half-width of a crossing's vote along its grid line, in
     /// scan units [default: the larger of 1.5 cells and 3 sampling distances].
     #[arg(long)]
@@ -55,9 +56,8 @@ pub struct ZipperArgs {
     /// (see `mint render`).
     #[arg(long)]
     pub preview: bool,
-    /// Print the report as JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub json: JsonArg,
 }
 
 pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
@@ -68,7 +68,7 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
     if a.preview {
         crate::paths::check_output(&crate::preview::preview_path(&a.output), &inputs)?;
     }
-    let bars = crate::progress::Bars::new(a.json);
+    let bars = crate::progress::Bars::new(a.json.json);
     let method = match a.method {
         MergeMethod::Zipper => mint_range::MergeMethod::Zipper(ZipperOptions { distance_factor: a.distance_factor, consensus: !a.no_consensus, ..Default::default() }),
         MergeMethod::Grid => {
@@ -79,13 +79,13 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
             mint_range::MergeMethod::Grid(GridMergeOptions { size, band: a.band, ..Default::default() })
         }
     };
-    let opts = mint_range::MergeFileOptions { method, scan_mem: a.mem as usize, write: Default::default() };
+    let opts = mint_range::MergeFileOptions { method, scan_mem: a.mem.bytes() as usize, write: Default::default() };
     let s = mint_range::merge_file(&a.set, &a.output, &opts, &bars)?;
     let (report, check, secs) = (&s.report, &s.check, s.seconds);
     if a.preview {
-        crate::preview::write_preview(&[a.output.as_path()], &a.output, a.json, &bars)?;
+        crate::preview::write_preview(&[a.output.as_path()], &a.output, a.json.json, &bars)?;
     }
-    if a.json {
+    if a.json.json {
         let key = report.method();
         let v = serde_json::json!({ "set": a.set.display().to_string(), "output": a.output.display().to_string(), "seconds": secs, key: report, "check": check, "scan_reads": s.scan_reads, "peak_scan_bytes": s.peak_scan_bytes, "peak_heap_bytes": crate::alloc::peak_heap() });
         println!("{}", serde_json::to_string_pretty(&v)?);
@@ -117,6 +117,6 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
             eprintln!("  consensus: {} vertices moved, mean {:.3e}, max {:.3e}, {:.2} scans each", c.moved, c.mean_move, c.max_move, c.mean_scans);
         }
     }
-    eprintln!("  scans read {} times for {} scans (at most {:.1} MiB of scans held at once, budget --mem {:.0} MiB)", s.scan_reads, s.scans, s.peak_scan_bytes as f64 / 1048576.0, a.mem as f64 / 1048576.0);
+    eprintln!("  scans read {} times for {} scans (at most {:.1} MiB of scans held at once, budget --mem {:.0} MiB)", s.scan_reads, s.scans, s.peak_scan_bytes as f64 / 1048576.0, a.mem.bytes() as f64 / 1048576.0);
     Ok(())
 }

@@ -1,0 +1,327 @@
+//! The one description of a run of the engine, in two halves:
+//!
+//! - [`RunSpec`]: everything that decides the output bytes (the job and
+//!   its inputs, the output, the grid, the sign rule, the hole limit, how
+//!   the output is written). A resumed run must match it exactly; the plan
+//!   (`DIR/plan.json`) embeds it as it is, and every task reads it back.
+//! - [`Tuning`]: everything that does not (memory, threads, dereferencing,
+//!   temporary directory, slab thickness, the work directory and its split
+//!   into parts and slabs). Any of it may change between a plan and its
+//!   tasks, or between a run and its resumption, without changing a byte.
+//!
+//! The defaults of both are stated once, here ([`defaults`]), and the
+//! command line shows them from here. Adding an option that changes the
+//! output is a field of [`RunSpec`] (or of one of its parts) and a flag of
+//! the CLI's one argument group that builds it; see docs/ARCHITECTURE.md.
+
+use crate::deref::Deref;
+use crate::error::PipelineError;
+use crate::scene::{parse_scene, Operand, Scene};
+use mint_core::expr::{BoolOp, Expr};
+use mint_core::grid::{Axis, GridSize};
+use mint_core::signs::SignRule;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Every default of a run, stated once.
+pub mod defaults {
+    use mint_core::signs::SignRule;
+    /// `--signs`.
+    pub const SIGNS: SignRule = SignRule::Auto;
+    /// `--max-hole`: holes wider than this many cells stay open (resample).
+    pub const MAX_HOLE: u32 = 16;
+    /// `--parts` and `--slabs`.
+    pub const PARTS: u32 = 1;
+    pub const SLABS: u32 = 1;
+    /// Non-canonical cells listed in a summary.
+    pub const MAX_LISTED: usize = 100;
+}
+
+mint_core::choice! {
+    /// The axis along which the grid is cut into slabs (`--axis`); `auto`
+    /// picks the grid's longest.
+    pub enum SlabAxis {
+        Auto => "auto",
+        X => "x",
+        Y => "y",
+        Z => "z",
+    }
+}
+
+impl SlabAxis {
+    /// The axis index, `None` for `auto`.
+    pub fn index(self) -> Option<Axis> {
+        match self {
+            SlabAxis::Auto => None,
+            SlabAxis::X => Some(0),
+            SlabAxis::Y => Some(1),
+            SlabAxis::Z => Some(2),
+        }
+    }
+}
+
+/// What a run evaluates.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Job {
+    /// Resample one mesh.
+    Resample { input: PathBuf },
+    /// `a op b` for two meshes.
+    Bool { op: BoolOp, a: PathBuf, b: PathBuf },
+    /// A CSG scene file.
+    Csg { scene: PathBuf },
+}
+
+impl Job {
+    /// The scene this job evaluates.
+    pub fn scene(&self) -> Result<Scene, PipelineError> {
+        let mesh = |p: &Path| Operand::Mesh { path: p.to_path_buf(), transform: Default::default() };
+        Ok(match self {
+            Job::Resample { input } => Scene { expr: Expr::Operand(0), operands: vec![mesh(input)] },
+            Job::Bool { op, a, b } => Scene { expr: Expr::Op(*op, vec![Expr::Operand(0), Expr::Operand(1)]), operands: vec![mesh(a), mesh(b)] },
+            Job::Csg { scene } => {
+                let text = std::fs::read_to_string(scene)
+                    .map_err(|source| PipelineError::Temp { path: scene.clone(), op: "reading the scene", source })?;
+                parse_scene(&text, scene)?
+            }
+        })
+    }
+
+    /// How the summary names the input.
+    pub fn name(&self) -> String {
+        match self {
+            Job::Resample { input } => input.display().to_string(),
+            Job::Bool { op, a, b } => format!("{} {op} {}", a.display(), b.display()),
+            Job::Csg { scene } => scene.display().to_string(),
+        }
+    }
+
+    /// The file errors about the whole job are reported against.
+    pub fn path(&self) -> PathBuf {
+        match self {
+            Job::Resample { input } => input.clone(),
+            Job::Bool { a, .. } => a.clone(),
+            Job::Csg { scene } => scene.clone(),
+        }
+    }
+
+    /// The same job with every path made absolute (tasks may run in another
+    /// directory, on another machine).
+    pub fn absolute(&self) -> Job {
+        match self {
+            Job::Resample { input } => Job::Resample { input: absolute(input) },
+            Job::Bool { op, a, b } => Job::Bool { op: *op, a: absolute(a), b: absolute(b) },
+            Job::Csg { scene } => Job::Csg { scene: absolute(scene) },
+        }
+    }
+}
+
+/// An absolute path, without resolving links (so that a plan names what
+/// the user named, from any machine that mounts it at the same place).
+pub fn absolute(p: &Path) -> PathBuf {
+    std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf())
+}
+
+/// The grid: its size, slab axis, and shift.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    /// About N cubic cells over the bounding box, or cells of size H.
+    pub size: GridSize,
+    /// Axis along which the grid is cut into slabs.
+    pub axis: SlabAxis,
+    /// Grid shift in fractions of a cell.
+    pub offset: [f64; 3],
+}
+
+impl GridSpec {
+    /// A grid of `size`, other fields at their defaults.
+    pub fn of(size: GridSize) -> GridSpec {
+        GridSpec { size, axis: SlabAxis::Auto, offset: [0.0; 3] }
+    }
+}
+
+/// How the output is encoded (its format follows the output's extension).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WriteSpec {
+    /// Text PLY or STL instead of binary.
+    pub ascii: bool,
+    /// Coordinates as f64 instead of f32.
+    pub double: bool,
+}
+
+impl WriteSpec {
+    /// The writer's options, spilling into `spill_dir`.
+    pub fn options(&self, spill_dir: Option<PathBuf>) -> mint_io::WriteOptions {
+        mint_io::WriteOptions { ascii: self.ascii, double: self.double, spill_dir }
+    }
+}
+
+/// Everything that decides a run's output bytes; see the module docs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunSpec {
+    pub job: Job,
+    pub output: PathBuf,
+    pub grid: GridSpec,
+    /// How crossing signs become inside/outside (see `mint_core::signs`).
+    /// For `bool` and `csg` it applies to each mesh operand.
+    pub signs: SignRule,
+    /// Holes whose capping cells span more than this many cells stay open
+    /// (robust rules); `None` closes every hole. Booleans and CSG close
+    /// every hole.
+    pub max_hole: Option<u32>,
+    pub write: WriteSpec,
+}
+
+impl RunSpec {
+    /// A run of `job` into `output` on a grid of `size`, every other field
+    /// at its default (booleans and CSG close every hole).
+    pub fn new(job: Job, output: impl Into<PathBuf>, size: GridSize) -> RunSpec {
+        let max_hole = match job {
+            Job::Resample { .. } => Some(defaults::MAX_HOLE),
+            _ => None,
+        };
+        RunSpec { job, output: output.into(), grid: GridSpec::of(size), signs: defaults::SIGNS, max_hole, write: WriteSpec::default() }
+    }
+
+    /// Resampling `input` into `output`.
+    pub fn resample(input: impl Into<PathBuf>, output: impl Into<PathBuf>, size: GridSize) -> RunSpec {
+        RunSpec::new(Job::Resample { input: input.into() }, output, size)
+    }
+
+    /// `a op b` into `output`.
+    pub fn boolean(op: BoolOp, a: impl Into<PathBuf>, b: impl Into<PathBuf>, output: impl Into<PathBuf>, size: GridSize) -> RunSpec {
+        RunSpec::new(Job::Bool { op, a: a.into(), b: b.into() }, output, size)
+    }
+
+    /// The scene file `scene` into `output`.
+    pub fn csg(scene: impl Into<PathBuf>, output: impl Into<PathBuf>, size: GridSize) -> RunSpec {
+        RunSpec::new(Job::Csg { scene: scene.into() }, output, size)
+    }
+
+    /// The spec as the engine runs it: booleans and CSG close every hole.
+    pub fn normalized(&self) -> RunSpec {
+        let mut s = self.clone();
+        if !matches!(s.job, Job::Resample { .. }) {
+            s.max_hole = None;
+        }
+        s
+    }
+
+    /// True for a strict `--signs orient` resampling (the paper's rule).
+    pub fn strict(&self) -> bool {
+        matches!(self.job, Job::Resample { .. }) && self.signs == SignRule::Orient
+    }
+
+    /// Checks what can be checked before any work: the grid size, and that
+    /// the output's format is known.
+    pub fn validate(&self) -> Result<(), PipelineError> {
+        match self.grid.size {
+            GridSize::Cells(0) => return Err(PipelineError::stage(&self.output, "--cells must be at least 1")),
+            GridSize::CellSize(h) if !(h > 0.0 && h.is_finite()) => {
+                return Err(PipelineError::stage(&self.output, format!("--cell-size {h}: must be a positive number")))
+            }
+            _ => {}
+        }
+        if self.grid.offset.iter().any(|o| !o.is_finite()) {
+            return Err(PipelineError::stage(&self.output, "--grid-offset: must be three finite numbers"));
+        }
+        mint_io::Format::from_path(&self.output)?;
+        Ok(())
+    }
+}
+
+/// Everything that does not change the output bytes; see the module docs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tuning {
+    /// Heap budget in bytes (see [`crate::budget::Budget`]). Default:
+    /// [`crate::budget::default_mem_bytes`], a quarter of RAM.
+    pub mem_bytes: u64,
+    /// Worker threads; 0: all cores. Default 0.
+    pub threads: usize,
+    /// How face corners become positions. Default `auto`.
+    pub deref: Deref,
+    /// Directory for temporary files. Default: the output's directory.
+    pub tmp_dir: Option<PathBuf>,
+    /// Force sub-slabs of this many layers (tests, tuning). Default: the
+    /// budget decides.
+    pub slab_layers: Option<u32>,
+    /// Keep the stages here, so that a run killed at any moment resumes
+    /// when run again with the same directory. Default `None`: a temporary
+    /// directory, removed at the end.
+    pub work_dir: Option<PathBuf>,
+    /// Parts the input's faces are split into (one discretize task each).
+    pub parts: u32,
+    /// Slabs the grid is split into (one reconstruct task each).
+    pub slabs: u32,
+}
+
+impl Default for Tuning {
+    fn default() -> Self {
+        Tuning {
+            mem_bytes: crate::budget::default_mem_bytes(),
+            threads: 0,
+            deref: Deref::Auto,
+            tmp_dir: None,
+            slab_layers: None,
+            work_dir: None,
+            parts: defaults::PARTS,
+            slabs: defaults::SLABS,
+        }
+    }
+}
+
+impl Tuning {
+    /// The worker threads this process runs (0: all cores).
+    pub fn thread_count(&self) -> usize {
+        threads_of(self.threads)
+    }
+}
+
+/// `n` worker threads, 0 meaning all cores.
+pub fn threads_of(n: usize) -> usize {
+    if n == 0 {
+        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)
+    } else {
+        n
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mint_core::choice::Choice;
+
+    #[test]
+    fn a_spec_survives_json() {
+        let mut s = RunSpec::boolean(BoolOp::Difference, "/a.ply", "/b.ply", "/o.ply", GridSize::CellSize(0.25));
+        s.grid.axis = SlabAxis::Y;
+        s.signs = SignRule::Parity;
+        let text = serde_json::to_string(&s).unwrap();
+        assert!(text.contains(r#""op":"difference""#) && text.contains(r#""signs":"parity""#) && text.contains(r#""cell_size":0.25"#), "{text}");
+        assert_eq!(serde_json::from_str::<RunSpec>(&text).unwrap(), s);
+    }
+
+    #[test]
+    fn unknown_values_are_refused_by_name() {
+        let text = serde_json::to_string(&RunSpec::resample("/a.ply", "/o.ply", GridSize::Cells(10))).unwrap();
+        let bad = text.replace(r#""signs":"auto""#, r#""signs":"sideways""#);
+        let e = serde_json::from_str::<RunSpec>(&bad).unwrap_err().to_string();
+        assert!(e.contains("unknown value 'sideways'") && e.contains("auto, orient, union, parity"), "{e}");
+        for &a in SlabAxis::ALL {
+            assert_eq!(SlabAxis::parse(a.name()), Ok(a));
+        }
+    }
+
+    #[test]
+    fn booleans_close_every_hole() {
+        assert_eq!(RunSpec::resample("a", "o.ply", GridSize::Cells(1)).max_hole, Some(defaults::MAX_HOLE));
+        assert_eq!(RunSpec::csg("s.json", "o.ply", GridSize::Cells(1)).max_hole, None);
+        let mut b = RunSpec::boolean(BoolOp::Union, "a", "b", "o.ply", GridSize::Cells(1));
+        b.max_hole = Some(3);
+        assert_eq!(b.normalized().max_hole, None);
+    }
+}

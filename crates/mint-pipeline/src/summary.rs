@@ -1,0 +1,81 @@
+//! What a run of the engine reports ([`ResampleSummary`]), for `resample`,
+//! `bool` and `csg` alike. What a run is asked to do is `spec`.
+
+use serde::Serialize;
+
+pub use crate::spec::defaults::MAX_LISTED;
+
+/// Everything a run measured; printed by the CLI and as JSON.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct ResampleSummary {
+    pub input: String,
+    pub output: String,
+    pub input_vertices: u64,
+    pub input_faces: u64,
+    /// Signed volume enclosed by the input (negative: inside-out).
+    pub input_signed_volume: f64,
+    /// True when the input was inside-out and its signs were reversed.
+    pub orientation_inverted: bool,
+    pub grid_cells: [u32; 3],
+    pub cell_size: f64,
+    pub grid_origin: [f64; 3],
+    pub slab_axis: char,
+    pub slabs: u64,
+    pub threads: usize,
+    pub intercepts_found: u64,
+    pub intercepts_removed: u64,
+    pub intercepts_kept: u64,
+    pub shard_bytes: u64,
+    pub active_cells: u64,
+    pub output_vertices: u64,
+    pub output_faces: u64,
+    pub non_canonical_cells: u64,
+    /// Up to [`MAX_LISTED`] non-canonical cells, as (x, y, z) cell indices.
+    pub non_canonical_list: Vec<[u32; 3]>,
+    /// Seconds per phase.
+    pub seconds_bounds: f64,
+    pub seconds_discretize: f64,
+    pub seconds_reconstruct: f64,
+    pub seconds_write: f64,
+    pub seconds_total: f64,
+    /// Largest planned slab, in estimated heap bytes.
+    pub planned_slab_bytes: u64,
+    /// The sign rule used (`auto` resolved to `union` or `parity`).
+    pub sign_rule: String,
+    /// A and B lines with intercepts, winding-valid ones, odd ones (auto's census).
+    pub census_lines: u64,
+    pub census_winding_valid: u64,
+    pub census_odd: u64,
+    /// Lines through holes whose nodes took states from elsewhere.
+    pub inconsistent_lines: u64,
+    /// Vertices made at edge midpoints where states change but no intercept
+    /// exists (hole closing).
+    pub synthesized_vertices: u64,
+    /// Edges whose several same-sign intercepts were merged (overlapping layers).
+    pub merged_edges: u64,
+    /// Intercepts on edges without a state change, dropped.
+    pub dropped_intercepts: u64,
+    pub seconds_census: f64,
+    /// Holes (groups of capping cells) closed, and left open by `max_hole`.
+    pub holes_closed: u64,
+    pub holes_left_open: u64,
+    /// Cells left open around those holes.
+    pub open_cells: u64,
+    /// The output's own boundary: edges used by one face, and the loops
+    /// they form (what `mint check` counts on the output).
+    pub output_boundary_edges: u64,
+    pub output_boundary_loops: u64,
+    /// How faces were dereferenced (`mmap` or `sort`) and why, per part
+    /// when parts decided differently; bytes the sort spilled to disk.
+    pub deref: String,
+    pub deref_spilled_bytes: u64,
+    /// The work directory of a staged run (`None`: a temporary one).
+    pub work_dir: Option<String>,
+    /// Tasks run by this process, and tasks found already done (resumed).
+    pub tasks_run: u64,
+    pub tasks_resumed: u64,
+    /// The tasks ran in other processes (`mint stage run`, Slurm): times
+    /// are wall times between stage completions, and this process's memory
+    /// says nothing of theirs.
+    pub distributed: bool,
+}
