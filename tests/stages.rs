@@ -360,3 +360,27 @@ fn resample_with_a_work_directory_resumes_and_refuses_other_options() {
     let e = resample(&input, &out, &o.clone().with(|o| { o.tuning.slabs = 4; }), &NoProgress).unwrap_err().to_string();
     assert!(e.contains("3 slabs"), "{e}");
 }
+
+/// A work directory names files, not path strings: a run planned with a
+/// relative input resumes with its absolute path; and `decimate --work`,
+/// whose intermediate now lives in the work directory, runs again with the
+/// same command (it used to name a random temporary file in its plan).
+#[test]
+fn work_directories_compare_files_and_decimate_resumes() {
+    let d = tempfile::tempdir().unwrap();
+    write_mesh(d.path(), "s.ply", |s| drop(mint_gen::sphere([0.0; 3], 1.0, 20_000, s).unwrap()));
+    let mint_in = |args: &[&str]| {
+        let o = std::process::Command::new(mint_bin()).current_dir(d.path()).args(args).output().unwrap();
+        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+    };
+    mint_in(&["stage", "plan", "resample", "s.ply", "o.ply", "--cells", "5000", "--work", "w", "--quiet"]);
+    let abs = d.path().join("s.ply");
+    mint_in(&["resample", abs.to_str().unwrap(), "o.ply", "--cells", "5000", "--work", "w", "--quiet"]);
+    let plan: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.path().join("w/plan.json")).unwrap()).unwrap();
+    assert_eq!(plan["spec"]["job"]["input"].as_str().unwrap(), abs.to_str().unwrap());
+    for out in ["d1.ply", "d2.ply"] {
+        mint_in(&["decimate", "s.ply", out, "--faces", "2000", "--work", "dw", "--quiet"]);
+    }
+    assert!(d.path().join("dw/intermediate.ply").is_file());
+    assert_eq!(std::fs::read(d.path().join("d1.ply")).unwrap(), std::fs::read(d.path().join("d2.ply")).unwrap());
+}

@@ -43,7 +43,7 @@ use mint_mesh::weld::position_key;
 use mint_mesh::CheckReport;
 use mint_store::{Buckets, Record, StoreError};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::Ordering;
 use std::sync::Mutex;
 
 /// Welding positions (units: vertices).
@@ -400,75 +400,68 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
     let n = records.len();
     let nv = positions.len();
     let chunks = n.div_ceil(FACE_CHUNK as u64) as usize;
-    let next = AtomicUsize::new(0);
-    let stop = AtomicBool::new(false);
-    let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
     let geoms: Mutex<Vec<FaceGeom>> = Mutex::new(vec![FaceGeom::default(); chunks]);
     let prefetch_corners = crate::deref::prefetch_pays(records, positions, (0, n));
     progress.start(LINKS, n);
-    let uf = std::thread::scope(|s| {
-        let uf = s.spawn(|| -> Result<(Vec<u32>, Bits, Bits, Vec<u32>), PipelineError> {
-            let mut parent: Vec<u32> = (0..nv).collect();
-            let mut referenced = Bits::new(nv as usize);
-            let mut has_collapsed = Bits::new(nv as usize);
-            let mut last_chunk = vec![UNTOUCHED; blocks as usize];
-            let mut faces: Vec<[u32; 3]> = Vec::with_capacity(FACE_CHUNK);
-            for c in 0..chunks {
-                let (a, b) = (c as u64 * FACE_CHUNK as u64, ((c + 1) as u64 * FACE_CHUNK as u64).min(n));
-                faces.clear();
-                records.visit_indices(a, b, |_, t| faces.push(t.map(id)))?;
-                for (k, &f) in faces.iter().enumerate() {
-                    // Vertices in no order: start loading the parents of a
-                    // face some way ahead.
-                    if let Some(g) = faces.get(k + AHEAD) {
-                        for &v in g {
-                            prefetch(&parent, v);
-                        }
-                    }
-                    link(&mut parent, &mut referenced, &mut has_collapsed, f);
-                    for v in f {
-                        last_chunk[(v >> block_shift) as usize] = c as u32;
-                    }
-                }
-                progress.advance(b - a);
-                if stop.load(Ordering::Relaxed) {
-                    break;
-                }
-                if progress.cancelled() {
-                    return Err(PipelineError::Cancelled);
-                }
+    // The workers measure each chunk's geometry; beside them, this thread
+    // links every face in order (the union-find is one sequential pass).
+    let (failed, _, uf) = crate::pool::run(
+        threads,
+        chunks as u64,
+        |_| Vec::<[u32; 3]>::with_capacity(FACE_CHUNK),
+        |faces, c| {
+            let (a, b) = (c * FACE_CHUNK as u64, ((c + 1) * FACE_CHUNK as u64).min(n));
+            faces.clear();
+            let visited = records.visit_indices(a, b, |_, t| faces.push(t.map(id)));
+            let g = if visited.is_ok() { chunk_geometry(faces, positions, prefetch_corners) } else { FaceGeom::default() };
+            if let Some(e) = crate::passes::chunk_outcome(visited, None, progress) {
+                return Err(e);
             }
-            Ok((parent, referenced, has_collapsed, last_chunk))
-        });
-        for _ in 0..threads {
-            let (next, stop, failed, geoms) = (&next, &stop, &failed, &geoms);
-            s.spawn(move || {
+            geoms.lock().unwrap()[c as usize] = g;
+            Ok(())
+        },
+        drop,
+        |stop| {
+            let uf = (|| -> Result<(Vec<u32>, Bits, Bits, Vec<u32>), PipelineError> {
+                let mut parent: Vec<u32> = (0..nv).collect();
+                let mut referenced = Bits::new(nv as usize);
+                let mut has_collapsed = Bits::new(nv as usize);
+                let mut last_chunk = vec![UNTOUCHED; blocks as usize];
                 let mut faces: Vec<[u32; 3]> = Vec::with_capacity(FACE_CHUNK);
-                loop {
-                    let c = next.fetch_add(1, Ordering::Relaxed);
-                    if c >= chunks || stop.load(Ordering::Relaxed) {
-                        return;
-                    }
+                for c in 0..chunks {
                     let (a, b) = (c as u64 * FACE_CHUNK as u64, ((c + 1) as u64 * FACE_CHUNK as u64).min(n));
                     faces.clear();
-                    let visited = records.visit_indices(a, b, |_, t| faces.push(t.map(id)));
-                    let g = if visited.is_ok() { chunk_geometry(&faces, positions, prefetch_corners) } else { FaceGeom::default() };
-                    if let Some(e) = crate::passes::chunk_outcome(visited, None, progress) {
-                        failed.lock().unwrap().get_or_insert(e);
-                        stop.store(true, Ordering::Relaxed);
-                        return;
+                    records.visit_indices(a, b, |_, t| faces.push(t.map(id)))?;
+                    for (k, &f) in faces.iter().enumerate() {
+                        // Vertices in no order: start loading the parents of a
+                        // face some way ahead.
+                        if let Some(g) = faces.get(k + AHEAD) {
+                            for &v in g {
+                                prefetch(&parent, v);
+                            }
+                        }
+                        link(&mut parent, &mut referenced, &mut has_collapsed, f);
+                        for v in f {
+                            last_chunk[(v >> block_shift) as usize] = c as u32;
+                        }
                     }
-                    geoms.lock().unwrap()[c] = g;
+                    progress.advance(b - a);
+                    if stop.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    if progress.cancelled() {
+                        return Err(PipelineError::Cancelled);
+                    }
                 }
-            });
-        }
-        let uf = uf.join().expect("union-find panicked");
-        if uf.is_err() {
-            stop.store(true, Ordering::Relaxed);
-        }
-        uf
-    });
-    if let Some(e) = failed.into_inner().unwrap() {
+                Ok((parent, referenced, has_collapsed, last_chunk))
+            })();
+            if uf.is_err() {
+                stop.store(true, Ordering::Relaxed);
+            }
+            uf
+        },
+    );
+    if let Some(e) = failed {
         return Err(e);
     }
     let (parent, referenced, has_collapsed, last_chunk) = uf?;
@@ -834,37 +827,31 @@ fn positions_pass(positions: &VertexPositions, hash: bool, dir: &Path, budget: &
     // hold 5/8 of the budget, and each worker at most two buckets' worth.
     let nb = (nv as u64 * 8).div_ceil(budget.check_weld_bucket()).clamp(1, 4096).next_power_of_two() as usize;
     progress.start(WELD, nv as u64);
-    let per = nv.div_ceil(threads as u32).max(1);
     let weld_share = budget.check_weld_per_thread();
-    type Part = Result<(Bbox, mint_store::BucketReader<Hashed>), StoreError>;
-    let parts: Vec<Part> = std::thread::scope(|s| {
-        let workers: Vec<_> = (0..threads as u32)
-            .map(|t| {
-                s.spawn(move || {
-                    let mut bbox = Bbox::empty();
-                    let mut keyed = Buckets::<Hashed>::new(dir, &format!("weld-{t}"), if hash { nb } else { 1 }, weld_share);
-                    let (v0, v1) = ((t * per).min(nv), ((t + 1) * per).min(nv));
-                    for v in v0..v1 {
-                        let p = positions.get(v);
-                        bbox.add(p);
-                        if hash && p.iter().all(|c| c.is_finite()) {
-                            let h = mix(&position_key(&p));
-                            keyed.push(h as usize & (nb - 1), Hashed { h: (h >> 32) as u32, v })?;
-                        }
-                        if (v - v0) % (1 << 20) == 0 {
-                            progress.advance(((v1 - v) as u64).min(1 << 20));
-                        }
-                    }
-                    Ok((bbox, keyed.finish()))
-                })
-            })
-            .collect();
-        workers.into_iter().map(|w| w.join().expect("weld worker panicked")).collect()
-    });
+    // Blocks of 2^20 vertices; each worker keeps its own box and buckets.
+    const BLOCK: u32 = 1 << 20;
+    let parts = crate::pool::collect(
+        threads,
+        nv.div_ceil(BLOCK) as u64,
+        |t| (Bbox::empty(), Buckets::<Hashed>::new(dir, &format!("weld-{t}"), if hash { nb } else { 1 }, weld_share)),
+        |(bbox, keyed), k| -> Result<(), StoreError> {
+            let (v0, v1) = (k as u32 * BLOCK, (k as u32 * BLOCK).saturating_add(BLOCK).min(nv));
+            for v in v0..v1 {
+                let p = positions.get(v);
+                bbox.add(p);
+                if hash && p.iter().all(|c| c.is_finite()) {
+                    let h = mix(&position_key(&p));
+                    keyed.push(h as usize & (nb - 1), Hashed { h: (h >> 32) as u32, v })?;
+                }
+            }
+            progress.advance((v1 - v0) as u64);
+            Ok(())
+        },
+        |(bbox, keyed)| (bbox, keyed.finish()),
+    )?;
     let mut bbox = Bbox::empty();
     let mut sets = Vec::new();
-    for part in parts {
-        let (b, set) = part?;
+    for (b, set) in parts {
         bbox.merge(&b);
         stats.bytes_spilled += set.bytes_spilled();
         sets.push(Mutex::new(set));
@@ -873,113 +860,114 @@ fn positions_pass(positions: &VertexPositions, hash: bool, dir: &Path, budget: &
     if !hash {
         return Ok((bbox, None, 0));
     }
-    let next = AtomicUsize::new(0);
-    let merges: Vec<Result<Vec<(u32, u32)>, StoreError>> = std::thread::scope(|s| {
-        let workers: Vec<_> = (0..threads)
-            .map(|_| {
-                let (sets, next) = (&sets, &next);
-                s.spawn(move || {
-                    let mut merges = Vec::new();
-                    let mut recs: Vec<Hashed> = Vec::new();
-                    let mut table: Vec<u32> = Vec::new();
-                    let mut colliding: Vec<u32> = Vec::new();
-                    let mut group: Vec<Hashed> = Vec::new();
-                    let mut run: Vec<([u64; 3], u32)> = Vec::new();
-                    let (mut sorted, mut start): (Vec<Hashed>, Vec<usize>) = Default::default();
+    // Each worker judges whole buckets with its own scratch, and keeps the
+    // merges it found.
+    #[derive(Default)]
+    struct Scratch {
+        merges: Vec<(u32, u32)>,
+        recs: Vec<Hashed>,
+        table: Vec<u32>,
+        colliding: Vec<u32>,
+        group: Vec<Hashed>,
+        run: Vec<([u64; 3], u32)>,
+        sorted: Vec<Hashed>,
+        start: Vec<usize>,
+    }
+    let sets = &sets;
+    let merges: Vec<Vec<(u32, u32)>> = crate::pool::collect(
+        threads,
+        nb as u64,
+        |_| Scratch::default(),
+        |w, b| -> Result<(), StoreError> {
+            let b = b as usize;
+            let Scratch { merges, recs, table, colliding, group, run, sorted, start } = w;
+            recs.clear();
+            for set in sets {
+                let bucket = set.lock().unwrap().take(b);
+                bucket.read(|batch| recs.extend_from_slice(batch))?;
+            }
+            // Split by 8 more bits of the hash (a counting
+            // sort) into parts of a few thousand records, then
+            // find the hashes seen twice in each part with an
+            // open-addressing table of record numbers (+1) that
+            // stays in the caches.
+            let part = |h: u32| (h >> 8) as usize & 255;
+            start.clear();
+            start.resize(257, 0);
+            for r in recs.iter() {
+                start[part(r.h) + 1] += 1;
+            }
+            for i in 0..256 {
+                start[i + 1] += start[i];
+            }
+            sorted.clear();
+            sorted.resize(recs.len(), Hashed { h: 0, v: 0 });
+            let mut at = start.clone();
+            for r in recs.iter() {
+                let k = &mut at[part(r.h)];
+                sorted[*k] = *r;
+                *k += 1;
+            }
+            for i in 0..256 {
+                let these = &sorted[start[i]..start[i + 1]];
+                let bits = (2 * these.len()).next_power_of_two().max(16).trailing_zeros();
+                table.clear();
+                table.resize(1 << bits, 0);
+                colliding.clear();
+                for (j, r) in these.iter().enumerate() {
+                    let mut slot = (r.h.wrapping_mul(0x9E37_79B9) >> (32 - bits)) as usize;
                     loop {
-                        let b = next.fetch_add(1, Ordering::Relaxed);
-                        if b >= nb {
-                            return Ok(merges);
+                        let t = table[slot];
+                        if t == 0 {
+                            table[slot] = j as u32 + 1;
+                            break;
                         }
-                        recs.clear();
-                        for set in sets {
-                            let bucket = set.lock().unwrap().take(b);
-                            bucket.read(|batch| recs.extend_from_slice(batch))?;
+                        if these[t as usize - 1].h == r.h {
+                            colliding.push(r.h);
+                            break;
                         }
-                        // Split by 8 more bits of the hash (a counting
-                        // sort) into parts of a few thousand records, then
-                        // find the hashes seen twice in each part with an
-                        // open-addressing table of record numbers (+1) that
-                        // stays in the caches.
-                        let part = |h: u32| (h >> 8) as usize & 255;
-                        start.clear();
-                        start.resize(257, 0);
-                        for r in &recs {
-                            start[part(r.h) + 1] += 1;
-                        }
-                        for i in 0..256 {
-                            start[i + 1] += start[i];
-                        }
-                        sorted.clear();
-                        sorted.resize(recs.len(), Hashed { h: 0, v: 0 });
-                        let mut at = start.clone();
-                        for r in &recs {
-                            let k = &mut at[part(r.h)];
-                            sorted[*k] = *r;
-                            *k += 1;
-                        }
-                        for i in 0..256 {
-                            let these = &sorted[start[i]..start[i + 1]];
-                            let bits = (2 * these.len()).next_power_of_two().max(16).trailing_zeros();
-                            table.clear();
-                            table.resize(1 << bits, 0);
-                            colliding.clear();
-                            for (j, r) in these.iter().enumerate() {
-                                let mut slot = (r.h.wrapping_mul(0x9E37_79B9) >> (32 - bits)) as usize;
-                                loop {
-                                    let t = table[slot];
-                                    if t == 0 {
-                                        table[slot] = j as u32 + 1;
-                                        break;
-                                    }
-                                    if these[t as usize - 1].h == r.h {
-                                        colliding.push(r.h);
-                                        break;
-                                    }
-                                    slot = (slot + 1) & ((1 << bits) - 1);
-                                }
-                            }
-                            if colliding.is_empty() {
-                                continue;
-                            }
-                            // Equal hashes (in this part): compare the
-                            // positions themselves.
-                            colliding.sort_unstable();
-                            colliding.dedup();
-                            group.clear();
-                            group.extend(these.iter().filter(|r| colliding.binary_search(&r.h).is_ok()));
-                            group.sort_unstable_by_key(|r| (r.h, r.v));
-                            let mut g = 0;
-                            while g < group.len() {
-                                let mut h = g + 1;
-                                while h < group.len() && group[h].h == group[g].h {
-                                    h += 1;
-                                }
-                                run.clear();
-                                run.extend(group[g..h].iter().map(|r| (position_key(&positions.get(r.v)), r.v)));
-                                run.sort_unstable();
-                                let mut i = 0;
-                                while i < run.len() {
-                                    let mut j = i + 1;
-                                    while j < run.len() && run[j].0 == run[i].0 {
-                                        merges.push((run[j].1, run[i].1));
-                                        j += 1;
-                                    }
-                                    i = j;
-                                }
-                                g = h;
-                            }
-                        }
+                        slot = (slot + 1) & ((1 << bits) - 1);
                     }
-                })
-            })
-            .collect();
-        workers.into_iter().map(|w| w.join().expect("weld worker panicked")).collect()
-    });
+                }
+                if colliding.is_empty() {
+                    continue;
+                }
+                // Equal hashes (in this part): compare the
+                // positions themselves.
+                colliding.sort_unstable();
+                colliding.dedup();
+                group.clear();
+                group.extend(these.iter().filter(|r| colliding.binary_search(&r.h).is_ok()));
+                group.sort_unstable_by_key(|r| (r.h, r.v));
+                let mut g = 0;
+                while g < group.len() {
+                    let mut h = g + 1;
+                    while h < group.len() && group[h].h == group[g].h {
+                        h += 1;
+                    }
+                    run.clear();
+                    run.extend(group[g..h].iter().map(|r| (position_key(&positions.get(r.v)), r.v)));
+                    run.sort_unstable();
+                    let mut i = 0;
+                    while i < run.len() {
+                        let mut j = i + 1;
+                        while j < run.len() && run[j].0 == run[i].0 {
+                            merges.push((run[j].1, run[i].1));
+                            j += 1;
+                        }
+                        i = j;
+                    }
+                    g = h;
+                }
+            }
+            Ok(())
+        },
+        |w| w.merges,
+    )?;
     let mut canonical: Option<Vec<u32>> = None;
     let mut merged = 0u64;
     for m in merges {
-        for (v, c) in m? {
+        for (v, c) in m {
             canonical.get_or_insert_with(|| (0..nv).collect())[v as usize] = c;
             merged += 1;
         }

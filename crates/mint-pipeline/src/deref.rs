@@ -38,7 +38,6 @@ use mint_io::{MeshReader, TriangleChunk, TriangleRecords, VertexPositions};
 use mint_store::{BucketReader, Buckets, Record, ShardWriter, StoreError};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 /// Scattering corners to vertex blocks (units: faces).
@@ -583,65 +582,50 @@ fn assemble<C: Coord>(
     let axis = grid.slab_axis;
     let gather: Vec<Mutex<BucketReader<Resolved<C>>>> = gather.into_iter().map(Mutex::new).collect();
     let gather = &gather;
-    let next = AtomicUsize::new(0);
-    let stop = AtomicBool::new(false);
-    let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
     let (tx, rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
     let mut volumes = vec![0.0f64; blocks.chunks.len()];
+    let local = &local;
     progress.start(ASSEMBLE, nfaces);
-    let written: Result<(), StoreError> = std::thread::scope(|s| {
-        for _ in 0..threads {
-            let tx = tx.clone();
-            let (next, stop, failed, local) = (&next, &stop, &failed, &local);
-            s.spawn(move || {
-                let mut tris: Vec<[[f64; 3]; 3]> = Vec::new();
-                loop {
-                    let b = next.fetch_add(1, Ordering::Relaxed);
-                    if b >= blocks.spans.len() || stop.load(Ordering::Relaxed) {
-                        return;
+    // Each worker assembles whole face blocks into its own triangles.
+    let (failed, _, written) = crate::pool::run(
+        threads,
+        blocks.spans.len() as u64,
+        move |_| (tx.clone(), Vec::<[[f64; 3]; 3]>::new()),
+        |(tx, tris), b| {
+            if progress.cancelled() {
+                return Err(PipelineError::Cancelled);
+            }
+            let (c0, c1, _) = blocks.spans[b as usize];
+            let n: u64 = blocks.chunks[c0..c1].iter().map(|&n| n as u64).sum();
+            tris.clear();
+            tris.resize(n as usize, [[0.0; 3]; 3]);
+            for set in gather {
+                let bucket = set.lock().unwrap().take(b as usize);
+                bucket.read(|batch| {
+                    for r in batch {
+                        let c = r.corner as usize;
+                        tris[c / 3][c % 3] = r.pos();
                     }
-                    if progress.cancelled() {
-                        failed.lock().unwrap().get_or_insert(PipelineError::Cancelled);
-                        stop.store(true, Ordering::Relaxed);
-                        return;
-                    }
-                    let (c0, c1, _) = blocks.spans[b];
-                    let n: u64 = blocks.chunks[c0..c1].iter().map(|&n| n as u64).sum();
-                    tris.clear();
-                    tris.resize(n as usize, [[0.0; 3]; 3]);
-                    for set in gather {
-                        let bucket = set.lock().unwrap().take(b);
-                        let filled = bucket.read(|batch| {
-                            for r in batch {
-                                let c = r.corner as usize;
-                                tris[c / 3][c % 3] = r.pos();
-                            }
-                        });
-                        if let Err(e) = filled {
-                            failed.lock().unwrap().get_or_insert(e.into());
-                            stop.store(true, Ordering::Relaxed);
-                            return;
-                        }
-                    }
-                    let mut at = 0usize;
-                    for ci in c0..c1 {
-                        let m = blocks.chunks[ci] as usize;
-                        let mut recs = Vec::with_capacity(1024);
-                        let mut volume = 0.0;
-                        discretize_slice(&tris[at..at + m], axis, local, xf, nb, &mut recs, &mut volume);
-                        at += m;
-                        progress.advance(m as u64);
-                        if tx.send((ci, recs, volume)).is_err() {
-                            return; // the writer stopped on an error
-                        }
-                    }
+                })?;
+            }
+            let mut at = 0usize;
+            for ci in c0..c1 {
+                let m = blocks.chunks[ci] as usize;
+                let mut recs = Vec::with_capacity(1024);
+                let mut volume = 0.0;
+                discretize_slice(&tris[at..at + m], axis, local, xf, nb, &mut recs, &mut volume);
+                at += m;
+                progress.advance(m as u64);
+                if tx.send((ci, recs, volume)).is_err() {
+                    break; // the writer stopped on an error and raised `stop`
                 }
-            });
-        }
-        drop(tx);
-        write_chunks(rx, &mut volumes, store, &stop)
-    });
-    if let Some(e) = failed.into_inner().unwrap() {
+            }
+            Ok(())
+        },
+        drop,
+        |stop| write_chunks(rx, &mut volumes, store, stop),
+    );
+    if let Some(e) = failed {
         return Err(e);
     }
     written?;

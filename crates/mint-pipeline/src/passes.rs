@@ -65,64 +65,53 @@ pub(crate) fn bounds(
     let (first, end) = range;
     let n = end - first;
     progress.start(crate::progress::BOUNDS, n);
-    let per = n.div_ceil(threads as u64).max(1);
-    let parts: Vec<Result<([f64; 3], [f64; 3]), PipelineError>> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads as u64)
-            .map(|t| {
-                s.spawn(move || {
-                    let mut lo = [f64::INFINITY; 3];
-                    let mut hi = [f64::NEG_INFINITY; 3];
-                    let (a, b) = (first + (t * per).min(n), first + ((t + 1) * per).min(n));
-                    if xf.is_none() {
-                        // The common case: a tight loop in mint-io, in blocks for progress.
-                        let mut at = a;
-                        while at < b {
-                            let to = (at + (1 << 20)).min(b);
-                            match positions.bounds(at as u32, to as u32) {
-                                Ok(Some((l, h))) => {
-                                    for d in 0..3 {
-                                        lo[d] = lo[d].min(l[d]);
-                                        hi[d] = hi[d].max(h[d]);
-                                    }
-                                }
-                                Ok(None) => {}
-                                Err((i, p)) => return Err(PipelineError::NonFinite { path: path.to_path_buf(), index: i as u64, x: p[0], y: p[1], z: p[2] }),
-                            }
-                            progress.advance(to - at);
-                            at = to;
-                        }
-                        return Ok((lo, hi));
+    // Blocks of 2^20 vertices; each worker keeps its own box (min and max
+    // do not depend on which worker saw which block).
+    const BLOCK: u64 = 1 << 20;
+    let boxes = crate::pool::collect(
+        threads,
+        n.div_ceil(BLOCK),
+        |_| ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),
+        |(lo, hi), k| {
+            let (a, b) = (first + k * BLOCK, first + ((k + 1) * BLOCK).min(n));
+            let mut grow = |p: [f64; 3]| {
+                for d in 0..3 {
+                    lo[d] = lo[d].min(p[d]);
+                    hi[d] = hi[d].max(p[d]);
+                }
+            };
+            match xf {
+                // The common case: a tight loop in mint-io.
+                None => match positions.bounds(a as u32, b as u32) {
+                    Ok(Some((l, h))) => {
+                        grow(l);
+                        grow(h);
                     }
+                    Ok(None) => {}
+                    Err((i, p)) => return Err(PipelineError::NonFinite { path: path.to_path_buf(), index: i as u64, x: p[0], y: p[1], z: p[2] }),
+                },
+                Some(t) => {
                     for i in a..b {
                         let p = positions.get(i as u32);
                         if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
                             return Err(PipelineError::NonFinite { path: path.to_path_buf(), index: i, x: p[0], y: p[1], z: p[2] });
                         }
-                        let p = match xf {
-                            Some(t) => t.apply_point(p),
-                            None => p,
-                        };
+                        let p = t.apply_point(p);
                         if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
                             return Err(PipelineError::TransformOverflow { path: path.to_path_buf(), index: i, x: p[0], y: p[1], z: p[2] });
                         }
-                        for d in 0..3 {
-                            lo[d] = lo[d].min(p[d]);
-                            hi[d] = hi[d].max(p[d]);
-                        }
-                        if (i - a) % (1 << 20) == (1 << 20) - 1 {
-                            progress.advance(1 << 20);
-                        }
+                        grow(p);
                     }
-                    Ok((lo, hi))
-                })
-            })
-            .collect();
-        handles.into_iter().map(|h| h.join().expect("bounds worker panicked")).collect()
-    });
+                }
+            }
+            progress.advance(b - a);
+            Ok(())
+        },
+        |b| b,
+    )?;
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for part in parts {
-        let (l, h) = part?;
+    for (l, h) in boxes {
         for d in 0..3 {
             lo[d] = lo[d].min(l[d]);
             hi[d] = hi[d].max(h[d]);
@@ -247,7 +236,7 @@ pub(crate) fn discretize_direct(
     progress.start(crate::progress::DISCRETIZE, end.saturating_sub(first));
     let mut volumes = vec![0.0f64; chunks as usize];
     let local = &local;
-    let (failed, written) = crate::pool::run(
+    let (failed, _, written) = crate::pool::run(
         threads,
         chunks,
         move |_| rec_tx.clone(),
@@ -278,6 +267,7 @@ pub(crate) fn discretize_direct(
             let _ = rec_tx.send((c as usize, recs, volume));
             Ok(())
         },
+        drop,
         |stop| write_chunks(rec_rx, &mut volumes, store, stop),
     );
     if let Some(e) = failed {
