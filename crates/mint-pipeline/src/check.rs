@@ -414,7 +414,7 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
             faces.clear();
             let visited = records.visit_indices(a, b, |_, t| faces.push(t.map(id)));
             let g = if visited.is_ok() { chunk_geometry(faces, positions, prefetch_corners) } else { FaceGeom::default() };
-            if let Some(e) = crate::passes::chunk_outcome(visited, None, progress) {
+            if let Some(e) = crate::discretize::chunk_outcome(visited, None, progress) {
                 return Err(e);
             }
             geoms.lock().unwrap()[c as usize] = g;
@@ -476,9 +476,9 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
 #[inline(never)]
 fn chunk_geometry(faces: &[[u32; 3]], positions: &VertexPositions, prefetch: bool) -> FaceGeom {
     // Compiled for AVX2 as well, as resample's per-triangle loop is (see
-    // `passes::visit_chunk`): the same operations, fewer register copies.
+    // `kernels::visit_chunk`): the same operations, fewer register copies.
     #[cfg(target_arch = "x86_64")]
-    if crate::passes::use_avx2() {
+    if crate::kernels::use_avx2() {
         #[target_feature(enable = "avx2")]
         unsafe fn with_avx2(faces: &[[u32; 3]], positions: &VertexPositions, prefetch: bool) -> FaceGeom {
             if prefetch {
@@ -759,7 +759,7 @@ fn corners_and_vertices<I: Fn(u32) -> u32 + Sync>(
                                         }
                                     })
                                 };
-                                if let Some(e) = crate::passes::chunk_outcome(visited, err, progress) {
+                                if let Some(e) = crate::discretize::chunk_outcome(visited, err, progress) {
                                     fail(e);
                                     return j;
                                 }

@@ -20,7 +20,7 @@ use crate::engine::run;
 use crate::error::PipelineError;
 use crate::spec::{RunSpec, Tuning, WriteSpec};
 use crate::summary::ResampleSummary;
-use crate::passes::CHUNK_TRIANGLES;
+use crate::discretize::CHUNK_TRIANGLES;
 use mint_io::{MeshReader, TriangleChunk};
 use std::sync::Mutex;
 use crate::progress::Progress;
@@ -190,7 +190,7 @@ fn simplify_and_write(
     })?;
     drop((positions, tris));
     let seconds_simplify = t.elapsed().as_secs_f64();
-    crate::passes::check_cancel(progress)?;
+    crate::progress::check_cancel(progress)?;
     let t = Instant::now();
     let mut w = MeshWriter::create(output, format, write.clone())?;
     for v in &p {
@@ -255,7 +255,7 @@ pub fn simplify_file(input: &Path, output: &Path, o: &SimplifyFileOptions, progr
     let (input_faces, input_vertices) = (tris.len() as u64, positions.len() as u64);
     let welded = if o.weld { mint_mesh::weld(&mut positions, &mut tris) } else { 0 };
     let seconds_read = t0.elapsed().as_secs_f64();
-    crate::passes::check_cancel(progress)?;
+    crate::progress::check_cancel(progress)?;
     let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
     let (sr, seconds_simplify, seconds_write) = simplify_and_write(input, output, format, &o.write, positions, tris, &so, progress)?;
     Ok(SimplifySummary {
@@ -306,7 +306,7 @@ fn surface_area(path: &Path, threads: usize, progress: &dyn Progress) -> Result<
             progress.advance(b - a);
             Ok(())
         })?;
-        crate::passes::check_cancel(progress)?;
+        crate::progress::check_cancel(progress)?;
         progress.finish();
         return Ok((n, sums.into_inner().unwrap().iter().sum()));
     }
@@ -314,7 +314,7 @@ fn surface_area(path: &Path, threads: usize, progress: &dyn Progress) -> Result<
     let (mut faces, mut total) = (0u64, 0.0f64);
     let mut chunk = TriangleChunk::new();
     while reader.next_chunk(&mut chunk)? {
-        crate::passes::check_cancel(progress)?;
+        crate::progress::check_cancel(progress)?;
         total += chunk.positions.iter().map(area).sum::<f64>();
         faces += chunk.len() as u64;
         progress.advance(chunk.len() as u64);

@@ -29,7 +29,8 @@
 //! otherwise; the summary says which ran and why.
 
 use crate::error::PipelineError;
-use crate::passes::{discretize_slice, write_chunks, LocalMap, CHUNK_TRIANGLES};
+use crate::discretize::{write_chunks, CHUNK_TRIANGLES};
+use crate::kernels::{discretize_slice, LocalMap};
 use crate::progress::{Phase, Progress};
 use mint_core::grid::Grid;
 use mint_core::primitives::Transform;
@@ -464,7 +465,7 @@ fn run<C: Coord>(
                         err = scatter_one(&mut mine, t, block, &mut corner).err();
                     }
                 });
-                if let Some(e) = crate::passes::chunk_outcome(visited, err, progress) {
+                if let Some(e) = crate::discretize::chunk_outcome(visited, err, progress) {
                     return Err(e);
                 }
                 progress.advance(b - a);

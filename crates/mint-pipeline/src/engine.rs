@@ -13,7 +13,7 @@
 
 use crate::error::PipelineError;
 use crate::summary::{ResampleSummary, MAX_LISTED};
-use crate::passes::check_cancel;
+use crate::progress::check_cancel;
 use crate::plan::{Fingerprint, OperandPlan, Plan, Stage};
 use crate::progress::Progress;
 use crate::scene::{Operand, Scene};

@@ -4,16 +4,17 @@
 //! the contract, then run named stages; each stage reports to a
 //! [`Progress`] hook that can also cancel the run.
 //!
-//! - [`engine`]: the drivers: a whole run in one process ([`resample`],
-//!   [`boolean`], [`csg`]), or one task at a time ([`plan_run`],
+//! - [`engine`]: the drivers: a whole run in one process ([`run`],
+//!   [`run_scene`]), or one task at a time ([`plan_run`],
 //!   [`run_task`], [`status`]) for resuming and for clusters;
 //! - [`spec`]: the one description of a run: what decides the output
 //!   ([`RunSpec`]) and what does not ([`Tuning`]), with every default;
 //! - [`budget`]: the memory budget and every share of it;
 //! - [`plan`]: a staged run in its work directory (spec, fingerprints, stages);
 //! - [`stages`]: the tasks of each stage and the reduces between stages;
-//! - [`passes`]: the parallel passes inside a task (bounds, discretize,
-//!   slab planning, ordered reconstruction);
+//! - the parallel passes inside a task, one file each: [`bounds`],
+//!   [`discretize`] (with the per-triangle [`kernels`]), [`slabs`] (slab
+//!   planning and ordered reconstruction);
 //! - [`pool`]: the one worker pool (numbered items, first error wins);
 //! - [`deref`]: how faces' vertex indices become positions (memory map,
 //!   or Lindstrom–Silva dereferencing by distribution sort);
@@ -26,16 +27,19 @@
 //!   quadric edge collapse (f64) to a face target.
 
 pub mod budget;
+pub mod bounds;
 pub mod check;
 pub mod decimate;
 pub mod deref;
+pub mod discretize;
 pub mod engine;
 pub mod error;
-pub mod passes;
+pub mod kernels;
 pub mod plan;
 pub mod pool;
 pub mod progress;
 pub mod scene;
+pub mod slabs;
 pub mod slurm;
 pub mod spec;
 pub mod stages;

@@ -13,3 +13,12 @@ pub const DISCRETIZE: Phase = Phase::named("discretize");
 pub const RECONSTRUCT: Phase = Phase::named("reconstruct");
 /// Copying the slabs into the output (units: faces).
 pub const WRITE: Phase = Phase::named("write");
+
+/// `Err(Cancelled)` once the run is cancelled (Ctrl-C, SIGTERM).
+pub(crate) fn check_cancel(progress: &dyn Progress) -> Result<(), crate::error::PipelineError> {
+    if progress.cancelled() {
+        Err(crate::error::PipelineError::Cancelled)
+    } else {
+        Ok(())
+    }
+}

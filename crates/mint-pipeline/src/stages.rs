@@ -31,7 +31,10 @@
 use crate::error::PipelineError;
 use crate::deref::{choose, prefetch_pays, discretize_sorted, Deref, DerefChoice, Faces, SortStats};
 use crate::budget::Budget;
-use crate::passes::{bounds, check_cancel, discretize_all, discretize_direct, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, CHUNK_TRIANGLES};
+use crate::bounds::bounds;
+use crate::discretize::{discretize_all, discretize_direct, CHUNK_TRIANGLES};
+use crate::progress::check_cancel;
+use crate::slabs::{plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB};
 use crate::plan::{OperandPlan, Plan, Stage};
 use crate::spec::Tuning;
 use crate::progress::Progress;

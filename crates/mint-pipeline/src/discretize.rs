@@ -1,0 +1,208 @@
+//! The discretize passes: every triangle of a mesh (a stream from the
+//! reader, or fixed-size records straight from the map) to its intercept
+//! records in a shard store, through the worker pool and the one shard
+//! writer ([`write_chunks`]), with six times the signed volume of each
+//! chunk, in chunk order. The per-triangle work is in `kernels`.
+
+use crate::error::PipelineError;
+use crate::kernels::{signed_volume6, visit_chunk, ChunkJob, LocalMap};
+use crate::progress::{check_cancel, Progress};
+use mint_core::grid::Grid;
+use mint_core::primitives::Transform;
+use mint_core::{discretize_triangle, Intercept};
+use mint_io::{MeshReader, TriangleChunk, TriangleRecords};
+use mint_store::{ShardWriter, StoreError};
+use std::sync::atomic::Ordering;
+
+/// Triangles per chunk handed from the reader to the workers. Parts of a
+/// split input start at multiples of it, so that the per-chunk volumes (and
+/// their sum) do not depend on the split.
+pub const CHUNK_TRIANGLES: usize = 64 * 1024;
+/// How many chunks ahead of the workers the direct path asks the kernel to
+/// read (about 40 MB of common PLY faces): far enough that a cold file's
+/// reads overlap the work, small beside any page cache.
+const READ_AHEAD: u64 = 48;
+
+/// The outcome of one worker's chunk of faces: the visit's own error
+/// first, then the sink's, then a pending Ctrl-C.
+pub(crate) fn chunk_outcome(visited: Result<(), mint_io::Error>, sink: Option<StoreError>, progress: &dyn Progress) -> Option<PipelineError> {
+    match (visited, sink) {
+        (Err(e), _) => Some(PipelineError::from(e)),
+        (_, Some(e)) => Some(e.into()),
+        _ if progress.cancelled() => Some(PipelineError::Cancelled),
+        _ => None,
+    }
+}
+
+/// Streams every triangle of `reader` through the workers into `store`.
+/// Returns the number of triangles read and six times the signed volume of
+/// each chunk (in grid units), in chunk order, so that their sum does not
+/// depend on threads or on how the input was split into parts.
+pub(crate) fn discretize_all(
+    reader: &mut MeshReader,
+    grid: &Grid,
+    store: &mut ShardWriter,
+    threads: usize,
+    progress: &dyn Progress,
+    xf: Option<&Transform>,
+    expected_faces: u64,
+) -> Result<(u64, Vec<f64>), PipelineError> {
+    use crossbeam_channel::bounded;
+    let [_, nb, _] = grid.local_dims();
+    let positions = reader.positions();
+    let positions = &positions;
+    let (chunk_tx, chunk_rx) = bounded::<(usize, TriangleChunk)>(threads * 2);
+    let (free_tx, free_rx) = bounded::<TriangleChunk>(threads * 3 + 2);
+    let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
+    progress.start(crate::progress::DISCRETIZE, expected_faces);
+    let mut faces = 0u64;
+    let mut volumes: Vec<f64> = Vec::new();
+    let result: Result<(), PipelineError> = std::thread::scope(|s| {
+        for _ in 0..threads {
+            let (chunk_rx, free_tx, rec_tx) = (chunk_rx.clone(), free_tx.clone(), rec_tx.clone());
+            s.spawn(move || {
+                for (seq, chunk) in chunk_rx {
+                    let mut recs = Vec::with_capacity(chunk.indices.len() / 4 + 16);
+                    let mut volume = 0.0;
+                    for tri in &chunk.indices {
+                        // Indices were range-checked by the reader; positions
+                        // were checked finite by the bounds pass.
+                        let at = |i: u32| {
+                            let p = positions.get(i);
+                            grid.to_local(match xf {
+                                Some(t) => t.apply_point(p),
+                                None => p,
+                            })
+                        };
+                        let local = [at(tri[0]), at(tri[1]), at(tri[2])];
+                        volume += signed_volume6(&local);
+                        discretize_triangle(&local, |c| recs.push(c.intercept(nb)));
+                    }
+                    let _ = free_tx.try_send(chunk);
+                    if rec_tx.send((seq, recs, volume)).is_err() {
+                        return; // the writer stopped on an error
+                    }
+                }
+            });
+        }
+        drop((chunk_rx, free_tx, rec_tx));
+        let volumes = &mut volumes;
+        let writer = s.spawn(move || -> Result<(), StoreError> {
+            for (seq, recs, volume) in rec_rx {
+                if volumes.len() <= seq {
+                    volumes.resize(seq + 1, 0.0);
+                }
+                volumes[seq] = volume;
+                store.append(&recs)?;
+            }
+            Ok(())
+        });
+        let read: Result<(), PipelineError> = (|| {
+            let mut seq = 0usize;
+            loop {
+                check_cancel(progress)?;
+                let mut chunk = free_rx.try_recv().unwrap_or_default();
+                if !reader.next_chunk(&mut chunk)? {
+                    return Ok(());
+                }
+                let n = chunk.indices.len() as u64;
+                faces += n;
+                if chunk_tx.send((seq, chunk)).is_err() {
+                    return Ok(()); // workers gone: the writer failed; its error follows
+                }
+                seq += 1;
+                progress.advance(n);
+            }
+        })();
+        drop(chunk_tx);
+        let written = writer.join().expect("shard writer panicked");
+        read?;
+        written?;
+        Ok(())
+    });
+    result?;
+    progress.finish();
+    Ok((faces, volumes))
+}
+
+/// Discretizes face records `first .. end` of a file read directly
+/// ([`TriangleRecords`]): `threads` workers take whole chunks of
+/// [`CHUNK_TRIANGLES`] records in turn and visit them straight from the map
+/// (no reader thread, no chunk buffers); one writer appends their records
+/// to `store`. Returns what [`discretize_all`] returns, chunk for chunk the
+/// same (`first` is a multiple of the chunk size, or 0).
+pub(crate) fn discretize_direct(
+    records: &TriangleRecords,
+    (first, end): (u64, u64),
+    grid: &Grid,
+    store: &mut ShardWriter,
+    threads: usize,
+    progress: &dyn Progress,
+    xf: Option<&Transform>,
+) -> Result<(u64, Vec<f64>), PipelineError> {
+    use crossbeam_channel::bounded;
+    let [_, nb, _] = grid.local_dims();
+    let local = LocalMap::new(grid);
+    let chunk = CHUNK_TRIANGLES as u64;
+    let chunks = end.saturating_sub(first).div_ceil(chunk);
+    let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
+    progress.start(crate::progress::DISCRETIZE, end.saturating_sub(first));
+    let mut volumes = vec![0.0f64; chunks as usize];
+    let local = &local;
+    let (failed, _, written) = crate::pool::run(
+        threads,
+        chunks,
+        move |_| rec_tx.clone(),
+        |rec_tx, c| {
+            if progress.cancelled() {
+                return Err(PipelineError::Cancelled);
+            }
+            let (a, b) = (first + c * chunk, (first + (c + 1) * chunk).min(end));
+            // Keep the disk busy READ_AHEAD chunks ahead of the workers
+            // (each worker asks for the chunk that far past its own).
+            let ahead = a + READ_AHEAD * chunk;
+            records.read_ahead(ahead, (ahead + chunk).min(end));
+            let mut recs = Vec::with_capacity(1024);
+            let mut volume = 0.0;
+            let visited = match (grid.slab_axis, xf) {
+                (0, None) => visit_chunk::<0>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
+                (1, None) => visit_chunk::<1>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
+                (_, None) => visit_chunk::<2>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
+                (_, Some(t)) => visit_chunk::<3>(&ChunkJob { records, a, b, local, xf: Some(t), nb, progress }, &mut recs, &mut volume),
+            };
+            match visited {
+                Ok(true) => {}
+                Ok(false) => return Err(PipelineError::Cancelled),
+                Err(e) => return Err(e.into()),
+            }
+            progress.advance(b - a);
+            // A closed channel: the writer stopped on an error and raised `stop`.
+            let _ = rec_tx.send((c as usize, recs, volume));
+            Ok(())
+        },
+        drop,
+        |stop| write_chunks(rec_rx, &mut volumes, store, stop),
+    );
+    if let Some(e) = failed {
+        return Err(e);
+    }
+    written?;
+    progress.finish();
+    Ok((end.saturating_sub(first), volumes))
+}
+
+/// The one shard writer of the parallel discretize passes (direct and
+/// sorted): appends each chunk's records to `store` as the workers send
+/// them (order does not matter: readers sort) and files each chunk's volume
+/// under its number. On a store error it raises `stop` for the workers and
+/// returns the error.
+pub(crate) fn write_chunks(rx: crossbeam_channel::Receiver<(usize, Vec<Intercept>, f64)>, volumes: &mut [f64], store: &mut ShardWriter, stop: &std::sync::atomic::AtomicBool) -> Result<(), StoreError> {
+    for (seq, recs, volume) in rx {
+        volumes[seq] = volume;
+        if let Err(e) = store.append(&recs) {
+            stop.store(true, Ordering::Relaxed);
+            return Err(e);
+        }
+    }
+    Ok(())
+}
