@@ -1,11 +1,12 @@
-//! `mint check` within a memory budget (mint_pipeline::check_file) gives
+//! `mint check` within a memory budget (mint_check::check_file) gives
 //! the in-core report (read whole, weld, mint_mesh::check), field for field,
 //! on clean and dirty meshes, welded and not, in memory and with a budget
 //! so small that its buckets spill to disk.
 
 use crate::common::{write_mesh, write_trimesh};
 use mint_core::TriMesh;
-use mint_pipeline::{check_file, CheckOptions, NoProgress};
+use mint_check::{check_file, CheckOptions};
+use mint_pipeline::NoProgress;
 use std::path::Path;
 
 fn in_core(path: &Path, weld: bool) -> mint_mesh::CheckReport {

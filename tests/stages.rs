@@ -7,7 +7,7 @@ use mint_core::expr::BoolOp;
 use mint_core::GridSize;
 use mint_pipeline::engine::{plan_run, run_task, TaskOptions, TaskOutcome};
 use crate::common::{boolean, csg, resample, Opts};
-use mint_pipeline::{parse_scene, Job, NoProgress, Plan, Stage};
+use mint_pipeline::{parse_scene, Job, NoProgress, Plan};
 use std::path::{Path, PathBuf};
 
 fn opts(cells: u64) -> Opts {

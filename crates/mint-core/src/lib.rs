@@ -17,6 +17,7 @@
 //! - [`in_core`]: the whole resampling in memory (strict, robust, hole protocol), for tests and small inputs;
 //! - [`rng`]: SplitMix64, the seeded generator shared by samplers and generators;
 //! - [`sink`]: the [`MeshSink`] trait through which meshes leave algorithms;
+//! - [`pool`]: the one worker pool of the parallel passes (numbered items, first error wins);
 //! - [`choice`]: closed sets of named values (sign rule, boolean operator…), named once for the command line and for plans.
 
 pub mod cells;
@@ -28,6 +29,7 @@ pub mod holes;
 pub mod in_core;
 pub mod intercept;
 pub mod mc_table;
+pub mod pool;
 pub mod predicates;
 pub mod primitives;
 pub mod progress;

@@ -53,7 +53,10 @@ pub use convert::{convert, convert_cancellable, ConvertSummary};
 pub use error::{Error, ErrorKind, Position};
 pub use format::Format;
 pub use reader::{read_info, read_mesh, read_mesh_with, ElementInfo, MeshInfo, MeshReader, RangeGrid, ReadOptions, ReadStats, TriangleChunk, VertexPositions, WholeMesh};
+pub use reader::PREFETCH_PAGES_PER_FACE;
 pub use visit::{f32le_corners, TriangleRecords, TriangleVisitor};
+#[cfg(target_arch = "x86_64")]
+pub use visit::use_avx2;
 pub use writer::{MeshWriter, WriteOptions, WriteSummary};
 
 #[cfg(test)]

@@ -466,6 +466,57 @@ impl MeshReader {
     }
 }
 
+/// Sampled locality: windows of this many consecutive faces…
+const WINDOW: u64 = 1024;
+/// …this many of them, spread over the faces.
+const WINDOWS: u64 = 64;
+/// Above this many pages per face (sampled), visiting should prefetch.
+/// Measured on a 20M-face torus with its vertices shuffled within windows
+/// (resample to 3M cells, warm): in order (0.005) prefetching cost 15-25%
+/// of user time; windows of 3,000 vertices (0.016) were a tie; 30,000
+/// (0.09) and 300,000 (0.59) gained 10-20% from it.
+pub const PREFETCH_PAGES_PER_FACE: f64 = 0.01;
+
+/// Sampling the locality of a mesh's faces (which decides prefetching,
+/// and `--deref auto`).
+impl crate::visit::TriangleRecords {
+    /// Whether visiting records `range` should prefetch corners ahead
+    /// ([`TriangleRecords::set_prefetch`]): when a sample of the faces touches
+    /// more than [`PREFETCH_PAGES_PER_FACE`] pages of positions per face.
+    /// Below that, neighbouring faces share pages, the hardware prefetcher
+    /// follows them, and the look-ahead only costs (a fifth of the visit on a
+    /// generated torus in order). Which one runs does not change any result.
+    pub fn prefetch_pays(&self, positions: &VertexPositions, range: (u64, u64)) -> bool {
+        self.pages_per_face(positions, range) > PREFETCH_PAGES_PER_FACE
+    }
+
+    /// Distinct 4 KiB pages of positions touched per face, over [`WINDOWS`]
+    /// windows of [`WINDOW`] consecutive faces spread evenly over `range`.
+    pub fn pages_per_face(&self, positions: &VertexPositions, (first, end): (u64, u64)) -> f64 {
+        let records = self;
+        let end = end.min(records.len());
+        let n = end.saturating_sub(first);
+        if n == 0 {
+            return 0.0;
+        }
+        let stride = positions.stride();
+        let (mut pages, mut faces) = (0u64, 0u64);
+        let mut ids: Vec<u64> = Vec::with_capacity(3 * WINDOW as usize);
+        for w in 0..WINDOWS.min(n.div_ceil(WINDOW)) {
+            let a = first + n.saturating_sub(WINDOW) * w / WINDOWS.max(1);
+            let b = (a + WINDOW).min(end);
+            ids.clear();
+            // A bad record is reported by the pass itself; a sample ignores it.
+            let _ = records.visit_indices(a, b, |_, t| ids.extend(t.iter().map(|&v| v as u64 * stride / 4096)));
+            ids.sort_unstable();
+            ids.dedup();
+            pages += ids.len() as u64;
+            faces += b - a;
+        }
+        pages as f64 / faces.max(1) as f64
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -65,6 +65,15 @@ pub(crate) enum FixedFaces {
     Soup { count: u64 },
 }
 
+/// True when the hot loops may run their AVX2 compilations (decided once;
+/// `MINT_NO_AVX2` in the environment says no, so that a test can compare).
+#[cfg(target_arch = "x86_64")]
+pub fn use_avx2() -> bool {
+    static USE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *USE.get_or_init(|| std::arch::is_x86_feature_detected!("avx2") && std::env::var_os("MINT_NO_AVX2").is_none())
+}
+
+
 /// A thread-safe handle on a file's face records; see the module docs.
 #[derive(Debug, Clone)]
 pub struct TriangleRecords {

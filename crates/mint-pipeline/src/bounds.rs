@@ -26,7 +26,7 @@ pub(crate) fn bounds(
     // Blocks of 2^20 vertices; each worker keeps its own box (min and max
     // do not depend on which worker saw which block).
     const BLOCK: u64 = 1 << 20;
-    let boxes = crate::pool::collect(
+    let boxes = mint_core::pool::collect(
         threads,
         n.div_ceil(BLOCK),
         |_| ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]),

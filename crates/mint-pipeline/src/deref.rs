@@ -77,20 +77,10 @@ pub struct DerefChoice {
 /// Positions at most this large are fetched from the map whatever their
 /// order: they stay in the processor's caches.
 const CACHE_SIZED: u64 = 32 << 20;
-/// Sampled locality: windows of this many consecutive faces…
-const WINDOW: u64 = 1024;
-/// …this many of them, spread over the faces.
-const WINDOWS: u64 = 64;
 /// More distinct 4 KiB pages of positions per face than this is poor
 /// locality (an ordered mesh touches a few pages per window; a shuffled
 /// one about three per face).
 const POOR_PAGES_PER_FACE: f64 = 0.25;
-/// Above this many pages per face (sampled), the direct path prefetches.
-/// Measured on a 20M-face torus with its vertices shuffled within windows
-/// (resample to 3M cells, warm): in order (0.005) prefetching cost 15-25%
-/// of user time; windows of 3,000 vertices (0.016) were a tie; 30,000
-/// (0.09) and 300,000 (0.59) gained 10-20% from it.
-const PREFETCH_PAGES_PER_FACE: f64 = 0.01;
 /// Bytes of positions per vertex block (one block is joined at a time and
 /// should stay in cache).
 const BLOCK_BYTES: u64 = 1 << 20;
@@ -128,7 +118,7 @@ pub(crate) fn choose(mode: Deref, records: Option<&TriangleRecords>, positions: 
     let Some(records) = records else {
         return DerefChoice { sort: true, reason: format!("the positions ({}) are larger than 3/4 of the memory available ({}), and this format's locality is not sampled", mib(bytes), mib(room)) };
     };
-    let pages = pages_per_face(records, positions, range);
+    let pages = records.pages_per_face(positions, range);
     if pages > POOR_PAGES_PER_FACE {
         DerefChoice { sort: true, reason: format!("poor vertex locality ({pages:.2} pages of positions per face, sampled) and positions ({}) larger than 3/4 of the memory available ({})", mib(bytes), mib(room)) }
     } else {
@@ -166,41 +156,6 @@ fn cache_room() -> u64 {
 
 fn mib(b: u64) -> String {
     format!("{:.0} MiB", b as f64 / (1u64 << 20) as f64)
-}
-
-/// Whether visiting records `range` should prefetch corners ahead
-/// ([`TriangleRecords::set_prefetch`]): when a sample of the faces touches
-/// more than [`PREFETCH_PAGES_PER_FACE`] pages of positions per face.
-/// Below that, neighbouring faces share pages, the hardware prefetcher
-/// follows them, and the look-ahead only costs (a fifth of the visit on a
-/// generated torus in order). Which one runs does not change any result.
-pub(crate) fn prefetch_pays(records: &TriangleRecords, positions: &VertexPositions, range: (u64, u64)) -> bool {
-    pages_per_face(records, positions, range) > PREFETCH_PAGES_PER_FACE
-}
-
-/// Distinct 4 KiB pages of positions touched per face, over [`WINDOWS`]
-/// windows of [`WINDOW`] consecutive faces spread evenly over `range`.
-fn pages_per_face(records: &TriangleRecords, positions: &VertexPositions, (first, end): (u64, u64)) -> f64 {
-    let end = end.min(records.len());
-    let n = end.saturating_sub(first);
-    if n == 0 {
-        return 0.0;
-    }
-    let stride = positions.stride();
-    let (mut pages, mut faces) = (0u64, 0u64);
-    let mut ids: Vec<u64> = Vec::with_capacity(3 * WINDOW as usize);
-    for w in 0..WINDOWS.min(n.div_ceil(WINDOW)) {
-        let a = first + n.saturating_sub(WINDOW) * w / WINDOWS.max(1);
-        let b = (a + WINDOW).min(end);
-        ids.clear();
-        // A bad record is reported by the pass itself; a sample ignores it.
-        let _ = records.visit_indices(a, b, |_, t| ids.extend(t.iter().map(|&v| v as u64 * stride / 4096)));
-        ids.sort_unstable();
-        ids.dedup();
-        pages += ids.len() as u64;
-        faces += b - a;
-    }
-    pages as f64 / faces.max(1) as f64
 }
 
 /// Where the faces come from.
@@ -382,7 +337,7 @@ pub(crate) fn discretize_sorted(
     progress: &dyn Progress,
     xf: Option<&Transform>,
     spill_dir: &Path,
-    budget: &crate::budget::Budget,
+    budget: &mint_store::Budget,
 ) -> Result<(u64, Vec<f64>, SortStats), PipelineError> {
     let tmp = tempfile::Builder::new()
         .prefix(".mint-deref-")
@@ -405,7 +360,7 @@ fn run<C: Coord>(
     progress: &dyn Progress,
     xf: Option<&Transform>,
     dir: &Path,
-    budget: &crate::budget::Budget,
+    budget: &mint_store::Budget,
 ) -> Result<(u64, Vec<f64>, SortStats), PipelineError> {
     let threads = threads.max(1);
     let nv = positions.len() as u64;
@@ -453,7 +408,7 @@ fn run<C: Coord>(
                 })
                 .collect();
             // Each worker scatters into its own buckets (locked once a chunk).
-            crate::pool::for_each(threads, chunks, |t| &scatter[t], |mine, c| {
+            mint_core::pool::for_each(threads, chunks, |t| &scatter[t], |mine, c| {
                 let mut mine = mine.lock().unwrap();
                 let (block, at) = spans[c as usize];
                 let a = first + c * chunk;
@@ -506,7 +461,7 @@ fn run<C: Coord>(
     progress.start(JOIN, vertex_blocks);
     // Each worker joins vertex blocks into its own gather buckets, with a
     // block of positions as scratch.
-    crate::pool::for_each(
+    mint_core::pool::for_each(
         threads,
         vertex_blocks,
         |t| (&gather[t], Vec::<[f64; 3]>::with_capacity(block_vertices as usize)),
@@ -588,7 +543,7 @@ fn assemble<C: Coord>(
     let local = &local;
     progress.start(ASSEMBLE, nfaces);
     // Each worker assembles whole face blocks into its own triangles.
-    let (failed, _, written) = crate::pool::run(
+    let (failed, _, written) = mint_core::pool::run(
         threads,
         blocks.spans.len() as u64,
         move |_| (tx.clone(), Vec::<[[f64; 3]; 3]>::new()),

@@ -149,7 +149,7 @@ pub(crate) fn discretize_direct(
     progress.start(crate::progress::DISCRETIZE, end.saturating_sub(first));
     let mut volumes = vec![0.0f64; chunks as usize];
     let local = &local;
-    let (failed, _, written) = crate::pool::run(
+    let (failed, _, written) = mint_core::pool::run(
         threads,
         chunks,
         move |_| rec_tx.clone(),

@@ -23,7 +23,7 @@ use mint_io::{TriangleRecords, TriangleVisitor};
 #[inline(never)]
 pub(crate) fn visit_chunk<const S: usize>(job: &ChunkJob, recs: &mut Vec<Intercept>, volume: &mut f64) -> Result<bool, mint_io::Error> {
     #[cfg(target_arch = "x86_64")]
-    if use_avx2() {
+    if mint_io::use_avx2() {
         #[target_feature(enable = "avx2")]
         unsafe fn with_avx2<const S: usize>(job: &ChunkJob, recs: &mut Vec<Intercept>, volume: &mut f64) -> Result<bool, mint_io::Error> {
             visit_chunk_body::<S, true>(job, recs, volume)
@@ -43,14 +43,6 @@ pub(crate) struct ChunkJob<'a> {
     pub(crate) xf: Option<&'a Transform>,
     pub(crate) nb: u32,
     pub(crate) progress: &'a dyn Progress,
-}
-
-/// True when the hot loops may run their AVX2 compilations (decided once;
-/// `MINT_NO_AVX2` in the environment says no).
-#[cfg(target_arch = "x86_64")]
-pub(crate) fn use_avx2() -> bool {
-    static USE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *USE.get_or_init(|| std::arch::is_x86_feature_detected!("avx2") && std::env::var_os("MINT_NO_AVX2").is_none())
 }
 
 /// [`visit_chunk`]'s work, inlined into each of its two compilations

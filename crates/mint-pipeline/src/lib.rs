@@ -9,34 +9,29 @@
 //!   [`run_task`], [`status`]) for resuming and for clusters;
 //! - [`spec`]: the one description of a run: what decides the output
 //!   ([`RunSpec`]) and what does not ([`Tuning`]), with every default;
-//! - [`budget`]: the memory budget and every share of it;
 //! - [`plan`]: a staged run in its work directory (spec, fingerprints, stages);
 //! - [`stages`]: the tasks of each stage and the reduces between stages;
 //! - the parallel passes inside a task, one file each: [`bounds`],
 //!   [`discretize`] (with the per-triangle [`kernels`]), [`slabs`] (slab
 //!   planning and ordered reconstruction);
-//! - [`pool`]: the one worker pool (numbered items, first error wins);
 //! - [`deref`]: how faces' vertex indices become positions (memory map,
 //!   or Lindstrom–Silva dereferencing by distribution sort);
 //! - [`workdir`]: task directories, atomic commits, checksums;
 //! - [`slurm`]: submitting a plan to a Slurm cluster;
-//! - [`scene`]: the CSG scene format;
-//! - [`check`](mod@check): `mint check` within a memory budget (the
-//!   in-core report, from corners bucketed on disk);
-//! - [`decimate`](mod@decimate): resampling to an intermediate size, then
-//!   quadric edge collapse (f64) to a face target.
+//! - [`scene`]: the CSG scene format.
+//!
+//! Above the engine: `mint-decimate` (the engine to an intermediate mesh,
+//! then quadric edge collapse). Beside it: `mint-check` (`mint check`
+//! within a memory budget). The memory budget's shares are
+//! `mint_store::Budget`; the worker pool is `mint_core::pool`.
 
-pub mod budget;
 pub mod bounds;
-pub mod check;
-pub mod decimate;
 pub mod deref;
 pub mod discretize;
 pub mod engine;
 pub mod error;
 pub mod kernels;
 pub mod plan;
-pub mod pool;
 pub mod progress;
 pub mod scene;
 pub mod slabs;
@@ -46,9 +41,7 @@ pub mod stages;
 pub mod summary;
 pub mod workdir;
 
-pub use check::{check_file, CheckOptions, CheckStats};
-pub use decimate::{decimate, simplify_file, DecimateOptions, DecimateSummary, SimplifyFileOptions, SimplifySummary};
-pub use budget::{default_mem_bytes, Budget};
+pub use mint_store::budget::{self, default_mem_bytes, Budget};
 pub use engine::{plan_run, run, run_scene, run_task, status, summarize_dir, RunStatus, StageStatus, TaskOptions, TaskOutcome};
 pub use deref::Deref;
 pub use error::PipelineError;

@@ -237,8 +237,8 @@ impl RunSpec {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Tuning {
-    /// Heap budget in bytes (see [`crate::budget::Budget`]). Default:
-    /// [`crate::budget::default_mem_bytes`], a quarter of RAM.
+    /// Heap budget in bytes (see [`mint_store::Budget`]). Default:
+    /// [`mint_store::default_mem_bytes`], a quarter of RAM.
     pub mem_bytes: u64,
     /// Worker threads; 0: all cores. Default 0.
     pub threads: usize,
@@ -262,7 +262,7 @@ pub struct Tuning {
 impl Default for Tuning {
     fn default() -> Self {
         Tuning {
-            mem_bytes: crate::budget::default_mem_bytes(),
+            mem_bytes: mint_store::default_mem_bytes(),
             threads: 0,
             deref: Deref::Auto,
             tmp_dir: None,

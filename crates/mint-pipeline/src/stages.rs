@@ -29,8 +29,8 @@
 //! memory or task order.
 
 use crate::error::PipelineError;
-use crate::deref::{choose, prefetch_pays, discretize_sorted, Deref, DerefChoice, Faces, SortStats};
-use crate::budget::Budget;
+use crate::deref::{choose, discretize_sorted, Deref, DerefChoice, Faces, SortStats};
+use mint_store::Budget;
 use crate::bounds::bounds;
 use crate::discretize::{discretize_all, discretize_direct, CHUNK_TRIANGLES};
 use crate::progress::check_cancel;
@@ -563,7 +563,7 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
         };
         let positions = reader.positions();
         if let Some(records) = direct.as_mut() {
-            let on = prefetch_pays(records, &positions, range);
+            let on = records.prefetch_pays(&positions, range);
             records.set_prefetch(on);
             // The bounds stage, complete before any discretize task (the
             // grid is made from its results), checked every vertex finite.

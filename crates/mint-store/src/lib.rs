@@ -17,12 +17,17 @@
 //! manifest, so a truncated or corrupted file is reported, never read as
 //! data. Memory follows what is kept, not shard size.
 //!
+//! [`Budget`] hands out every share of a run's memory budget (`--mem`):
+//! the buckets', the slabs', `check`'s.
+//!
 //! The store does not own its directory: the staged engine (mint-pipeline)
 //! decides where shards live and when they are removed.
 
+pub mod budget;
 pub mod buckets;
 
 pub use buckets::{Bucket, BucketReader, Buckets, Record};
+pub use budget::{default_mem_bytes, Budget};
 use mint_core::intercept::FAMILY_S;
 use mint_core::Intercept;
 use serde::{Deserialize, Serialize};

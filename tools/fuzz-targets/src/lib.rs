@@ -146,8 +146,8 @@ fn mesh_reader(ext: &str, data: &[u8]) {
 /// whole and welded: the same report wherever the in-core one succeeds;
 /// otherwise a one-line error or a report.
 fn check_against_in_core(path: &Path) {
-    let opts = mint_pipeline::CheckOptions { mem_bytes: 1, weld: true, tmp_dir: Some(scratch()), threads: 2, list_boundary: 0 };
-    let bounded = mint_pipeline::check_file(path, &opts, &mint_pipeline::NoProgress);
+    let opts = mint_check::CheckOptions { mem_bytes: 1, weld: true, tmp_dir: Some(scratch()), threads: 2, list_boundary: 0 };
+    let bounded = mint_check::check_file(path, &opts, &mint_pipeline::NoProgress);
     let whole = mint_io::read_mesh(path).ok().and_then(|(mut p, mut f)| {
         let welded = mint_mesh::weld(&mut p, &mut f);
         let mut r = mint_mesh::try_check(&p, &f).ok()?;

@@ -1,7 +1,7 @@
 //! `mint check`: judges a mesh of any size (counts, components, boundary and
 //! non-manifold edges, orientation, degenerate and duplicate faces, genus,
 //! volume) and gives one verdict, watertight or not. Calls
-//! `mint_pipeline::check_file` (and `mint_mesh::self_intersections` for
+//! `mint_check::check_file` (and `mint_mesh::self_intersections` for
 //! `--self-intersections`).
 
 use crate::jobs::{load_mesh, JsonArg, MemArg, QuietArg};
@@ -49,8 +49,8 @@ pub struct CheckArgs {
 
 pub(crate) fn cmd_check(a: CheckArgs) -> Result<()> {
     let threads = if a.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { a.threads };
-    let opts = mint_pipeline::CheckOptions { mem_bytes: a.mem.bytes(), weld: !a.no_weld, tmp_dir: a.tmp.clone(), threads, list_boundary: 0 };
-    let (r, stats) = mint_pipeline::check_file(&a.file, &opts, &Bars::new(a.quiet.quiet || a.json.json))?;
+    let opts = mint_check::CheckOptions { mem_bytes: a.mem.bytes(), weld: !a.no_weld, tmp_dir: a.tmp.clone(), threads, list_boundary: 0 };
+    let (r, stats) = mint_check::check_file(&a.file, &opts, &Bars::new(a.quiet.quiet || a.json.json))?;
     let sx = if a.self_intersections {
         let (mut positions, mut faces) = load_mesh(&a.file)?;
         if !a.no_weld {

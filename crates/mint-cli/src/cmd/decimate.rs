@@ -1,6 +1,6 @@
 //! `mint decimate`: a mesh of any size down to a target face count, by an
 //! out-of-core resampling to an intermediate mesh and an in-core quadric
-//! simplification. Calls `mint_pipeline::decimate`.
+//! simplification. Calls `mint_decimate::decimate`.
 
 use crate::alloc;
 use crate::jobs::{JsonArg, MemArg, QuietArg};
@@ -54,7 +54,7 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         crate::paths::check_output(&preview_path(&a.output), &[&a.input])?;
     }
     let mem = a.mem.bytes();
-    let o = mint_pipeline::DecimateOptions {
+    let o = mint_decimate::DecimateOptions {
         target_faces: a.faces,
         intermediate_faces: a.intermediate,
         max_error: a.error,
@@ -62,7 +62,7 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         tuning: mint_pipeline::Tuning { mem_bytes: mem, threads: a.threads, tmp_dir: a.tmp.clone(), work_dir: a.work.clone(), ..Default::default() },
     };
     let bars = Bars::new(a.quiet.quiet || a.json.json);
-    let s = mint_pipeline::decimate(&a.input, &a.output, &o, &bars)?;
+    let s = mint_decimate::decimate(&a.input, &a.output, &o, &bars)?;
     if a.preview {
         write_before_after(&a.input, &a.output, a.quiet.quiet || a.json.json, &bars)?;
     }

@@ -1,7 +1,7 @@
 //! `mint render`: a PNG picture of one or more meshes of any size, by a
 //! streaming z-buffer rasterizer (shading, or the distance to a reference;
 //! wireframe, boundary edges). Calls `mint_render::render_files` (and
-//! `mint_pipeline::check_file` for `--show-boundary`).
+//! `mint_check::check_file` for `--show-boundary`).
 
 use crate::jobs::{QuietArg, JsonArg, MemArg};
 use crate::progress::Bars;
@@ -108,8 +108,8 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     if a.show_boundary {
         const MOST: usize = 10_000_000;
         for input in inputs {
-            let opts = mint_pipeline::CheckOptions { mem_bytes: a.mem.bytes(), weld: true, tmp_dir: None, threads, list_boundary: MOST };
-            let (report, stats) = mint_pipeline::check_file(input, &opts, &bars)?;
+            let opts = mint_check::CheckOptions { mem_bytes: a.mem.bytes(), weld: true, tmp_dir: None, threads, list_boundary: MOST };
+            let (report, stats) = mint_check::check_file(input, &opts, &bars)?;
             let positions = mint_io::MeshReader::open(input, mint_io::ReadOptions::default())?.positions();
             marks.push(stats.boundary.iter().map(|&[v, w]| [positions.get(v), positions.get(w)]).collect::<Vec<_>>());
             if report.boundary_edges as usize > MOST && !a.quiet.quiet {

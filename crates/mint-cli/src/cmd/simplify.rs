@@ -1,6 +1,6 @@
 //! `mint simplify`: the in-core stage of `mint decimate` alone, for a mesh
 //! that fits in memory: weld, quadric edge collapse (f64) to a face
-//! target, check, write. Calls `mint_pipeline::simplify_file`.
+//! target, check, write. Calls `mint_decimate::simplify_file`.
 
 use crate::jobs::{QuietArg, JsonArg};
 use crate::alloc;
@@ -42,14 +42,14 @@ pub struct SimplifyArgs {
 
 pub(crate) fn cmd_simplify(a: SimplifyArgs) -> Result<()> {
     crate::paths::check_output(&a.output, &[&a.input])?;
-    let o = mint_pipeline::SimplifyFileOptions {
+    let o = mint_decimate::SimplifyFileOptions {
         target_faces: a.faces,
         max_error: a.error,
         weld: !a.no_weld,
         write: WriteOptions { ascii: a.ascii, double: a.double, ..Default::default() },
     };
     let bars = Bars::new(a.quiet.quiet || a.json.json);
-    let s = mint_pipeline::simplify_file(&a.input, &a.output, &o, &bars)?;
+    let s = mint_decimate::simplify_file(&a.input, &a.output, &o, &bars)?;
     if a.json.json {
         let mut v = serde_json::to_value(&s)?;
         v["peak_heap_bytes"] = alloc::peak_heap().into();

@@ -16,19 +16,29 @@
 //! Memory: stage 1 is bounded by `--mem`; stage 2 holds the intermediate
 //! mesh and the simplifier's tables (measured in docs/PERFORMANCE.md).
 
-use crate::engine::run;
-use crate::error::PipelineError;
-use crate::spec::{RunSpec, Tuning, WriteSpec};
-use crate::summary::ResampleSummary;
-use crate::discretize::CHUNK_TRIANGLES;
-use mint_io::{MeshReader, TriangleChunk};
-use std::sync::Mutex;
-use crate::progress::Progress;
 use mint_core::grid::GridSize;
-use mint_io::{Format, MeshWriter, WriteOptions};
+use mint_io::{Format, MeshReader, MeshWriter, TriangleChunk, WriteOptions};
+use mint_pipeline::discretize::CHUNK_TRIANGLES;
+use mint_pipeline::progress::{Progress, BOUNDS};
+use mint_pipeline::{run, PipelineError, ResampleSummary, RunSpec, Tuning, WriteSpec};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::time::Instant;
+
+/// `Err(Cancelled)` once the run is cancelled.
+fn check_cancel(progress: &dyn Progress) -> Result<(), PipelineError> {
+    if progress.cancelled() {
+        Err(PipelineError::Cancelled)
+    } else {
+        Ok(())
+    }
+}
+
+/// A one-line error naming `path`.
+fn refuse(path: &Path, message: String) -> PipelineError {
+    PipelineError::Stage { path: path.to_path_buf(), message }
+}
 
 /// The least default intermediate size. Small targets need an intermediate
 /// finer than `4 N` for the simplifier to choose the shape: measured on
@@ -104,7 +114,7 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
     let t0 = Instant::now();
     let format = Format::from_path(output)?;
     if o.target_faces < 4 {
-        return Err(PipelineError::stage(output, format!("--faces {}: a closed surface needs at least 4 faces", o.target_faces)));
+        return Err(refuse(output, format!("--faces {}: a closed surface needs at least 4 faces", o.target_faces)));
     }
     let threads = o.tuning.thread_count();
     // 1. Area, then the cell size for the intermediate target.
@@ -186,11 +196,11 @@ fn simplify_and_write(
     let t = Instant::now();
     let (p, f, sr) = mint_mesh::simplify_with(&positions, &tris, so, &|| progress.cancelled()).map_err(|e| match e {
         mint_mesh::MeshError::Cancelled => PipelineError::Cancelled,
-        e => PipelineError::stage(input, format!("simplifying: {e}")),
+        e => refuse(input, format!("simplifying: {e}")),
     })?;
     drop((positions, tris));
     let seconds_simplify = t.elapsed().as_secs_f64();
-    crate::progress::check_cancel(progress)?;
+    check_cancel(progress)?;
     let t = Instant::now();
     let mut w = MeshWriter::create(output, format, write.clone())?;
     for v in &p {
@@ -246,7 +256,7 @@ pub fn simplify_file(input: &Path, output: &Path, o: &SimplifyFileOptions, progr
     let t0 = Instant::now();
     let format = Format::from_path(output)?;
     if o.target_faces < 4 {
-        return Err(PipelineError::stage(output, format!("--faces {}: a closed surface needs at least 4 faces", o.target_faces)));
+        return Err(refuse(output, format!("--faces {}: a closed surface needs at least 4 faces", o.target_faces)));
     }
     let (mut positions, mut tris) = mint_io::read_mesh(input)?;
     if tris.is_empty() {
@@ -255,7 +265,7 @@ pub fn simplify_file(input: &Path, output: &Path, o: &SimplifyFileOptions, progr
     let (input_faces, input_vertices) = (tris.len() as u64, positions.len() as u64);
     let welded = if o.weld { mint_mesh::weld(&mut positions, &mut tris) } else { 0 };
     let seconds_read = t0.elapsed().as_secs_f64();
-    crate::progress::check_cancel(progress)?;
+    check_cancel(progress)?;
     let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
     let (sr, seconds_simplify, seconds_write) = simplify_and_write(input, output, format, &o.write, positions, tris, &so, progress)?;
     Ok(SimplifySummary {
@@ -293,9 +303,9 @@ fn surface_area(path: &Path, threads: usize, progress: &dyn Progress) -> Result<
     if let Some(records) = reader.triangle_records()? {
         let n = records.len();
         let chunks = n.div_ceil(CHUNK_TRIANGLES as u64);
-        progress.start(crate::progress::BOUNDS, n);
+        progress.start(BOUNDS, n);
         let sums = Mutex::new(vec![0.0f64; chunks as usize]);
-        crate::pool::for_each(threads, chunks, |_| (), |_, c| {
+        mint_core::pool::for_each(threads, chunks, |_| (), |_, c| {
             if progress.cancelled() {
                 return Err(PipelineError::Cancelled);
             }
@@ -306,15 +316,15 @@ fn surface_area(path: &Path, threads: usize, progress: &dyn Progress) -> Result<
             progress.advance(b - a);
             Ok(())
         })?;
-        crate::progress::check_cancel(progress)?;
+        check_cancel(progress)?;
         progress.finish();
         return Ok((n, sums.into_inner().unwrap().iter().sum()));
     }
-    progress.start(crate::progress::BOUNDS, reader.info().face_count.unwrap_or(0));
+    progress.start(BOUNDS, reader.info().face_count.unwrap_or(0));
     let (mut faces, mut total) = (0u64, 0.0f64);
     let mut chunk = TriangleChunk::new();
     while reader.next_chunk(&mut chunk)? {
-        crate::progress::check_cancel(progress)?;
+        check_cancel(progress)?;
         total += chunk.positions.iter().map(area).sum::<f64>();
         faces += chunk.len() as u64;
         progress.advance(chunk.len() as u64);

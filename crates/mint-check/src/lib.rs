@@ -34,9 +34,8 @@
 //! positions are read through the file's memory map and are not counted.
 //! One vertex's incident faces must fit in memory.
 
-use crate::budget::Budget;
-use crate::error::PipelineError;
-use crate::progress::{Phase, Progress};
+use mint_core::progress::{Phase, Progress};
+use mint_store::Budget;
 use mint_io::{MeshReader, ReadOptions, TriangleChunk, VertexPositions};
 use mint_mesh::check::{fan_pair, is_collapsed, report_from, scan_vertex, union_face, Bbox, FaceGeom, TopologyCounts, Totals, VertexScratch, FACE_CHUNK};
 use mint_mesh::weld::position_key;
@@ -45,6 +44,37 @@ use mint_store::{Buckets, Record, StoreError};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 use std::sync::Mutex;
+
+/// Why a check failed; each text is one line naming the file.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckError {
+    /// Reading the mesh failed (bad input).
+    #[error(transparent)]
+    Io(#[from] mint_io::Error),
+    /// A spill bucket failed (full disk…).
+    #[error(transparent)]
+    Store(#[from] StoreError),
+    /// A temporary directory or file failed.
+    #[error("{path}: {op}: {source}")]
+    Temp { path: PathBuf, op: &'static str, source: std::io::Error },
+    /// The mesh is beyond what the check handles.
+    #[error("{path}: {message}")]
+    Limit { path: PathBuf, message: String },
+    /// The user interrupted the check.
+    #[error("interrupted")]
+    Cancelled,
+}
+
+/// The outcome of one worker's chunk of faces: the visit's own error
+/// first, then the sink's, then a pending Ctrl-C.
+fn chunk_outcome(visited: Result<(), mint_io::Error>, sink: Option<StoreError>, progress: &dyn Progress) -> Option<CheckError> {
+    match (visited, sink) {
+        (Err(e), _) => Some(CheckError::from(e)),
+        (_, Some(e)) => Some(e.into()),
+        _ if progress.cancelled() => Some(CheckError::Cancelled),
+        _ => None,
+    }
+}
 
 /// Welding positions (units: vertices).
 pub const WELD: Phase = Phase::named("check: weld");
@@ -155,12 +185,12 @@ fn mix(k: &[u64; 3]) -> u64 {
 /// Checks the mesh in `path` within `opts.mem_bytes` of heap; see the
 /// module docs. Returns the same report as reading the mesh whole, welding
 /// it (when `opts.weld`) and calling [`mint_mesh::check()`].
-pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> Result<(CheckReport, CheckStats), PipelineError> {
+pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> Result<(CheckReport, CheckStats), CheckError> {
     let tmp_root = opts.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
     let tmp = tempfile::Builder::new()
         .prefix(".mint-check-")
         .tempdir_in(&tmp_root)
-        .map_err(|source| PipelineError::Temp { path: tmp_root.clone(), op: "creating the check's spill directory", source })?;
+        .map_err(|source| CheckError::Temp { path: tmp_root.clone(), op: "creating the check's spill directory", source })?;
     let dir = tmp.path();
     let mut reader = MeshReader::open(path, ReadOptions { chunk_triangles: FACE_CHUNK, spill_dir: Some(dir.to_path_buf()), resolve_positions: false })?;
     let positions = reader.positions();
@@ -206,7 +236,7 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
         match links_direct(records, &id, &positions, threads, block_shift, blocks, progress) {
             Ok(p) => pass = Some((p, Vec::new())),
             // Polygons in a fixed-record file: read it as a stream.
-            Err(PipelineError::Io(e)) if e.kind() == mint_io::ErrorKind::Unsupported => {}
+            Err(CheckError::Io(e)) if e.kind() == mint_io::ErrorKind::Unsupported => {}
             Err(e) => return Err(e),
         }
     }
@@ -219,7 +249,7 @@ pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> 
     };
     let Links { mut parent, referenced, has_collapsed, geom, nfaces, last_chunk } = links;
     if nfaces > (u32::MAX / 3) as u64 {
-        return Err(PipelineError::stage(path, format!("{nfaces} faces: `check` handles at most {} (u32 indices)", u32::MAX / 3)));
+        return Err(CheckError::Limit { path: path.to_path_buf(), message: format!("{nfaces} faces: `check` handles at most {} (u32 indices)", u32::MAX / 3) });
     }
 
     lap("links");
@@ -396,16 +426,16 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
     block_shift: u32,
     blocks: u64,
     progress: &dyn Progress,
-) -> Result<Links, PipelineError> {
+) -> Result<Links, CheckError> {
     let n = records.len();
     let nv = positions.len();
     let chunks = n.div_ceil(FACE_CHUNK as u64) as usize;
     let geoms: Mutex<Vec<FaceGeom>> = Mutex::new(vec![FaceGeom::default(); chunks]);
-    let prefetch_corners = crate::deref::prefetch_pays(records, positions, (0, n));
+    let prefetch_corners = records.prefetch_pays(positions, (0, n));
     progress.start(LINKS, n);
     // The workers measure each chunk's geometry; beside them, this thread
     // links every face in order (the union-find is one sequential pass).
-    let (failed, _, uf) = crate::pool::run(
+    let (failed, _, uf) = mint_core::pool::run(
         threads,
         chunks as u64,
         |_| Vec::<[u32; 3]>::with_capacity(FACE_CHUNK),
@@ -414,7 +444,7 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
             faces.clear();
             let visited = records.visit_indices(a, b, |_, t| faces.push(t.map(id)));
             let g = if visited.is_ok() { chunk_geometry(faces, positions, prefetch_corners) } else { FaceGeom::default() };
-            if let Some(e) = crate::discretize::chunk_outcome(visited, None, progress) {
+            if let Some(e) = chunk_outcome(visited, None, progress) {
                 return Err(e);
             }
             geoms.lock().unwrap()[c as usize] = g;
@@ -422,7 +452,7 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
         },
         drop,
         |stop| {
-            let uf = (|| -> Result<(Vec<u32>, Bits, Bits, Vec<u32>), PipelineError> {
+            let uf = (|| -> Result<(Vec<u32>, Bits, Bits, Vec<u32>), CheckError> {
                 let mut parent: Vec<u32> = (0..nv).collect();
                 let mut referenced = Bits::new(nv as usize);
                 let mut has_collapsed = Bits::new(nv as usize);
@@ -450,7 +480,7 @@ fn links_direct<I: Fn(u32) -> u32 + Sync>(
                         break;
                     }
                     if progress.cancelled() {
-                        return Err(PipelineError::Cancelled);
+                        return Err(CheckError::Cancelled);
                     }
                 }
                 Ok((parent, referenced, has_collapsed, last_chunk))
@@ -478,7 +508,7 @@ fn chunk_geometry(faces: &[[u32; 3]], positions: &VertexPositions, prefetch: boo
     // Compiled for AVX2 as well, as resample's per-triangle loop is (see
     // `kernels::visit_chunk`): the same operations, fewer register copies.
     #[cfg(target_arch = "x86_64")]
-    if crate::kernels::use_avx2() {
+    if mint_io::use_avx2() {
         #[target_feature(enable = "avx2")]
         unsafe fn with_avx2(faces: &[[u32; 3]], positions: &VertexPositions, prefetch: bool) -> FaceGeom {
             if prefetch {
@@ -502,7 +532,7 @@ fn chunk_geometry(faces: &[[u32; 3]], positions: &VertexPositions, prefetch: boo
 fn chunk_geometry_body<const PREFETCH: bool>(faces: &[[u32; 3]], positions: &VertexPositions) -> FaceGeom {
     let mut g = FaceGeom::default();
     for (k, f) in faces.iter().enumerate() {
-        // Only where locality is poor; see `deref::prefetch_pays`.
+        // Only where locality is poor; see `TriangleRecords::prefetch_pays`.
         if !PREFETCH {
         } else if let Some(h) = faces.get(k + AHEAD) {
             for &v in h {
@@ -519,7 +549,7 @@ fn chunk_geometry_body<const PREFETCH: bool>(faces: &[[u32; 3]], positions: &Ver
 
 /// The faces of any file, streamed in order by one thread: the first pass
 /// and every corner (into `out`) at once.
-fn faces_streamed(reader: &mut MeshReader, id: &dyn Fn(u32) -> u32, positions: &VertexPositions, blocks: u64, mut out: Sink, progress: &dyn Progress) -> Result<(Links, Sink), PipelineError> {
+fn faces_streamed(reader: &mut MeshReader, id: &dyn Fn(u32) -> u32, positions: &VertexPositions, blocks: u64, mut out: Sink, progress: &dyn Progress) -> Result<(Links, Sink), CheckError> {
     let nv = positions.len();
     let mut parent: Vec<u32> = (0..nv).collect();
     let mut referenced = Bits::new(nv as usize);
@@ -547,7 +577,7 @@ fn faces_streamed(reader: &mut MeshReader, id: &dyn Fn(u32) -> u32, positions: &
         nfaces += chunk.indices.len() as u64;
         progress.advance(chunk.indices.len() as u64);
         if progress.cancelled() {
-            return Err(PipelineError::Cancelled);
+            return Err(CheckError::Cancelled);
         }
     }
     if in_chunk > 0 {
@@ -588,7 +618,7 @@ impl Judge<'_> {
     /// Judges vertex block `blk`: takes its faces from every sink,
     /// groups their corners in the block by vertex (a counting sort) and scans each vertex; Euler
     /// characteristics and flags go to the vertex's component.
-    fn block(&self, blk: u64, sinks: &[Mutex<Sink>], j: &mut Judged) -> Result<(), PipelineError> {
+    fn block(&self, blk: u64, sinks: &[Mutex<Sink>], j: &mut Judged) -> Result<(), CheckError> {
         let v0 = (blk * self.block_vertices) as u32;
         let v1 = ((blk + 1) * self.block_vertices).min(self.nv as u64) as u32;
         let n = (v1 - v0) as usize;
@@ -704,7 +734,7 @@ fn corners_and_vertices<I: Fn(u32) -> u32 + Sync>(
     last_chunk: &[u32],
     judge: &Judge,
     progress: &dyn Progress,
-) -> Result<(TopologyCounts, Vec<(u32, u32)>, Vec<[u32; 2]>), PipelineError> {
+) -> Result<(TopologyCounts, Vec<(u32, u32)>, Vec<[u32; 2]>), CheckError> {
     let n = records.map_or(0, |r| r.len());
     let chunks = n.div_ceil(FACE_CHUNK as u64) as usize;
     let mut order: Vec<u32> = (0..last_chunk.len() as u32).filter(|&b| last_chunk[b as usize] != UNTOUCHED).collect();
@@ -712,8 +742,8 @@ fn corners_and_vertices<I: Fn(u32) -> u32 + Sync>(
     let released = if chunks == 0 { order.len() } else { 0 };
     let schedule = Mutex::new(Schedule { next_chunk: 0, done: vec![false; chunks], prefix: 0, order, released, handed: 0, stop: false });
     let wake = std::sync::Condvar::new();
-    let failed: Mutex<Option<PipelineError>> = Mutex::new(None);
-    let fail = |e: PipelineError| {
+    let failed: Mutex<Option<CheckError>> = Mutex::new(None);
+    let fail = |e: CheckError| {
         failed.lock().unwrap().get_or_insert(e);
         schedule.lock().unwrap().stop = true;
         wake.notify_all();
@@ -759,7 +789,7 @@ fn corners_and_vertices<I: Fn(u32) -> u32 + Sync>(
                                         }
                                     })
                                 };
-                                if let Some(e) = crate::discretize::chunk_outcome(visited, err, progress) {
+                                if let Some(e) = chunk_outcome(visited, err, progress) {
                                     fail(e);
                                     return j;
                                 }
@@ -786,7 +816,7 @@ fn corners_and_vertices<I: Fn(u32) -> u32 + Sync>(
                                 let v1 = ((blk + 1) * judge.block_vertices).min(judge.nv as u64);
                                 progress.advance(v1 - blk * judge.block_vertices);
                                 if progress.cancelled() {
-                                    fail(PipelineError::Cancelled);
+                                    fail(CheckError::Cancelled);
                                     return j;
                                 }
                             }
@@ -820,7 +850,7 @@ fn corners_and_vertices<I: Fn(u32) -> u32 + Sync>(
 /// positions into small buckets of `(hash, vertex)`; then each bucket's
 /// hashes go into a table that fits the caches, and only vertices whose
 /// hashes collide are compared by position.
-fn positions_pass(positions: &VertexPositions, hash: bool, dir: &Path, budget: &Budget, threads: usize, progress: &dyn Progress, stats: &mut CheckStats) -> Result<(Bbox, Option<Vec<u32>>, u64), PipelineError> {
+fn positions_pass(positions: &VertexPositions, hash: bool, dir: &Path, budget: &Budget, threads: usize, progress: &dyn Progress, stats: &mut CheckStats) -> Result<(Bbox, Option<Vec<u32>>, u64), CheckError> {
     let nv = positions.len();
     // Buckets that each fit a sixteenth of the budget (a power of two, at
     // most 4096; few, so that spilling writes large pieces). The buckets
@@ -830,7 +860,7 @@ fn positions_pass(positions: &VertexPositions, hash: bool, dir: &Path, budget: &
     let weld_share = budget.check_weld_per_thread();
     // Blocks of 2^20 vertices; each worker keeps its own box and buckets.
     const BLOCK: u32 = 1 << 20;
-    let parts = crate::pool::collect(
+    let parts = mint_core::pool::collect(
         threads,
         nv.div_ceil(BLOCK) as u64,
         |t| (Bbox::empty(), Buckets::<Hashed>::new(dir, &format!("weld-{t}"), if hash { nb } else { 1 }, weld_share)),
@@ -874,7 +904,7 @@ fn positions_pass(positions: &VertexPositions, hash: bool, dir: &Path, budget: &
         start: Vec<usize>,
     }
     let sets = &sets;
-    let merges: Vec<Vec<(u32, u32)>> = crate::pool::collect(
+    let merges: Vec<Vec<(u32, u32)>> = mint_core::pool::collect(
         threads,
         nb as u64,
         |_| Scratch::default(),

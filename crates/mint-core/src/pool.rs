@@ -1,4 +1,4 @@
-//! The engine's one worker pool: `threads` scoped workers take numbered
+//! The one worker pool of mint's parallel passes (the engine's, `check`'s): `threads` scoped workers take numbered
 //! items (chunks of faces, vertex blocks, buckets) from a shared counter,
 //! in order, until the items run out or one fails; the first error wins
 //! and stops the others before their next item. The calling thread may run
