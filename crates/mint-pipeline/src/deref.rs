@@ -343,39 +343,72 @@ pub(crate) fn discretize_sorted(
         .prefix(".mint-deref-")
         .tempdir_in(spill_dir)
         .map_err(|source| PipelineError::Temp { path: spill_dir.to_path_buf(), op: "creating the dereference spill directory", source })?;
+    let threads = threads.max(1);
+    let nv = positions.len() as u64;
+    let job = |per_vertex: u64| {
+        // Vertex blocks stay in cache (and a vertex's place in its block
+        // fits V_BITS).
+        let block_vertices = (BLOCK_BYTES / per_vertex).min(1 << V_BITS).max(nv.div_ceil(MAX_BUCKETS)).max(1);
+        SortJob { positions, grid, threads, progress, xf, dir: tmp.path(), budget, nv, block_vertices, vertex_blocks: nv.div_ceil(block_vertices).max(1) }
+    };
     if positions.exact_in_f32() {
-        run::<f32>(faces, positions, grid, store, threads, progress, xf, tmp.path(), budget)
+        run::<f32>(faces, store, &job(3 * f32::SIZE as u64))
     } else {
-        run::<f64>(faces, positions, grid, store, threads, progress, xf, tmp.path(), budget)
+        run::<f64>(faces, store, &job(3 * f64::SIZE as u64))
     }
 }
 
-#[allow(clippy::too_many_arguments)]
-fn run<C: Coord>(
-    mut faces: Faces,
-    positions: &VertexPositions,
-    grid: &Grid,
-    store: &mut ShardWriter,
+/// What every step of one sorted dereference shares.
+struct SortJob<'a> {
+    positions: &'a VertexPositions,
+    grid: &'a Grid,
     threads: usize,
-    progress: &dyn Progress,
-    xf: Option<&Transform>,
-    dir: &Path,
-    budget: &mint_store::Budget,
-) -> Result<(u64, Vec<f64>, SortStats), PipelineError> {
-    let threads = threads.max(1);
-    let nv = positions.len() as u64;
-    // Vertex blocks stay in cache (and a vertex's place in its block fits
-    // V_BITS). Face blocks are whole chunks: one chunk (its triangles stay
-    // in cache while corners are placed) unless that makes more than
-    // MAX_BUCKETS of them.
-    let per_vertex = 3 * C::SIZE as u64;
-    let block_vertices = (BLOCK_BYTES / per_vertex).min(1 << V_BITS).max(nv.div_ceil(MAX_BUCKETS)).max(1);
-    let vertex_blocks = nv.div_ceil(block_vertices).max(1);
+    progress: &'a dyn Progress,
+    xf: Option<&'a Transform>,
+    /// The spill directory.
+    dir: &'a Path,
+    budget: &'a mint_store::Budget,
+    nv: u64,
+    /// Vertices per vertex block, and the blocks.
+    block_vertices: u64,
+    vertex_blocks: u64,
+}
+
+/// The three steps of a sorted dereference, in order: scatter, join,
+/// assemble (see the module docs).
+fn run<C: Coord>(faces: Faces, store: &mut ShardWriter, job: &SortJob) -> Result<(u64, Vec<f64>, SortStats), PipelineError> {
+    let trace = std::env::var_os("MINT_DEREF_TRACE").is_some();
+    let t0 = std::time::Instant::now();
+    let (blocks, scatter, nfaces) = scatter_corners(faces, job)?;
+    if trace {
+        eprintln!("deref: scatter {:.2}s ({} vertex blocks of {}, {} face blocks)", t0.elapsed().as_secs_f64(), job.vertex_blocks, job.block_vertices, blocks.spans.len());
+    }
+    let t0 = std::time::Instant::now();
+    let (gather, spilled) = join_blocks::<C>(scatter, &blocks, job)?;
+    let stats = SortStats { vertex_blocks: job.vertex_blocks, face_blocks: blocks.spans.len().max(1) as u64, bytes_spilled: spilled };
+    if trace {
+        eprintln!("deref: join {:.2}s; {} bytes spilled", t0.elapsed().as_secs_f64(), spilled);
+    }
+    let t0 = std::time::Instant::now();
+    let volumes = assemble::<C>(gather, &blocks, store, job, nfaces)?;
+    if trace {
+        eprintln!("deref: assemble and discretize {:.2}s", t0.elapsed().as_secs_f64());
+    }
+    Ok((nfaces, volumes, stats))
+}
+
+/// Step 1: every face's corners to the buckets of their vertex blocks
+/// (one set of buckets per worker), numbering the faces in blocks of whole
+/// chunks. Returns the face blocks, the buckets to read, and the faces.
+fn scatter_corners(mut faces: Faces, job: &SortJob) -> Result<(Blocks, Vec<Mutex<BucketReader<Corner>>>, u64), PipelineError> {
+    let SortJob { threads, progress, dir, budget, block_vertices, vertex_blocks, .. } = *job;
     let chunk = CHUNK_TRIANGLES as u64;
     let total_faces = match &faces {
         Faces::Records { records, first, end } => (*end).min(records.len()).saturating_sub(*first),
         Faces::Reader(r) => r.info().face_count.unwrap_or(0),
     };
+    // Face blocks are whole chunks: one chunk (its triangles stay in cache
+    // while corners are placed) unless that makes more than MAX_BUCKETS.
     let max_block = (total_faces.div_ceil(MAX_BUCKETS - 1).div_ceil(chunk) * chunk).max(chunk);
     let mut blocks = Blocks::new(max_block);
     let scatter_budget = budget.sort_buckets_per_thread();
@@ -390,10 +423,6 @@ fn run<C: Coord>(
         }
         Ok(())
     };
-
-    let trace = std::env::var_os("MINT_DEREF_TRACE").is_some();
-    let t0 = std::time::Instant::now();
-    // 1. Scatter corners to vertex blocks.
     progress.start(SCATTER, total_faces);
     let nfaces;
     match &mut faces {
@@ -448,14 +477,16 @@ fn run<C: Coord>(
         }
     }
     progress.finish();
-    let scatter: Vec<Mutex<BucketReader<Corner>>> = scatter.into_iter().map(|m| Mutex::new(m.into_inner().unwrap().finish())).collect();
-    let face_blocks = blocks.spans.len().max(1);
-    if trace {
-        eprintln!("deref: scatter {:.2}s ({} vertex blocks of {}, {} face blocks of <= {})", t0.elapsed().as_secs_f64(), vertex_blocks, block_vertices, face_blocks, max_block);
-    }
-    let t0 = std::time::Instant::now();
+    let scatter = scatter.into_iter().map(|m| Mutex::new(m.into_inner().unwrap().finish())).collect();
+    Ok((blocks, scatter, nfaces))
+}
 
-    // 2. Join each vertex block with its corners.
+/// Step 2: each vertex block's positions joined with its corners, into
+/// the buckets of their face blocks (one set per worker). Returns those
+/// buckets to read, and the bytes both steps spilled.
+fn join_blocks<C: Coord>(scatter: Vec<Mutex<BucketReader<Corner>>>, blocks: &Blocks, job: &SortJob) -> Result<(Vec<BucketReader<Resolved<C>>>, u64), PipelineError> {
+    let SortJob { positions, threads, progress, dir, budget, nv, block_vertices, vertex_blocks, .. } = *job;
+    let face_blocks = blocks.spans.len().max(1);
     let gather_budget = budget.sort_buckets_per_thread();
     let gather: Vec<Mutex<Buckets<Resolved<C>>>> = (0..threads).map(|t| Mutex::new(Buckets::new(dir, &format!("positions-{t}"), face_blocks, gather_budget))).collect();
     progress.start(JOIN, vertex_blocks);
@@ -507,32 +538,15 @@ fn run<C: Coord>(
     }
     let gather: Vec<BucketReader<Resolved<C>>> = gather.into_iter().map(|m| m.into_inner().unwrap().finish()).collect();
     spilled += gather.iter().map(|g| g.bytes_spilled()).sum::<u64>();
-    let stats = SortStats { vertex_blocks, face_blocks: face_blocks as u64, bytes_spilled: spilled };
-    if trace {
-        eprintln!("deref: join {:.2}s; {} bytes spilled", t0.elapsed().as_secs_f64(), spilled);
-    }
-    let t0 = std::time::Instant::now();
-
-    // 3. Assemble face blocks and discretize them chunk by chunk.
-    let volumes = assemble::<C>(gather, &blocks, grid, store, threads, progress, xf, nfaces)?;
-    if trace {
-        eprintln!("deref: assemble and discretize {:.2}s", t0.elapsed().as_secs_f64());
-    }
-    Ok((nfaces, volumes, stats))
+    Ok((gather, spilled))
 }
 
-#[allow(clippy::too_many_arguments)]
-fn assemble<C: Coord>(
-    gather: Vec<BucketReader<Resolved<C>>>,
-    blocks: &Blocks,
-    grid: &Grid,
-    store: &mut ShardWriter,
-    threads: usize,
-    progress: &dyn Progress,
-    xf: Option<&Transform>,
-    nfaces: u64,
-) -> Result<Vec<f64>, PipelineError> {
+/// Step 3: each face block's triangles assembled from its buckets and
+/// discretized chunk by chunk into `store`; six times each chunk's signed
+/// volume, in chunk order.
+fn assemble<C: Coord>(gather: Vec<BucketReader<Resolved<C>>>, blocks: &Blocks, store: &mut ShardWriter, job: &SortJob, nfaces: u64) -> Result<Vec<f64>, PipelineError> {
     use crossbeam_channel::bounded;
+    let SortJob { grid, threads, progress, xf, .. } = *job;
     let [_, nb, _] = grid.local_dims();
     let local = LocalMap::new(grid);
     let axis = grid.slab_axis;
