@@ -39,10 +39,10 @@ pub(crate) fn backend(format: Format) -> Backend {
             create: |path, o| boxed(ply::write::PlyWriter::create(path, o)),
             f32_only: false,
         },
-        Format::Obj => Backend { info: obj::info, open: obj::open, create: |path, o| boxed(obj::ObjWriter::create(path, o)), f32_only: false },
+        Format::Obj => Backend { info: obj::info, open: obj::open, create: |path, o| boxed(obj::writer(path, o)), f32_only: false },
         Format::Stl => Backend { info: stl::info, open: stl::open, create: |path, o| boxed(stl::StlWriter::create(path, o)), f32_only: true },
-        Format::Off => Backend { info: off::info, open: off::open, create: |path, o| boxed(off::OffWriter::create(path, o)), f32_only: false },
-        Format::Mesh => Backend { info: mesh::info, open: mesh::open, create: |path, o| boxed(mesh::MeshFmtWriter::create(path, o)), f32_only: false },
+        Format::Off => Backend { info: off::info, open: off::open, create: |path, o| boxed(off::writer(path, o)), f32_only: false },
+        Format::Mesh => Backend { info: mesh::info, open: mesh::open, create: |path, o| boxed(mesh::writer(path, o)), f32_only: false },
         Format::Raw => Backend { info: raw::info, open: raw::open, create: |path, o| boxed(raw::RawWriter::create(path, o)), f32_only: false },
         Format::Vrml => Backend { info: vrml::info, open: vrml::open, create: |path, o| boxed(vrml::VrmlWriter::create(path, o)), f32_only: false },
         Format::ThreeDs => {

@@ -33,6 +33,7 @@ pub mod convert;
 pub mod error;
 pub mod format;
 mod formats;
+mod line_formats;
 mod mapped;
 mod mesh;
 mod obj;

@@ -17,17 +17,17 @@
 //! Reading takes two passes over the mapped file, like OBJ: [`open`] spills
 //! the vertices and finds the index base; [`MeshBody`] streams the faces.
 
-use std::io::Write;
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::error::{show_token, Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
-use crate::positions::not_finite;
-use crate::positions::{Emit, Positions};
-use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, PolygonFan, ReadStats};
+use crate::positions::Positions;
+use crate::backend::{ElementInfo, MeshInfo, Opened, PolygonFan};
 use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
-use crate::backend::{write_point, FormatWriter, OutFile, WriteOptions};
+use crate::backend::WriteOptions;
+use crate::line_formats::{FaceLines, TextStyle, TextWriter};
 use crate::Format;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -201,89 +201,67 @@ struct MeshBody {
     rec_at: usize,
 }
 
-impl FaceStream for MeshBody {
-    fn fill(&mut self, out: &mut Emit, stats: &mut ReadStats) -> Result<bool, Error> {
-        let map = self.map.clone();
-        let data = map.bytes();
-        let nv = out.pos.count();
-        let mut lines = Lines::new(data, self.pos);
-        loop {
-            match self.fan.emit(out) {
-                Ok(true) => {}
-                Ok(false) => {
-                    self.pos = lines.pos;
-                    return Ok(true);
-                }
-                Err(v) => return Err(not_finite(&self.path, v, out.pos).at_element("f").at_record(self.f_rec - 1).at_line(line_of(data, self.rec_at))),
-            }
-            let Some((at, line)) = lines.next_line() else {
-                self.pos = data.len();
-                return Ok(false);
-            };
-            let (kind, rest) = classify(&self.path, data, line, at)?;
-            if kind != Kind::Face {
-                continue;
-            }
-            self.fan.clear();
-            for tok in words(rest) {
-                let i = parse_i64(tok).unwrap_or(-1) - self.base;
-                if i < 0 || i >= nv as i64 {
-                    return Err(Error::new(
-                        ErrorKind::Index,
-                        &self.path,
-                        format!(
-                            "vertex index {} is out of range ({} vertices, indices read as {}-based)",
-                            i + self.base,
-                            nv,
-                            self.base
-                        ),
-                    )
-                    .at_element("f")
-                    .at_record(self.f_rec)
-                    .at_line(line_of(data, at))
-                    .at_byte(at as u64));
-                }
-                self.fan.push(i as u32);
-            }
-            self.f_rec += 1;
-            self.rec_at = at;
-            self.fan.ready(stats);
+impl FaceLines for MeshBody {
+    fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn map(&self) -> Arc<Mapped> {
+        self.map.clone()
+    }
+
+    fn pos_done(&self) -> usize {
+        self.pos
+    }
+
+    fn state(&mut self) -> (&mut PolygonFan, &mut usize) {
+        (&mut self.fan, &mut self.pos)
+    }
+
+    fn locate(&self, e: Error, data: &[u8]) -> Error {
+        e.at_element("f").at_record(self.f_rec - 1).at_line(line_of(data, self.rec_at))
+    }
+
+    fn next_line<'d>(&mut self, lines: &mut Lines<'d>, _data: &'d [u8]) -> Result<Option<(usize, Cow<'d, [u8]>)>, Error> {
+        Ok(lines.next_line().map(|(a, l)| (a, Cow::Borrowed(l))))
+    }
+
+    fn face(&mut self, data: &[u8], at: usize, line: &[u8], nv: u32) -> Result<bool, Error> {
+        let (kind, rest) = classify(&self.path, data, line, at)?;
+        if kind != Kind::Face {
+            return Ok(false);
         }
-    }
-
-    fn bytes_done(&self) -> u64 {
-        self.pos as u64
+        self.fan.clear();
+        for tok in words(rest) {
+            let i = parse_i64(tok).unwrap_or(-1) - self.base;
+            if i < 0 || i >= nv as i64 {
+                return Err(Error::new(
+                    ErrorKind::Index,
+                    &self.path,
+                    format!(
+                        "vertex index {} is out of range ({} vertices, indices read as {}-based)",
+                        i + self.base,
+                        nv,
+                        self.base
+                    ),
+                )
+                .at_element("f")
+                .at_record(self.f_rec)
+                .at_line(line_of(data, at))
+                .at_byte(at as u64));
+            }
+            self.fan.push(i as u32);
+        }
+        self.f_rec += 1;
+        self.rec_at = at;
+        Ok(true)
     }
 }
 
-/// Writes `mesh`: header, `v` lines, `f` lines with 0-based indices.
-pub(crate) struct MeshFmtWriter {
-    out: OutFile,
-    double: bool,
-}
-
-impl MeshFmtWriter {
-    pub(crate) fn create(path: &Path, opts: &WriteOptions) -> Result<MeshFmtWriter, Error> {
-        let mut out = OutFile::create(path)?;
-        out.put(b"mesh\n# written by mint-io; face indices start at 0\n")?;
-        Ok(MeshFmtWriter { out, double: opts.double })
-    }
-}
-
-impl FormatWriter for MeshFmtWriter {
-    fn vertex(&mut self, p: [f64; 3]) -> Result<(), Error> {
-        write_point(self.out.text(), b"v ", p, self.double, b"\n");
-        self.out.maybe_flush()
-    }
-
-    fn face(&mut self, f: [u32; 3]) -> Result<(), Error> {
-        let _ = writeln!(self.out.text(), "f {} {} {}", f[0], f[1], f[2]);
-        self.out.maybe_flush()
-    }
-
-    fn finish(self: Box<Self>, _vertices: u64, _faces: u64) -> Result<u64, Error> {
-        self.out.commit()
-    }
+/// `mesh` as mint writes it: its header, `v` lines, `f` lines with
+/// 0-based indices.
+pub(crate) fn writer(path: &Path, opts: &WriteOptions) -> Result<TextWriter, Error> {
+    TextWriter::create(path, opts, TextStyle { header: b"mesh\n# written by mint-io; face indices start at 0\n", vertex: b"v ", face: "f ", base: 0, counts: None })
 }
 
 #[cfg(test)]

@@ -13,17 +13,17 @@
 //!
 //! Writing: `v` lines, then `f` lines with 1-based indices.
 
-use std::io::Write;
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::error::{show_token, Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
-use crate::positions::not_finite;
-use crate::positions::{Emit, Positions};
-use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, PolygonFan, ReadStats};
+use crate::positions::Positions;
+use crate::backend::{ElementInfo, MeshInfo, Opened, PolygonFan};
 use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
-use crate::backend::{write_point, FormatWriter, OutFile, WriteOptions};
+use crate::backend::WriteOptions;
+use crate::line_formats::{FaceLines, TextStyle, TextWriter};
 use crate::Format;
 
 /// The kind of an OBJ line we care about.
@@ -198,71 +198,49 @@ impl ObjBody {
     }
 }
 
-impl FaceStream for ObjBody {
-    fn fill(&mut self, out: &mut Emit, stats: &mut ReadStats) -> Result<bool, Error> {
-        let map = self.map.clone();
-        let data = map.bytes();
-        let nv = out.pos.count();
-        let mut lines = Lines::new(data, self.pos);
-        loop {
-            match self.fan.emit(out) {
-                Ok(true) => {}
-                Ok(false) => {
-                    self.pos = lines.pos;
-                    return Ok(true);
-                }
-                Err(v) => return Err(err_at(not_finite(&self.path, v, out.pos), data, "f", self.f_rec - 1, self.rec_at)),
+impl FaceLines for ObjBody {
+    fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn map(&self) -> Arc<Mapped> {
+        self.map.clone()
+    }
+
+    fn pos_done(&self) -> usize {
+        self.pos
+    }
+
+    fn state(&mut self) -> (&mut PolygonFan, &mut usize) {
+        (&mut self.fan, &mut self.pos)
+    }
+
+    fn locate(&self, e: Error, data: &[u8]) -> Error {
+        err_at(e, data, "f", self.f_rec - 1, self.rec_at)
+    }
+
+    fn next_line<'d>(&mut self, lines: &mut Lines<'d>, _data: &'d [u8]) -> Result<Option<(usize, Cow<'d, [u8]>)>, Error> {
+        Ok(lines.next_joined())
+    }
+
+    fn face(&mut self, data: &[u8], at: usize, line: &[u8], nv: u32) -> Result<bool, Error> {
+        match classify(line) {
+            (Kind::Vertex, _) => self.v_seen += 1,
+            (Kind::Face, rest) => {
+                self.parse_face(data, rest, nv, at)?;
+                self.f_rec += 1;
+                self.rec_at = at;
+                return Ok(true);
             }
-            let Some((at, line)) = lines.next_joined() else {
-                self.pos = data.len();
-                return Ok(false);
-            };
-            match classify(&line) {
-                (Kind::Vertex, _) => self.v_seen += 1,
-                (Kind::Face, rest) => {
-                    self.parse_face(data, rest, nv, at)?;
-                    self.f_rec += 1;
-                    self.rec_at = at;
-                    self.fan.ready(stats);
-                }
-                _ => {}
-            }
+            _ => {}
         }
-    }
-
-    fn bytes_done(&self) -> u64 {
-        self.pos as u64
+        Ok(false)
     }
 }
 
-/// Writes `v` then `f` lines.
-pub(crate) struct ObjWriter {
-    out: OutFile,
-    double: bool,
-}
-
-impl ObjWriter {
-    pub(crate) fn create(path: &Path, opts: &WriteOptions) -> Result<ObjWriter, Error> {
-        let mut out = OutFile::create(path)?;
-        out.put(b"# written by mint-io\n")?;
-        Ok(ObjWriter { out, double: opts.double })
-    }
-}
-
-impl FormatWriter for ObjWriter {
-    fn vertex(&mut self, p: [f64; 3]) -> Result<(), Error> {
-        write_point(self.out.text(), b"v ", p, self.double, b"\n");
-        self.out.maybe_flush()
-    }
-
-    fn face(&mut self, f: [u32; 3]) -> Result<(), Error> {
-        let _ = writeln!(self.out.text(), "f {} {} {}", f[0] as u64 + 1, f[1] as u64 + 1, f[2] as u64 + 1);
-        self.out.maybe_flush()
-    }
-
-    fn finish(self: Box<Self>, _vertices: u64, _faces: u64) -> Result<u64, Error> {
-        self.out.commit()
-    }
+/// OBJ as mint writes it: `v` then `f` lines, indices from 1.
+pub(crate) fn writer(path: &Path, opts: &WriteOptions) -> Result<TextWriter, Error> {
+    TextWriter::create(path, opts, TextStyle { header: b"# written by mint-io\n", vertex: b"v ", face: "f ", base: 1, counts: None })
 }
 
 #[cfg(test)]

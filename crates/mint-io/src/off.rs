@@ -14,18 +14,18 @@
 //! follow the last face. The writer reserves the counts line with space
 //! padding and rewrites it at `finish`.
 
-use std::io::Write;
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::error::{show_token, Error, ErrorKind};
 use crate::format::off_keyword;
 use crate::mapped::{Mapped, SpillFile};
-use crate::positions::not_finite;
-use crate::positions::{Emit, Positions};
-use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, PolygonFan, ReadStats};
+use crate::positions::Positions;
+use crate::backend::{ElementInfo, MeshInfo, Opened, PolygonFan};
 use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
-use crate::backend::{write_point, FormatWriter, OutFile, WriteOptions};
+use crate::backend::WriteOptions;
+use crate::line_formats::{FaceLines, TextStyle, TextWriter};
 use crate::Format;
 
 /// The next line with content, `#` comments removed: (start, content).
@@ -208,61 +208,60 @@ impl OffBody {
     }
 }
 
-impl FaceStream for OffBody {
-    fn fill(&mut self, out: &mut Emit, stats: &mut ReadStats) -> Result<bool, Error> {
-        let map = self.map.clone();
-        let data = map.bytes();
-        let nv = out.pos.count();
-        let mut lines = Lines::new(data, self.pos);
-        loop {
-            match self.fan.emit(out) {
-                Ok(true) => {}
-                Ok(false) => {
-                    self.pos = lines.pos;
-                    return Ok(true);
-                }
-                Err(v) => return Err(at(not_finite(&self.path, v, out.pos), data, "face", Some(self.rec - 1), self.rec_at)),
-            }
-            if self.rec == self.nf {
-                // Only blank lines and comments may follow.
-                if let Some((a, line)) = content_line(&mut lines) {
-                    let tok = words(line).next().unwrap_or(b"");
-                    return Err(at(
-                        Error::format(&self.path, format!("unexpected data after the last face: {} (the counts line does not match the body)", show_token(tok))),
-                        data,
-                        "face",
-                        Some(self.nf),
-                        a,
-                    ));
-                }
-                self.pos = data.len();
-                return Ok(false);
-            }
-            let Some((a, line)) = content_line(&mut lines) else {
+impl FaceLines for OffBody {
+    fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn map(&self) -> Arc<Mapped> {
+        self.map.clone()
+    }
+
+    fn pos_done(&self) -> usize {
+        self.pos
+    }
+
+    fn state(&mut self) -> (&mut PolygonFan, &mut usize) {
+        (&mut self.fan, &mut self.pos)
+    }
+
+    fn locate(&self, e: Error, data: &[u8]) -> Error {
+        at(e, data, "face", Some(self.rec - 1), self.rec_at)
+    }
+
+    fn next_line<'d>(&mut self, lines: &mut Lines<'d>, data: &'d [u8]) -> Result<Option<(usize, Cow<'d, [u8]>)>, Error> {
+        if self.rec == self.nf {
+            // Only blank lines and comments may follow.
+            if let Some((a, line)) = content_line(lines) {
+                let tok = words(line).next().unwrap_or(b"");
                 return Err(at(
-                    Error::format(&self.path, format!("unexpected end of file: {} faces declared, {} found (truncated file?)", self.nf, self.rec)),
+                    Error::format(&self.path, format!("unexpected data after the last face: {} (the counts line does not match the body)", show_token(tok))),
                     data,
                     "face",
-                    Some(self.rec),
-                    data.len(),
+                    Some(self.nf),
+                    a,
                 ));
-            };
-            self.parse_face(data, line, a, nv)?;
-            self.rec += 1;
-            self.rec_at = a;
-            self.fan.ready(stats);
+            }
+            return Ok(None);
+        }
+        match content_line(lines) {
+            Some((a, line)) => Ok(Some((a, Cow::Borrowed(line)))),
+            None => Err(at(
+                Error::format(&self.path, format!("unexpected end of file: {} faces declared, {} found (truncated file?)", self.nf, self.rec)),
+                data,
+                "face",
+                Some(self.rec),
+                data.len(),
+            )),
         }
     }
 
-    fn bytes_done(&self) -> u64 {
-        self.pos as u64
+    fn face(&mut self, data: &[u8], a: usize, line: &[u8], nv: u32) -> Result<bool, Error> {
+        self.parse_face(data, line, a, nv)?;
+        self.rec += 1;
+        self.rec_at = a;
+        Ok(true)
     }
-}
-
-/// Writes OFF; the counts line is reserved and patched at `finish`.
-pub(crate) struct OffWriter {
-    out: OutFile,
-    double: bool,
 }
 
 /// Width of the reserved counts line, without its newline: two 20-digit
@@ -273,30 +272,10 @@ fn counts_line(v: u64, f: u64) -> String {
     format!("{:<width$}\n", format!("{v} {f} 0"), width = COUNTS_WIDTH)
 }
 
-impl OffWriter {
-    pub(crate) fn create(path: &Path, opts: &WriteOptions) -> Result<OffWriter, Error> {
-        let mut out = OutFile::create(path)?;
-        out.put(b"OFF\n")?;
-        out.put(counts_line(0, 0).as_bytes())?;
-        Ok(OffWriter { out, double: opts.double })
-    }
-}
-
-impl FormatWriter for OffWriter {
-    fn vertex(&mut self, p: [f64; 3]) -> Result<(), Error> {
-        write_point(self.out.text(), b"", p, self.double, b"\n");
-        self.out.maybe_flush()
-    }
-
-    fn face(&mut self, f: [u32; 3]) -> Result<(), Error> {
-        let _ = writeln!(self.out.text(), "3 {} {} {}", f[0], f[1], f[2]);
-        self.out.maybe_flush()
-    }
-
-    fn finish(mut self: Box<Self>, vertices: u64, faces: u64) -> Result<u64, Error> {
-        self.out.patch(4, counts_line(vertices, faces).as_bytes())?;
-        self.out.commit()
-    }
+/// OFF as mint writes it: the counts line reserved after `OFF` and
+/// patched at the end, vertex lines, `3 a b c` face lines.
+pub(crate) fn writer(path: &Path, opts: &WriteOptions) -> Result<TextWriter, Error> {
+    TextWriter::create(path, opts, TextStyle { header: b"OFF\n", vertex: b"", face: "3 ", base: 0, counts: Some(counts_line) })
 }
 
 #[cfg(test)]
