@@ -107,7 +107,9 @@ pub struct RunArgs {
     /// Write ASCII instead of binary (PLY/STL).
     #[arg(long)]
     pub ascii: bool,
-    /// Write vertex coordinates as f64 instead of f32.
+    /// Write vertex coordinates as f64 [default: f32 where it places every
+    /// vertex within a thousandth of a cell, f64 elsewhere, e.g. for
+    /// geo-referenced (UTM) or tiny models; the summary says which].
     #[arg(long)]
     pub double: bool,
     #[command(flatten)]

@@ -17,10 +17,16 @@ static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 /// large" and the temporary files are removed, instead of killing the
 /// process with its debris.
 pub fn install_ctrlc() {
-    // SAFETY: setting a signal's disposition to SIG_IGN at startup, before
-    // any thread exists, has no memory-safety preconditions.
+    // SAFETY: setting a signal's disposition at startup, before any thread
+    // exists, has no memory-safety preconditions. SIGXFSZ ignored: a file
+    // too large is an error we report. SIGPIPE to its default: a closed
+    // stdout (`mint check x.ply | head -0`) ends the command quietly with
+    // the conventional status, like every Unix tool, instead of a panic in
+    // `println!` (Rust ignores SIGPIPE by default). mint prints to stdout
+    // only results, after its outputs are written.
     unsafe {
         libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     let _ = ctrlc::set_handler(|| {
         if INTERRUPTED.swap(true, Ordering::SeqCst) {

@@ -40,7 +40,7 @@ pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, j
             s.intercepts_kept,
             human_bytes(s.shard_bytes)
         );
-        eprintln!("  output       {} vertices, {} faces", s.output_vertices, s.output_faces);
+        eprintln!("  output       {} vertices, {} faces, coordinates {}", s.output_vertices, s.output_faces, s.output_precision);
         if !s.deref.is_empty() {
             let spilled = if s.deref_spilled_bytes > 0 { format!(" ({} spilled to disk)", human_bytes(s.deref_spilled_bytes)) } else { String::new() };
             eprintln!("  faces        dereferenced by {}{spilled}", s.deref);
@@ -118,7 +118,7 @@ pub(crate) fn report(g: &ReportArgs, s: &mint_pipeline::ResampleSummary) -> Resu
         eprintln!("{} -> {}", s.input, s.output);
         eprintln!("  grid         {}x{}x{} cells of {:.6} ({} slabs)", s.grid_cells[0], s.grid_cells[1], s.grid_cells[2], s.cell_size, s.slabs);
         eprintln!("  input        {} mesh faces; operand signs: {}", s.input_faces, s.sign_rule);
-        eprintln!("  output       {} vertices, {} faces", s.output_vertices, s.output_faces);
+        eprintln!("  output       {} vertices, {} faces, coordinates {}", s.output_vertices, s.output_faces, s.output_precision);
         eprintln!("  time         {:.2}s; peak heap {}", s.seconds_total, human_bytes(alloc::peak_heap()));
     }
     Ok(())

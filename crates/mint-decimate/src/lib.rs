@@ -84,6 +84,8 @@ pub struct DecimateOptions {
 pub struct DecimateSummary {
     pub input: String,
     pub output: String,
+    /// The output's coordinates: "f32", or "f64" and why.
+    pub output_precision: String,
     pub input_faces: u64,
     pub input_area: f64,
     pub cell_size: f64,
@@ -151,12 +153,14 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
     let (positions, tris) = mint_io::read_mesh(&mid_path)?;
     drop(mid);
     let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
-    let (sr, _, seconds_write) = simplify_and_write(input, output, format, &o.write.options(None), positions, tris, &so, progress)?;
+    let tolerance = h * mint_pipeline::spec::defaults::F32_TOLERANCE_CELLS;
+    let (sr, output_precision, _, seconds_write) = simplify_and_write(input, output, format, &o.write.options(None), tolerance, positions, tris, &so, progress)?;
     // Reading the intermediate counts as simplifying.
     let seconds_simplify = t.elapsed().as_secs_f64() - seconds_write;
     Ok(DecimateSummary {
         input: input.display().to_string(),
         output: output.display().to_string(),
+        output_precision,
         input_faces: faces,
         input_area: area,
         cell_size: h,
@@ -181,18 +185,21 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
 
 /// Simplifies a mesh held in memory and writes it: the in-core stage of
 /// [`decimate`] and all of [`simplify_file`]. Returns the simplifier's
-/// report and the seconds spent simplifying and writing.
+/// report, the output's precision ("f32", or "f64" and why) and the
+/// seconds spent simplifying and writing. Coordinates are written in f32
+/// only where it places them within `tolerance` (`mint_io::precision`).
 #[allow(clippy::too_many_arguments)]
 fn simplify_and_write(
     input: &Path,
     output: &Path,
     format: Format,
     write: &WriteOptions,
+    tolerance: f64,
     positions: Vec<[f64; 3]>,
     tris: Vec<[u32; 3]>,
     so: &mint_mesh::SimplifyOptions,
     progress: &dyn Progress,
-) -> Result<(mint_mesh::SimplifyReport, f64, f64), PipelineError> {
+) -> Result<(mint_mesh::SimplifyReport, String, f64, f64), PipelineError> {
     let t = Instant::now();
     let (p, f, sr) = mint_mesh::simplify_with(&positions, &tris, so, &|| progress.cancelled()).map_err(|e| match e {
         mint_mesh::MeshError::Cancelled => PipelineError::Cancelled,
@@ -202,7 +209,9 @@ fn simplify_and_write(
     let seconds_simplify = t.elapsed().as_secs_f64();
     check_cancel(progress)?;
     let t = Instant::now();
-    let mut w = MeshWriter::create(output, format, write.clone())?;
+    let (lo, hi) = bbox(&p);
+    let (double, precision) = mint_io::precision::choose(output, format, write.double, lo, hi, tolerance)?;
+    let mut w = MeshWriter::create(output, format, WriteOptions { double, ..write.clone() })?;
     for v in &p {
         w.write_vertex(*v)?;
     }
@@ -210,7 +219,30 @@ fn simplify_and_write(
         w.write_face(*t)?;
     }
     w.finish()?;
-    Ok((sr, seconds_simplify, t.elapsed().as_secs_f64()))
+    Ok((sr, precision, seconds_simplify, t.elapsed().as_secs_f64()))
+}
+
+/// The box of `p` (a zero box at the origin when empty).
+fn bbox(p: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    if p.is_empty() {
+        return ([0.0; 3], [0.0; 3]);
+    }
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for v in p {
+        for d in 0..3 {
+            lo[d] = lo[d].min(v[d]);
+            hi[d] = hi[d].max(v[d]);
+        }
+    }
+    (lo, hi)
+}
+
+/// `simplify`'s tolerance without a grid: a millionth of the box's
+/// diagonal (f32 keeps a mesh near the origin; a geo-referenced one gets f64).
+fn tolerance_of(p: &[[f64; 3]]) -> f64 {
+    let (lo, hi) = bbox(p);
+    1e-6 * (0..3).map(|d| (hi[d] - lo[d]).powi(2)).sum::<f64>().sqrt()
 }
 
 /// Options of [`simplify_file`].
@@ -231,6 +263,8 @@ pub struct SimplifyFileOptions {
 pub struct SimplifySummary {
     pub input: String,
     pub output: String,
+    /// The output's coordinates: "f32", or "f64" and why.
+    pub output_precision: String,
     pub input_faces: u64,
     pub input_vertices: u64,
     pub welded_vertices: u64,
@@ -267,10 +301,12 @@ pub fn simplify_file(input: &Path, output: &Path, o: &SimplifyFileOptions, progr
     let seconds_read = t0.elapsed().as_secs_f64();
     check_cancel(progress)?;
     let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
-    let (sr, seconds_simplify, seconds_write) = simplify_and_write(input, output, format, &o.write, positions, tris, &so, progress)?;
+    let tolerance = tolerance_of(&positions);
+    let (sr, output_precision, seconds_simplify, seconds_write) = simplify_and_write(input, output, format, &o.write, tolerance, positions, tris, &so, progress)?;
     Ok(SimplifySummary {
         input: input.display().to_string(),
         output: output.display().to_string(),
+        output_precision,
         input_faces,
         input_vertices,
         welded_vertices: welded,

@@ -27,6 +27,8 @@ use crate::writer::{MeshWriter, WriteOptions};
 pub struct ConvertSummary {
     /// Format of the input (detected).
     pub input_format: Format,
+    /// The output's coordinates: "f32", or "f64" and why.
+    pub precision: String,
     /// Format of the output (from its extension).
     pub output_format: Format,
     /// Vertices in the input (for STL: 3 per facet).
@@ -84,8 +86,19 @@ pub fn convert_cancellable(
     let soup = |f: Format| matches!(f, Format::Stl | Format::Raw);
     let weld = soup(input_format) && !soup(output_format);
     let total = reader.bytes_total();
+    // Coordinates the input stores as f64 stay f64 where f32 would move them
+    // by more than a millionth of the box's diagonal (geo-referenced
+    // models); an f32 input loses nothing in f32.
+    let positions = reader.positions();
+    let (double, precision) = match (write.double || positions.exact_in_f32(), positions.bounds(0, positions.len())) {
+        (false, Ok(Some((lo, hi)))) => {
+            let diag = (0..3).map(|d| (hi[d] - lo[d]).powi(2)).sum::<f64>().sqrt();
+            crate::precision::choose(output, output_format, false, lo, hi, 1e-6 * diag)?
+        }
+        _ => (write.double, if write.double { "f64 (asked)".to_string() } else { "f32".to_string() }),
+    };
     // The writer's temporary file lives beside the target until `finish`.
-    let mut writer = MeshWriter::create(output, output_format, write)?;
+    let mut writer = MeshWriter::create(output, output_format, WriteOptions { double, ..write })?;
     // Vertices: copied, or welded for STL input.
     let nv = reader.vertex_count();
     let mut welded: HashMap<[u64; 3], u32> = HashMap::new();
@@ -130,6 +143,7 @@ pub fn convert_cancellable(
     let vertices_written = writer.vertices();
     let summary = writer.finish()?;
     Ok(ConvertSummary {
+        precision,
         input_format,
         output_format,
         vertices_read: nv as u64,

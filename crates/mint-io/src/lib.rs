@@ -40,6 +40,7 @@ mod obj;
 mod off;
 mod ply;
 mod positions;
+pub mod precision;
 mod raw;
 pub mod reader;
 mod stl;

@@ -72,8 +72,10 @@
 //!   summed in fixed chunks of faces combined in order, so they are
 //!   bit-identical under any thread count.
 //! - `watertight`: no boundary, non-manifold or inconsistently oriented
-//!   edge, no non-manifold vertex, and at least one face. Unreferenced
-//!   vertices, degenerate and collapsed faces do not by themselves spoil it.
+//!   edge, no non-manifold vertex, no collapsed (repeated-index) or
+//!   duplicated face, every component closed, and at least one proper
+//!   face. Unreferenced vertices and zero-area faces with three distinct
+//!   vertices do not by themselves spoil it.
 //!
 //! Non-goals: no geometric self-intersection test, no repair.
 
@@ -219,7 +221,18 @@ pub fn report_from(t: Totals) -> CheckReport {
     let (boundary_loops, loop_edges) = walk_boundary_loops(t.simple);
     let proper_faces = t.faces - t.geom.collapsed;
     let c = &t.counts;
-    let watertight = c.boundary == 0 && c.non_manifold_edges == 0 && c.non_manifold_vertices == 0 && c.inconsistent == 0 && t.faces > 0;
+    let duplicate_faces = c.duplicates + t.duplicate_collapsed;
+    // The verdict agrees with every count: a collapsed (repeated-index) or
+    // duplicated face, or a component that is not closed, is not part of a
+    // closed 2-manifold, whatever the edges say.
+    let watertight = c.boundary == 0
+        && c.non_manifold_edges == 0
+        && c.non_manifold_vertices == 0
+        && c.inconsistent == 0
+        && t.geom.collapsed == 0
+        && duplicate_faces == 0
+        && proper_faces > 0
+        && genera.len() as u64 == t.components;
     CheckReport {
         vertices: t.vertices,
         faces: t.faces,
@@ -238,7 +251,7 @@ pub fn report_from(t: Totals) -> CheckReport {
         inconsistently_oriented_edges: c.inconsistent,
         degenerate_faces: t.geom.degenerate,
         collapsed_faces: t.geom.collapsed,
-        duplicate_faces: c.duplicates + t.duplicate_collapsed,
+        duplicate_faces,
         euler_characteristic: t.referenced as i64 - c.edges as i64 + proper_faces as i64,
         closed_components: genera.len() as u64,
         genus_total: genera.iter().sum(),

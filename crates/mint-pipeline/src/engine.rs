@@ -316,6 +316,9 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
         s.dropped_intercepts += r.repair.dropped_intercepts;
     }
     (s.output_boundary_edges, s.output_boundary_loops) = crate::stages::boundary_of(&loose);
+    if let Ok(w) = crate::workdir::read_result::<crate::stages::WriteResult>(&ctx.dir, Stage::Write, 0) {
+        s.output_precision = w.precision;
+    }
     if plan.strict() || rules.first() == Some(&SignRule::Orient) {
         s.intercepts_kept = kept;
         s.intercepts_removed = removed;

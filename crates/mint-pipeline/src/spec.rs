@@ -35,6 +35,9 @@ pub mod defaults {
     pub const SLABS: u32 = 1;
     /// Non-canonical cells listed in a summary.
     pub const MAX_LISTED: usize = 100;
+    /// Outputs are written in f32 only when f32 places every vertex within
+    /// this fraction of a cell (else f64; `--double` forces f64).
+    pub const F32_TOLERANCE_CELLS: f64 = 1e-3;
 }
 
 mint_core::choice! {
@@ -147,7 +150,9 @@ impl GridSpec {
 pub struct WriteSpec {
     /// Text PLY or STL instead of binary.
     pub ascii: bool,
-    /// Coordinates as f64 instead of f32.
+    /// Coordinates as f64 even where f32 would place them within
+    /// [`defaults::F32_TOLERANCE_CELLS`] of a cell (elsewhere f64 is chosen
+    /// anyway).
     pub double: bool,
 }
 

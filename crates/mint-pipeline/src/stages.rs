@@ -135,6 +135,9 @@ pub struct WriteResult {
     pub output: PathBuf,
     pub vertices: u64,
     pub faces: u64,
+    /// Coordinates written as f64, and why (or "f32").
+    pub double: bool,
+    pub precision: String,
 }
 
 /// Everything a task needs: the plan, its scene, this process's tuning
@@ -827,7 +830,13 @@ pub fn boundary_of(loose: &[(u32, u32)]) -> (u64, u64) {
 fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
     let output = &ctx.plan.spec.output;
     let format = Format::from_path(output)?;
-    let write = ctx.plan.spec.write.options(Some(ctx.dir.clone()));
+    // f32 only where it places every vertex within a small fraction of a
+    // cell (mint_io::precision): geo-referenced and tiny models get f64.
+    let grid = ctx.grid()?;
+    let hi: [f64; 3] = std::array::from_fn(|d| grid.origin[d] + grid.dims[d] as f64 * grid.cell);
+    let tolerance = grid.cell * crate::spec::defaults::F32_TOLERANCE_CELLS;
+    let (double, precision) = mint_io::precision::choose(output, format, ctx.plan.spec.write.double, grid.origin, hi, tolerance)?;
+    let write = mint_io::WriteOptions { double, ..ctx.plan.spec.write.options(Some(ctx.dir.clone())) };
     let slabs: Vec<(Stage, ReconstructResult)> = (0..ctx.plan.tasks(Stage::Reconstruct)).map(|t| ctx.final_slab(t)).collect::<Result<_, _>>()?;
     let total_faces: u64 = slabs.iter().map(|(_, s)| s.faces).sum();
     let mut writer = MeshWriter::create(output, format, write)?;
@@ -867,7 +876,7 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
     }
     writer.finish()?;
     ctx.progress.finish();
-    Ok(WriteResult { output: output.clone(), vertices, faces: total_faces })
+    Ok(WriteResult { output: output.clone(), vertices, faces: total_faces, double, precision })
 }
 
 #[cfg(test)]

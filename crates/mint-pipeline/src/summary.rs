@@ -29,6 +29,8 @@ pub struct ResampleSummary {
     pub active_cells: u64,
     pub output_vertices: u64,
     pub output_faces: u64,
+    /// The output's coordinates: "f32", or "f64" with the reason.
+    pub output_precision: String,
     pub non_canonical_cells: u64,
     /// Up to [`MAX_LISTED`] non-canonical cells, as (x, y, z) cell indices.
     pub non_canonical_list: Vec<[u32; 3]>,

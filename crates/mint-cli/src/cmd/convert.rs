@@ -46,14 +46,15 @@ pub(crate) fn cmd_convert(a: ConvertArgs) -> Result<()> {
     bars.finish();
     if !a.quiet.quiet {
         eprintln!(
-            "converted {} ({:?}) -> {} ({:?}): {} vertices, {} triangles, {}",
+            "converted {} ({:?}) -> {} ({:?}): {} vertices, {} triangles, {}, coordinates {}",
             a.input.display(),
             summary.input_format,
             a.output.display(),
             summary.output_format,
             summary.vertices_written,
             summary.triangles,
-            human_bytes(summary.bytes_written)
+            human_bytes(summary.bytes_written),
+            summary.precision
         );
     }
     Ok(())

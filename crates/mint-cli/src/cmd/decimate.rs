@@ -75,7 +75,7 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         eprintln!("decimated {} -> {}", s.input, s.output);
         eprintln!("  input        {} faces, area {:.6}", s.input_faces, s.input_area);
         eprintln!("  resampled    {} faces (asked {}), cells of {:.6}, {}", s.intermediate_faces, s.intermediate_faces_asked, s.cell_size, if s.intermediate_watertight { "watertight" } else { "NOT watertight" });
-        eprintln!("  simplified   {} faces (target {}), {} vertices, error {:.2e} of the extent", s.output_faces, s.target_faces, s.output_vertices, s.simplify_error);
+        eprintln!("  simplified   {} faces (target {}), {} vertices, error {:.2e} of the extent; coordinates {}", s.output_faces, s.target_faces, s.output_vertices, s.simplify_error, s.output_precision);
         eprintln!(
             "  output       {}{}",
             if s.output_watertight { "watertight (closed, 2-manifold, consistently oriented)" } else { "NOT watertight" },

@@ -57,7 +57,7 @@ pub(crate) fn cmd_simplify(a: SimplifyArgs) -> Result<()> {
     } else if !a.quiet.quiet {
         eprintln!("simplified {} -> {}", s.input, s.output);
         eprintln!("  input        {} faces, {} vertices ({} welded), {}", s.input_faces, s.input_vertices, s.welded_vertices, if s.input_watertight { "watertight" } else { "not watertight" });
-        eprintln!("  output       {} faces (target {}), {} vertices, error {:.2e} of the extent", s.output_faces, s.target_faces, s.output_vertices, s.simplify_error);
+        eprintln!("  output       {} faces (target {}), {} vertices, error {:.2e} of the extent; coordinates {}", s.output_faces, s.target_faces, s.output_vertices, s.simplify_error, s.output_precision);
         eprintln!(
             "  judged       {}{}",
             if s.output_watertight { "watertight (closed, 2-manifold, consistently oriented)" } else { "NOT watertight" },

@@ -1,0 +1,176 @@
+//! World coordinates (issue 26): geo-referenced (UTM-like) and tiny models
+//! keep their geometry through resample, bool, decimate, simplify and
+//! convert: f64 where f32 cannot place the output within a thousandth of a
+//! cell (or a millionth of the extent without a grid), a one-line refusal
+//! from formats that hold only f32, and a `check` whose verdict agrees with
+//! its counts on a collapsed mesh.
+
+use crate::common::{box_mesh, load, resample, Opts};
+use mint_core::{GridSize, MeshSink, TriMesh};
+use mint_io::{Format, MeshWriter, WriteOptions};
+use mint_pipeline::NoProgress;
+use std::path::{Path, PathBuf};
+
+/// A UTM-like offset: x ≈ 5·10⁵, y ≈ 5.4·10⁶ metres.
+const AT: [f64; 3] = [512345.25, 5412345.5, 120.0];
+
+fn mint_bin() -> PathBuf {
+    PathBuf::from(env!("CARGO_BIN_EXE_mint"))
+}
+
+/// Writes `m` with f64 coordinates (as geo-referenced data comes).
+fn write_f64(dir: &Path, name: &str, m: &TriMesh) -> PathBuf {
+    let path = dir.join(name);
+    let mut w = MeshWriter::create(&path, Format::from_path(&path).unwrap(), WriteOptions { double: true, ..Default::default() }).unwrap();
+    for p in &m.positions {
+        w.vertex(*p).unwrap();
+    }
+    for f in &m.faces {
+        w.face(*f).unwrap();
+    }
+    w.finish().unwrap();
+    path
+}
+
+/// A sphere of radius `r` around `c`, as a UV mesh.
+fn sphere(c: [f64; 3], r: f64) -> TriMesh {
+    let mut m = TriMesh::default();
+    mint_gen::sphere([0.0; 3], 1.0, 40_000, &mut m).unwrap();
+    for p in &mut m.positions {
+        *p = [c[0] + r * p[0], c[1] + r * p[1], c[2] + r * p[2]];
+    }
+    m
+}
+
+fn header_is_double(path: &Path) -> bool {
+    let bytes = std::fs::read(path).unwrap();
+    let head = String::from_utf8_lossy(&bytes[..bytes.len().min(400)]).into_owned();
+    head.contains("property double x")
+}
+
+#[test]
+fn a_utm_sphere_keeps_its_shape_and_is_watertight() {
+    let d = tempfile::tempdir().unwrap();
+    let input = write_f64(d.path(), "utm.ply", &sphere(AT, 10.0));
+    let out = d.path().join("out.ply");
+    let s = resample(&input, &out, &Opts::new(GridSize::Cells(1_000_000)), &NoProgress).unwrap();
+    assert!(s.output_precision.starts_with("f64"), "{}", s.output_precision);
+    assert!(header_is_double(&out));
+    let m = load(&out);
+    let r = mint_mesh::check(&m.positions, &m.faces);
+    assert!(r.watertight, "{r:?}");
+    // Every vertex is a crossing of a grid line with the input's triangles:
+    // within the chord error of the sphere, never on a half-metre lattice.
+    // (f32 would move them by up to 0.25.)
+    for p in &m.positions {
+        let rad = ((p[0] - AT[0]).powi(2) + (p[1] - AT[1]).powi(2) + (p[2] - AT[2]).powi(2)).sqrt();
+        assert!(rad > 10.0 - 0.01 && rad < 10.0 + 1e-6, "radius {rad}");
+    }
+    // The same sphere at the origin gives the same surface, moved (a few
+    // near-tie cells may differ: the inputs differ by rounding).
+    let centred = write_f64(d.path(), "centred.ply", &sphere([0.0; 3], 10.0));
+    let out0 = d.path().join("out0.ply");
+    let s0 = resample(&centred, &out0, &Opts::new(GridSize::Cells(1_000_000)), &NoProgress).unwrap();
+    assert_eq!(s0.output_precision, "f32");
+    let m0 = load(&out0);
+    assert!((m0.positions.len() as f64 - m.positions.len() as f64).abs() <= 1e-3 * m.positions.len() as f64);
+    let moved: Vec<[f64; 3]> = m.positions.iter().map(|p| [p[0] - AT[0], p[1] - AT[1], p[2] - AT[2]]).collect();
+    let (ab, ba) = mint_mesh::symmetric_distance((&moved, &m.faces), (&m0.positions, &m0.faces), 20_000, 1);
+    assert!(ab.mean.max(ba.mean) <= 0.01 * s.cell_size && ab.max.max(ba.max) <= s.cell_size, "{ab:?} {ba:?}");
+}
+
+#[test]
+fn a_building_at_five_million_metres_stays_on_its_faces() {
+    let d = tempfile::tempdir().unwrap();
+    let (lo, hi) = ([5.0e6, 5.0e6, 100.0], [5.0e6 + 30.0, 5.0e6 + 20.0, 150.0]);
+    let input = write_f64(d.path(), "box.ply", &box_mesh(lo, hi));
+    let out = d.path().join("out.ply");
+    let s = resample(&input, &out, &Opts::new(GridSize::CellSize(0.25)), &NoProgress).unwrap();
+    let m = load(&out);
+    assert!(mint_mesh::check(&m.positions, &m.faces).watertight);
+    for p in &m.positions {
+        let off = (0..3).map(|k| (p[k] - lo[k]).abs().min((p[k] - hi[k]).abs())).fold(f64::INFINITY, f64::min);
+        assert!(off <= 0.01 * s.cell_size, "{p:?} is {off} off the box's faces");
+    }
+    // Decimated too: watertight, f64, on the box (to the collapse's error).
+    let dec = d.path().join("dec.ply");
+    let o = std::process::Command::new(mint_bin()).arg("decimate").arg(&input).arg(&dec).args(["--faces", "500", "--json", "--quiet"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(j["output_precision"].as_str().unwrap().starts_with("f64"), "{j}");
+    assert!(j["output_watertight"].as_bool().unwrap());
+    assert!(header_is_double(&dec));
+}
+
+#[test]
+fn f32_only_formats_refuse_and_convert_keeps_f64() {
+    let d = tempfile::tempdir().unwrap();
+    let m = sphere(AT, 10.0);
+    let input = write_f64(d.path(), "utm.ply", &m);
+    for out in ["o.stl", "o.3ds"] {
+        let o = std::process::Command::new(mint_bin()).arg("resample").arg(&input).arg(d.path().join(out)).args(["--cells", "20000", "--quiet"]).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.lines().count() == 1 && err.contains("stores f32 coordinates") && err.contains(".ply or .obj"), "{out}: {err}");
+        assert!(!d.path().join(out).exists());
+        let o = std::process::Command::new(mint_bin()).arg("convert").arg(&input).arg(d.path().join(out)).output().unwrap();
+        assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("stores f32 coordinates"));
+    }
+    // OBJ keeps every coordinate bit for bit.
+    let obj = d.path().join("o.obj");
+    let o = std::process::Command::new(mint_bin()).arg("convert").arg(&input).arg(&obj).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(load(&obj).positions, m.positions);
+}
+
+#[test]
+fn a_tiny_scene_keeps_distinct_vertices_and_a_collapsed_mesh_is_not_watertight() {
+    let d = tempfile::tempdir().unwrap();
+    let scene = d.path().join("tiny.json");
+    std::fs::write(&scene, r#"{"sphere": {"radius": 1e-100}}"#).unwrap();
+    let out = d.path().join("tiny.ply");
+    let o = std::process::Command::new(mint_bin()).arg("csg").arg(&scene).arg(&out).args(["--cells", "20000", "--quiet"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m = load(&out);
+    let mut keys: Vec<[u64; 3]> = m.positions.iter().map(|p| p.map(f64::to_bits)).collect();
+    keys.sort_unstable();
+    keys.dedup();
+    assert_eq!(keys.len(), m.positions.len(), "vertices collapsed onto each other");
+    assert!(mint_mesh::check(&m.positions, &m.faces).watertight);
+    // The same output forced into f32 collapses, and check says so.
+    let mut collapsed = m.clone();
+    for p in &mut collapsed.positions {
+        *p = p.map(|c| c as f32 as f64);
+    }
+    let mut welded = collapsed.clone();
+    mint_mesh::weld(&mut welded.positions, &mut welded.faces);
+    let r = mint_mesh::check(&welded.positions, &welded.faces);
+    assert!(!r.watertight, "{r:?}");
+}
+
+/// A closed stdout ends a command quietly, killed by SIGPIPE as every Unix
+/// tool is (it panicked with "failed printing to stdout: Broken pipe").
+#[test]
+fn a_closed_stdout_ends_the_command_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    let d = tempfile::tempdir().unwrap();
+    let input = write_f64(d.path(), "s.ply", &sphere([0.0; 3], 1.0));
+    for args in [&["check", "--json"][..], &["info"][..], &["validate", "--json"][..], &["check"][..]] {
+        let mut child = std::process::Command::new(mint_bin())
+            .args(&args[..1])
+            .arg(&input)
+            .args(&args[1..])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take()); // like `| head -0`
+        let o = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!err.contains("panicked") && !err.contains("Broken pipe"), "{args:?}: {err}");
+        assert!(o.status.success() || o.status.signal() == Some(libc_sigpipe()), "{args:?}: {:?} {err}", o.status);
+    }
+}
+
+fn libc_sigpipe() -> i32 {
+    13
+}
