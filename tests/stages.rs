@@ -384,3 +384,37 @@ fn work_directories_compare_files_and_decimate_resumes() {
     assert!(d.path().join("dw/intermediate.ply").is_file());
     assert_eq!(std::fs::read(d.path().join("d1.ply")).unwrap(), std::fs::read(d.path().join("d2.ply")).unwrap());
 }
+
+/// A shard whose checksum is valid but whose record names a grid line past
+/// the grid (a crafted or stale work directory) is refused with one line;
+/// it panicked with an index out of bounds (issue 26).
+#[test]
+fn a_shard_record_outside_the_grid_is_refused_not_a_panic() {
+    let d = tempfile::tempdir().unwrap();
+    let input = write_mesh(d.path(), "g.ply", |s| drop(mint_gen::genus(1, 20_000, s).unwrap()));
+    let work = d.path().join("w");
+    let o = std::process::Command::new(mint_bin()).args(["stage", "plan", "resample"]).arg(&input).arg(d.path().join("o.ply")).args(["--cells", "20000", "--quiet", "--work"]).arg(&work).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let run = |stage: &str| std::process::Command::new(mint_bin()).args(["stage", "run"]).arg(&work).args([stage, "0", "--quiet"]).output().unwrap();
+    assert!(run("bounds").status.success() && run("discretize").status.success());
+    // Rewrite the first record of the first shard, then its checksums.
+    let task = work.join("discretize/00000");
+    let text = std::fs::read_to_string(task.join("result.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(text.split_once('\n').unwrap().1).unwrap();
+    let shards = v["operands"][0]["shards"]["shards"].as_array_mut().unwrap();
+    let shard = shards.iter_mut().find(|s| s["len"].as_u64().unwrap() >= 16).unwrap();
+    let path = task.join(format!("op-0/shard-{:05}.bin", shard["index"].as_u64().unwrap()));
+    let mut bytes = std::fs::read(&path).unwrap();
+    bytes[4..8].copy_from_slice(&1_000_000u32.to_le_bytes()); // family A, line 1,000,000
+    std::fs::write(&path, &bytes).unwrap();
+    shard["crc32"] = crc32fast::hash(&bytes).into();
+    std::fs::write(task.join("result.json"), mint_pipeline::workdir::checked_json(&v)).unwrap();
+    for stage in ["census", "reconstruct"] {
+        let o = run(stage);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && !err.contains("panicked"), "{stage}: {err}");
+        if stage == "census" {
+            one_line_error(&err, "outside the");
+        }
+    }
+}

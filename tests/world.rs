@@ -174,3 +174,25 @@ fn a_closed_stdout_ends_the_command_quietly() {
 fn libc_sigpipe() -> i32 {
     13
 }
+
+/// The summary's intercept counts add up, also when nothing is kept (they
+/// wrapped around: "kept 18446744073709550729").
+#[test]
+fn intercept_counts_add_up_even_when_the_result_is_empty() {
+    let d = tempfile::tempdir().unwrap();
+    let tri = TriMesh { positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], faces: vec![[0, 1, 2]] };
+    let input = write_f64(d.path(), "tri.ply", &tri);
+    let s = resample(&input, &d.path().join("o.ply"), &Opts::new(GridSize::Cells(10_000)), &NoProgress).unwrap();
+    assert_eq!((s.output_faces, s.intercepts_kept, s.intercepts_removed), (0, 0, s.intercepts_found), "{s:?}");
+    let scan = crate::common::write_mesh(d.path(), "scan.ply", |sink| drop(mint_gen::scan_like(60_000, 3, &Default::default(), sink).unwrap()));
+    for slabs in [1, 3] {
+        let o = Opts::new(GridSize::Cells(40_000)).with(|o| {
+            o.tuning.slabs = slabs;
+            o.tuning.slab_layers = Some(2);
+            o.tuning.work_dir = Some(d.path().join(format!("w{slabs}")));
+        });
+        let s = resample(&scan, &d.path().join("s.ply"), &o, &NoProgress).unwrap();
+        assert_eq!(s.intercepts_kept + s.intercepts_removed, s.intercepts_found, "{s:?}");
+        assert_eq!(s.intercepts_kept, s.output_vertices - s.synthesized_vertices);
+    }
+}

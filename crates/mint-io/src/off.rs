@@ -82,7 +82,13 @@ fn parse_header(path: &Path, data: &[u8]) -> Result<Header, Error> {
         None => kline,
     };
     let mut w = words(kline);
-    let kw = w.next().unwrap_or(b"");
+    let tok = w.next().unwrap_or(b"");
+    // `OFF8 6 12`: the keyword and the first count run together (files
+    // written so exist among public test meshes).
+    let (kw, glued): (&[u8], Option<&[u8]>) = match tok.windows(3).position(|x| x == b"OFF") {
+        Some(i) if off_keyword(tok).is_none() && i + 3 < tok.len() && tok[i + 3..].iter().all(u8::is_ascii_digit) => (&tok[..i + 3], Some(&tok[i + 3..])),
+        _ => (tok, None),
+    };
     let Some(prefix) = off_keyword(kw) else {
         return Err(at(Error::format(path, format!("not an OFF file: expected 'OFF', found {}", show_token(kw))), data, "header", None, kat));
     };
@@ -95,7 +101,7 @@ fn parse_header(path: &Path, data: &[u8]) -> Result<Header, Error> {
             kat,
         ));
     }
-    let rest: Vec<&[u8]> = w.collect();
+    let rest: Vec<&[u8]> = glued.into_iter().chain(w).collect();
     if rest.first() == Some(&&b"BINARY"[..]) {
         return Err(at(Error::unsupported(path, "binary OFF is not supported"), data, "header", None, kat));
     }
@@ -104,7 +110,7 @@ fn parse_header(path: &Path, data: &[u8]) -> Result<Header, Error> {
     } else {
         (kat, kline)
     };
-    let nums: Vec<&[u8]> = words(counts).filter(|t| off_keyword(t).is_none()).collect();
+    let nums: Vec<&[u8]> = if rest.is_empty() { words(counts).filter(|t| off_keyword(t).is_none()).collect() } else { rest.clone() };
     let parse = |t: Option<&&[u8]>| t.and_then(|t| parse_i64(t)).filter(|&n| n >= 0).map(|n| n as u64);
     let (Some(nv), Some(nf)) = (parse(nums.first()), parse(nums.get(1))) else {
         return Err(at(
@@ -294,6 +300,8 @@ mod tests {
         assert_eq!((h.nv, h.nf, h.comments.clone()), (4, 2, vec!["hi".to_string()]));
         let h = parse_header(Path::new("a.off"), b"COFF\n\n# c\n3 1 3\n").unwrap();
         assert_eq!((h.nv, h.nf), (3, 1));
+        let h = parse_header(Path::new("a.off"), b"OFF8 6 12\n").unwrap();
+        assert_eq!((h.nv, h.nf), (8, 6));
         let e = parse_header(Path::new("a.off"), b"4OFF\n1 0 0\n").err().unwrap();
         assert_eq!(e.kind(), ErrorKind::Unsupported);
         let e = parse_header(Path::new("a.off"), b"OFF\nx y\n").err().unwrap();

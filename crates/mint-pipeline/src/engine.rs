@@ -323,8 +323,11 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
         s.intercepts_kept = kept;
         s.intercepts_removed = removed;
     } else {
-        s.intercepts_kept = s.intercepts_found - s.dropped_intercepts;
-        s.intercepts_removed = s.dropped_intercepts;
+        // Counted, not subtracted: each output vertex not synthesized is a
+        // kept crossing (drops are counted per visit, and a plane shared by
+        // two sub-slabs is visited twice, so found - dropped could wrap).
+        s.intercepts_kept = s.output_vertices.saturating_sub(s.synthesized_vertices).min(s.intercepts_found);
+        s.intercepts_removed = s.intercepts_found - s.intercepts_kept;
     }
     Ok(s)
 }

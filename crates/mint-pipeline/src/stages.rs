@@ -415,6 +415,7 @@ impl<'a> Ctx<'a> {
             operands.push(match op {
                 Operand::Mesh { .. } => {
                     let mut planes = self.shards(j)?.read_planes(k0, k1, true)?;
+                    check_records(&planes, k0, grid, &self.dir)?;
                     if self.inverted(j)? {
                         planes.iter_mut().flatten().for_each(|r| r.signed_value = -r.signed_value);
                     }
@@ -495,6 +496,40 @@ fn expr_bounds(e: &Expr, leaf: &[([f64; 3], [f64; 3])]) -> ([f64; 3], [f64; 3]) 
             }
         }
     }
+}
+
+/// Checks what every record read from shards claims against the grid: its
+/// plane, family, line and position. Checksums catch accidents, not content:
+/// a crafted or stale shard whose checksum is valid must be refused with one
+/// line, never index past a line table.
+fn check_records(planes: &[Vec<Intercept>], k0: u32, grid: &Grid, dir: &Path) -> Result<(), PipelineError> {
+    use mint_core::intercept::{FAMILY_A, FAMILY_B, FAMILY_S};
+    let [na, nb, ns] = grid.local_dims();
+    for (i, plane) in planes.iter().enumerate() {
+        let k = k0 + i as u32;
+        for r in plane {
+            let v = r.signed_value.abs();
+            let (lines, span) = match r.family() {
+                FAMILY_A => (nb as u64 + 1, na as f64),
+                FAMILY_B => (na as u64 + 1, nb as f64),
+                FAMILY_S => ((na as u64 + 1) * (nb as u64 + 1), ns as f64),
+                _ => (0, 0.0),
+            };
+            if r.plane != k || (r.index() as u64) >= lines || !(v.is_finite() && v <= span + 1.0) {
+                return Err(PipelineError::stage(
+                    dir,
+                    format!(
+                        "a shard record claims plane {}, family {}, line {}, position {} in plane {k}, outside the {na}x{nb}x{ns}-cell grid: the work directory is damaged or not this run's; remove it and run again",
+                        r.plane,
+                        r.family(),
+                        r.index(),
+                        r.signed_value
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 // ----- the stages -----
@@ -636,7 +671,9 @@ fn census_task(ctx: &Ctx, task: u32) -> Result<CensusResult, PipelineError> {
         let invert = ctx.inverted(j)?;
         let mut c = LineCensus::default();
         for (k0, k1) in ctx.sub_slabs(a, b)? {
-            for p in &mut shards.read_planes(k0, k1 - 1, false)? {
+            let mut planes = shards.read_planes(k0, k1 - 1, false)?;
+            check_records(&planes, k0, ctx.grid()?, &ctx.dir)?;
+            for p in &mut planes {
                 if invert {
                     p.iter_mut().for_each(|r| r.signed_value = -r.signed_value);
                 }
