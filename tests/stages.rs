@@ -418,3 +418,68 @@ fn a_shard_record_outside_the_grid_is_refused_not_a_panic() {
         }
     }
 }
+
+/// A damaged `faces.bin` is blamed on itself, not on the output (it read
+/// "out.ply: vertex index 4294967295 is out of range"), and nothing is written.
+#[test]
+fn a_damaged_slab_result_is_blamed_on_itself() {
+    let d = tempfile::tempdir().unwrap();
+    let input = write_mesh(d.path(), "g.ply", |s| drop(mint_gen::genus(1, 20_000, s).unwrap()));
+    let work = d.path().join("w");
+    let out = d.path().join("o.ply");
+    let o = std::process::Command::new(mint_bin()).args(["stage", "plan", "resample"]).arg(&input).arg(&out).args(["--cells", "20000", "--quiet", "--close-all", "--work"]).arg(&work).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let run = |stage: &str| std::process::Command::new(mint_bin()).args(["stage", "run"]).arg(&work).args([stage, "0", "--quiet"]).output().unwrap();
+    for stage in ["bounds", "discretize", "census", "reconstruct"] {
+        assert!(run(stage).status.success(), "{stage}");
+    }
+    let faces = work.join("reconstruct/00000/faces.bin");
+    let mut bytes = std::fs::read(&faces).unwrap();
+    bytes[0..4].copy_from_slice(&u32::MAX.to_le_bytes());
+    std::fs::write(&faces, &bytes).unwrap();
+    let o = run("write");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    one_line_error(&err, "faces.bin");
+    assert!(!out.exists());
+}
+
+/// A run killed with SIGKILL leaves its `.mint-work-*` directory; the next
+/// run in that folder removes it and says so, and never touches the
+/// directory of a run that is alive (issue 26).
+#[test]
+fn debris_of_killed_runs_is_removed_by_the_next_run() {
+    let d = tempfile::tempdir().unwrap();
+    let input = d.path().join("s.ply");
+    assert!(std::process::Command::new(mint_bin()).args(["gen", "sphere"]).arg(&input).args(["--faces", "2000000"]).output().unwrap().status.success());
+    let out = d.path().join("out.ply");
+    let debris = || -> Vec<PathBuf> {
+        let mut v: Vec<PathBuf> = std::fs::read_dir(d.path()).unwrap().flatten().map(|e| e.path()).filter(|p| p.file_name().unwrap().to_string_lossy().starts_with(".mint-work-")).collect();
+        v.sort();
+        v
+    };
+    let mut left = Vec::new();
+    for wait_ms in [300u64, 150, 80, 40, 20, 10, 5] {
+        let mut child = std::process::Command::new(mint_bin()).arg("resample").arg(&input).arg(&out).args(["--cells", "4000000", "--quiet", "--threads", "1"]).spawn().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(wait_ms));
+        let _ = child.kill();
+        let _ = child.wait();
+        left = debris();
+        if !left.is_empty() {
+            break;
+        }
+    }
+    assert!(!left.is_empty(), "no run was killed while its work directory existed");
+    // A live run's directory (its owner lock held) is never removed.
+    let live = d.path().join(".mint-work-live");
+    std::fs::create_dir(&live).unwrap();
+    let _held = mint_pipeline::workdir::OwnerLock::of_dir(&live).unwrap();
+    let o = std::process::Command::new(mint_bin()).arg("resample").arg(&input).arg(&out).args(["--cells", "20000", "--quiet"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    for l in &left {
+        assert!(!l.exists(), "{} is still there", l.display());
+        assert!(err.contains(&format!("mint: removed {}", l.display())), "{err}");
+    }
+    assert_eq!(debris(), vec![live]);
+}

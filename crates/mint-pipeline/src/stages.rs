@@ -891,13 +891,20 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
         })?;
         check_cancel(ctx.progress)?;
     }
+    let total_vertices: u64 = slabs.iter().map(|(_, s)| s.vertices).sum();
     let mut offset = 0u64;
     let mut written = 0u64;
     for (t, (stage, s)) in slabs.iter().enumerate() {
         let path = crate::workdir::task_dir(&ctx.dir, *stage, t as u32).join("faces.bin");
         read_records::<12>(&path, s.faces_file.unwrap_or(FileSum { len: 0, crc32: 0 }), |b| {
-            let id = |d: usize| (u32::from_le_bytes(b[4 * d..4 * d + 4].try_into().unwrap()) as u64 + offset) as u32;
-            writer.write_face([id(0), id(1), id(2)])?;
+            let id = |d: usize| u32::from_le_bytes(b[4 * d..4 * d + 4].try_into().unwrap()) as u64 + offset;
+            let f = [id(0), id(1), id(2)];
+            // A damaged slab result is blamed on itself, before its
+            // checksum (checked at its end) could say so: never on the output.
+            if f.iter().any(|&v| v >= total_vertices) {
+                return Err(PipelineError::stage(&path, format!("damaged slab result: a face names vertex {} of {total_vertices}; remove its task directory and run the task again", f.iter().max().unwrap())));
+            }
+            writer.write_face(f.map(|v| v as u32))?;
             written += 1;
             if written % (1 << 16) == 0 {
                 ctx.progress.advance(1 << 16);
