@@ -9,6 +9,7 @@ use anyhow::Result;
 
 /// Prints a resampling summary: JSON on stdout, or lines on stderr.
 pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, json: bool, quiet: bool, mem: u64) -> Result<()> {
+    print_removed(&summary.removed_dead);
     let peak_heap = alloc::peak_heap();
     let peak_rss = alloc::peak_rss();
     let warnings = summary_warnings(summary);
@@ -98,6 +99,13 @@ pub(crate) fn summary_warnings(s: &mint_pipeline::ResampleSummary) -> Vec<String
     w
 }
 
+/// Says which leftovers of killed runs were removed (also with --quiet and --json).
+pub(crate) fn print_removed(removed: &[String]) {
+    for r in removed {
+        eprintln!("mint: removed {r}, left by a run that was killed");
+    }
+}
+
 /// Prints the warnings on stderr, one line each (also with --quiet and --json).
 fn print_warnings(warnings: &[String]) {
     for w in warnings {
@@ -106,6 +114,7 @@ fn print_warnings(warnings: &[String]) {
 }
 
 pub(crate) fn report(g: &ReportArgs, s: &mint_pipeline::ResampleSummary) -> Result<()> {
+    print_removed(&s.removed_dead);
     let warnings = summary_warnings(s);
     print_warnings(&warnings);
     if g.json() {

@@ -108,6 +108,8 @@ pub struct DecimateSummary {
     pub seconds_simplify: f64,
     pub seconds_write: f64,
     pub seconds_total: f64,
+    /// Temporary files and directories that killed runs had left, removed.
+    pub removed_dead: Vec<String>,
     pub resample: ResampleSummary,
 }
 
@@ -131,17 +133,23 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
     let h = (FACES_PER_AREA_CELL * area / m as f64).sqrt();
     // 2. Resample into a temporary file beside the output (or in tmp).
     let t = Instant::now();
+    let (mut removed_dead, mut owner) = (Vec::new(), None);
     let (mid_path, mid) = match &o.tuning.work_dir {
         // Kept beside the resampling's stages: the same command resumes.
         Some(w) => (w.join("intermediate.ply"), None),
         None => {
             let dir = o.tuning.tmp_dir.clone().unwrap_or_else(|| output.parent().filter(|p| !p.as_os_str().is_empty()).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")));
-            let mid = tempfile::Builder::new().prefix(".mint-decimate-").suffix(".ply").tempfile_in(&dir).map_err(|source| PipelineError::Temp {
+            // Intermediates that killed runs left here go first.
+            removed_dead = mint_pipeline::workdir::remove_dead(&dir, ".mint-decimate-");
+            // A directory of its own, locked by this run while it lives
+            // (the intermediate itself is replaced by an atomic rename).
+            let mid = tempfile::Builder::new().prefix(".mint-decimate-").tempdir_in(&dir).map_err(|source| PipelineError::Temp {
                 path: dir.clone(),
-                op: "creating the intermediate mesh",
+                op: "creating the intermediate mesh's directory",
                 source,
             })?;
-            (mid.path().to_path_buf(), Some(mid))
+            owner = Some(mint_pipeline::workdir::OwnerLock::of_dir(mid.path())?);
+            (mid.path().join("intermediate.ply"), Some(mid))
         }
     };
     let mut spec = RunSpec::resample(input, &mid_path, GridSize::CellSize(h));
@@ -151,7 +159,7 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
     // 3. In core: simplify and judge; 4. write.
     let t = Instant::now();
     let (positions, tris) = mint_io::read_mesh(&mid_path)?;
-    drop(mid);
+    drop((owner, mid));
     let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
     let tolerance = h * mint_pipeline::spec::defaults::F32_TOLERANCE_CELLS;
     let (sr, output_precision, _, seconds_write) = simplify_and_write(input, output, format, &o.write.options(None), tolerance, positions, tris, &so, progress)?;
@@ -179,6 +187,7 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
         seconds_simplify,
         seconds_write,
         seconds_total: t0.elapsed().as_secs_f64(),
+        removed_dead: removed_dead.iter().map(|p| p.display().to_string()).chain(rs.removed_dead.iter().cloned()).collect(),
         resample: rs,
     })
 }

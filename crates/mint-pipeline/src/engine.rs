@@ -25,6 +25,9 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// The name of a temporary work directory (`.mint-work-XXXXXX`).
+pub const WORK_PREFIX: &str = ".mint-work-";
+
 /// Runs `spec` whole in this process, in `tuning.work_dir` (kept, and
 /// resumed when it holds the same run) or a temporary directory.
 pub fn run(spec: &RunSpec, tuning: &Tuning, progress: &dyn Progress) -> Result<ResampleSummary, PipelineError> {
@@ -160,16 +163,20 @@ fn run_job(spec: &RunSpec, scene: Option<Scene>, tuning: &Tuning, progress: &dyn
         Some(d) => d.clone(),
         None => output.parent().filter(|p| !p.as_os_str().is_empty()).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from(".")),
     };
-    let _temp;
+    let (_temp, _owner);
+    let mut removed_dead = Vec::new();
     let dir = match &tuning.work_dir {
         Some(d) => d.clone(),
         None => {
-            let t = tempfile::Builder::new().prefix(".mint-work-").tempdir_in(&tmp_root).map_err(|source| PipelineError::Temp {
+            // Work directories that killed runs left here go first.
+            removed_dead = crate::workdir::remove_dead(&tmp_root, WORK_PREFIX);
+            let t = tempfile::Builder::new().prefix(WORK_PREFIX).tempdir_in(&tmp_root).map_err(|source| PipelineError::Temp {
                 path: tmp_root.clone(),
                 op: "creating the work directory",
                 source,
             })?;
             let p = t.path().to_path_buf();
+            _owner = crate::workdir::OwnerLock::of_dir(&p)?;
             _temp = t;
             p
         }
@@ -213,6 +220,7 @@ fn run_job(spec: &RunSpec, scene: Option<Scene>, tuning: &Tuning, progress: &dyn
     s.work_dir = tuning.work_dir.as_ref().map(|d| d.display().to_string());
     s.tasks_run = ran;
     s.tasks_resumed = resumed;
+    s.removed_dead = removed_dead.iter().map(|p| p.display().to_string()).collect();
     Ok(s)
 }
 

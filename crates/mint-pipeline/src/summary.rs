@@ -76,6 +76,9 @@ pub struct ResampleSummary {
     /// Tasks run by this process, and tasks found already done (resumed).
     pub tasks_run: u64,
     pub tasks_resumed: u64,
+    /// Temporary work directories that killed runs had left beside this
+    /// one's, removed.
+    pub removed_dead: Vec<String>,
     /// The tasks ran in other processes (`mint stage run`, Slurm): times
     /// are wall times between stage completions, and this process's memory
     /// says nothing of theirs.

@@ -269,3 +269,60 @@ pub fn temp_tasks(dir: &Path, stage: Stage) -> Vec<PathBuf> {
     v.sort();
     v
 }
+
+/// The owner lock of a temporary work directory: an exclusive
+/// `flock` held by the live run that made it, for as long as it runs. A
+/// directory whose lock can be taken belongs to a run that died (SIGKILL,
+/// power loss), and the next run in the same folder removes it.
+pub struct OwnerLock(#[allow(dead_code)] File);
+
+/// The owner lock's file inside a temporary work directory.
+pub const OWNER_FILE: &str = ".owner";
+
+fn try_flock(f: &File) -> bool {
+    use std::os::fd::AsRawFd;
+    // SAFETY: flock on a descriptor this File owns; no memory is involved.
+    unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) == 0 }
+}
+
+impl OwnerLock {
+    /// Takes the lock of the directory `dir`: the file is locked under a
+    /// temporary name and renamed into place, so that no other run can ever
+    /// see it unlocked while this one lives.
+    pub fn of_dir(dir: &Path) -> Result<OwnerLock, PipelineError> {
+        let tmp = dir.join(format!("{OWNER_FILE}.{}", std::process::id()));
+        let f = File::create(&tmp).map_err(io(&tmp, "creating the owner lock"))?;
+        if !try_flock(&f) {
+            return Err(PipelineError::stage(&tmp, "cannot lock a file this run just made"));
+        }
+        let _ = writeln!(&f, "{}", std::process::id());
+        std::fs::rename(&tmp, dir.join(OWNER_FILE)).map_err(io(&tmp, "placing the owner lock"))?;
+        Ok(OwnerLock(f))
+    }
+}
+
+/// Removes the directories of `root` named `prefix…` that a dead run left:
+/// those whose [`OWNER_FILE`] nobody holds. Directories without one (a run
+/// being set up, or an older mint) are left alone. Returns what was removed.
+pub fn remove_dead(root: &Path, prefix: &str) -> Vec<PathBuf> {
+    let Ok(rd) = std::fs::read_dir(root) else { return Vec::new() };
+    let mut removed = Vec::new();
+    for e in rd.flatten() {
+        if !e.file_name().to_string_lossy().starts_with(prefix) {
+            continue;
+        }
+        let path = e.path();
+        if !e.file_type().map(|t| t.is_dir()).unwrap_or(false) {
+            continue;
+        }
+        let Ok(f) = File::open(path.join(OWNER_FILE)) else { continue };
+        if !try_flock(&f) {
+            continue; // a live run holds it
+        }
+        if std::fs::remove_dir_all(&path).is_ok() {
+            removed.push(path);
+        }
+    }
+    removed.sort();
+    removed
+}

@@ -63,6 +63,7 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
     };
     let bars = Bars::new(a.quiet.quiet || a.json.json);
     let s = mint_decimate::decimate(&a.input, &a.output, &o, &bars)?;
+    crate::summary::print_removed(&s.removed_dead);
     if a.preview {
         write_before_after(&a.input, &a.output, a.quiet.quiet || a.json.json, &bars)?;
     }
