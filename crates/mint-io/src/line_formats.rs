@@ -7,7 +7,7 @@
 
 use std::borrow::Cow;
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use crate::backend::{write_point, FaceStream, FormatWriter, OutFile, PolygonFan, ReadStats, WriteOptions};
@@ -16,15 +16,27 @@ use crate::mapped::Mapped;
 use crate::positions::{not_finite, Emit};
 use crate::text::Lines;
 
+/// What every line-based body streams through: its file and map, where the
+/// next unread line starts, and the polygon being emitted.
+pub(crate) struct Section {
+    pub(crate) path: PathBuf,
+    pub(crate) map: Arc<Mapped>,
+    pub(crate) pos: usize,
+    pub(crate) fan: PolygonFan,
+}
+
+impl Section {
+    /// The face section of `path` (mapped as `map`), from byte `pos`.
+    pub(crate) fn new(path: &Path, map: Arc<Mapped>, pos: usize) -> Section {
+        Section { path: path.to_path_buf(), map, pos, fan: PolygonFan::default() }
+    }
+}
+
 /// A line-based format's face section, as [`fill_faces`] reads it.
 pub(crate) trait FaceLines: Send {
-    /// The file being read, and its map.
-    fn path(&self) -> &Path;
-    fn map(&self) -> Arc<Mapped>;
-    /// The polygon being emitted, and where the next unread line starts.
-    fn state(&mut self) -> (&mut PolygonFan, &mut usize);
-    /// Where the next unread line starts.
-    fn pos_done(&self) -> usize;
+    /// The body's [`Section`].
+    fn section(&self) -> &Section;
+    fn section_mut(&mut self) -> &mut Section;
     /// Where in the file the current polygon is, added to an error about it.
     fn locate(&self, e: Error, data: &[u8]) -> Error;
     /// The next line of the face section, or `None` where it ends (an
@@ -42,33 +54,32 @@ impl<B: FaceLines> FaceStream for B {
     }
 
     fn bytes_done(&self) -> u64 {
-        // `state` needs `&mut`; the position is read through a copy.
-        self.pos_done() as u64
+        self.section().pos as u64
     }
 }
 
 /// Fills `out` with the next triangles of `body` (see the module docs).
 /// Returns `false` once the faces are exhausted.
 fn fill_faces<B: FaceLines>(body: &mut B, out: &mut Emit, stats: &mut ReadStats) -> Result<bool, Error> {
-    let map = body.map();
+    let map = body.section().map.clone();
     let data = map.bytes();
     let nv = out.pos.count();
-    let mut lines = Lines::new(data, *body.state().1);
+    let mut lines = Lines::new(data, body.section().pos);
     loop {
-        match body.state().0.emit(out) {
+        match body.section_mut().fan.emit(out) {
             Ok(true) => {}
             Ok(false) => {
-                *body.state().1 = lines.pos;
+                body.section_mut().pos = lines.pos;
                 return Ok(true);
             }
-            Err(v) => return Err(body.locate(not_finite(body.path(), v, out.pos), data)),
+            Err(v) => return Err(body.locate(not_finite(&body.section().path, v, out.pos), data)),
         }
         let Some((at, line)) = body.next_line(&mut lines, data)? else {
-            *body.state().1 = data.len();
+            body.section_mut().pos = data.len();
             return Ok(false);
         };
         if body.face(data, at, &line, nv)? {
-            body.state().0.ready(stats);
+            body.section_mut().fan.ready(stats);
         }
     }
 }

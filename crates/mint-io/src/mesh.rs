@@ -18,16 +18,16 @@
 //! the vertices and finds the index base; [`MeshBody`] streams the faces.
 
 use std::borrow::Cow;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
 use crate::error::{show_token, Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
 use crate::positions::Positions;
-use crate::backend::{ElementInfo, MeshInfo, Opened, PolygonFan};
+use crate::backend::{ElementInfo, MeshInfo, Opened};
 use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
 use crate::backend::WriteOptions;
-use crate::line_formats::{FaceLines, TextStyle, TextWriter};
+use crate::line_formats::{FaceLines, Section, TextStyle, TextWriter};
 use crate::Format;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -186,36 +186,25 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         return Err(Error::unsupported(path, format!("{} vertices; mint reads at most {} (32-bit indices)", s.nv, u32::MAX)).at_element("v"));
     }
     let positions = Positions::spilled(Arc::new(spill.into_mapped()?), s.nv as u32);
-    let body = MeshBody { path: path.to_path_buf(), map: map.clone(), pos: s.body, base: s.base(), f_rec: 0, fan: PolygonFan::default(), rec_at: 0 };
+    let body = MeshBody { sec: Section::new(path, map.clone(), s.body), base: s.base(), f_rec: 0, rec_at: 0 };
     Ok(Opened { info: make_info(&s), positions, body: Box::new(body), range_grid: None, spilled_vertices: s.nv })
 }
 
 /// Second pass: streams the `f` lines.
 struct MeshBody {
-    path: PathBuf,
-    map: Arc<Mapped>,
-    pos: usize,
+    sec: Section,
     base: i64,
     f_rec: u64,
-    fan: PolygonFan,
     rec_at: usize,
 }
 
 impl FaceLines for MeshBody {
-    fn path(&self) -> &Path {
-        &self.path
+    fn section(&self) -> &Section {
+        &self.sec
     }
 
-    fn map(&self) -> Arc<Mapped> {
-        self.map.clone()
-    }
-
-    fn pos_done(&self) -> usize {
-        self.pos
-    }
-
-    fn state(&mut self) -> (&mut PolygonFan, &mut usize) {
-        (&mut self.fan, &mut self.pos)
+    fn section_mut(&mut self) -> &mut Section {
+        &mut self.sec
     }
 
     fn locate(&self, e: Error, data: &[u8]) -> Error {
@@ -227,17 +216,17 @@ impl FaceLines for MeshBody {
     }
 
     fn face(&mut self, data: &[u8], at: usize, line: &[u8], nv: u32) -> Result<bool, Error> {
-        let (kind, rest) = classify(&self.path, data, line, at)?;
+        let (kind, rest) = classify(&self.sec.path, data, line, at)?;
         if kind != Kind::Face {
             return Ok(false);
         }
-        self.fan.clear();
+        self.sec.fan.clear();
         for tok in words(rest) {
             let i = parse_i64(tok).unwrap_or(-1) - self.base;
             if i < 0 || i >= nv as i64 {
                 return Err(Error::new(
                     ErrorKind::Index,
-                    &self.path,
+                    &self.sec.path,
                     format!(
                         "vertex index {} is out of range ({} vertices, indices read as {}-based)",
                         i + self.base,
@@ -250,7 +239,7 @@ impl FaceLines for MeshBody {
                 .at_line(line_of(data, at))
                 .at_byte(at as u64));
             }
-            self.fan.push(i as u32);
+            self.sec.fan.push(i as u32);
         }
         self.f_rec += 1;
         self.rec_at = at;

@@ -14,16 +14,16 @@
 //! Writing: `v` lines, then `f` lines with 1-based indices.
 
 use std::borrow::Cow;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
 use crate::error::{show_token, Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
 use crate::positions::Positions;
-use crate::backend::{ElementInfo, MeshInfo, Opened, PolygonFan};
+use crate::backend::{ElementInfo, MeshInfo, Opened};
 use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
 use crate::backend::WriteOptions;
-use crate::line_formats::{FaceLines, TextStyle, TextWriter};
+use crate::line_formats::{FaceLines, Section, TextStyle, TextWriter};
 use crate::Format;
 
 /// The kind of an OBJ line we care about.
@@ -149,37 +149,32 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         return Err(Error::unsupported(path, format!("{nv} vertices; mint reads at most {} (32-bit indices)", u32::MAX)).at_element("v"));
     }
     let positions = Positions::spilled(Arc::new(spill.into_mapped()?), nv as u32);
-    let body = ObjBody { path: path.to_path_buf(), map, pos: 0, v_seen: 0, f_rec: 0, fan: PolygonFan::default(), rec_at: 0 };
+    let body = ObjBody { sec: Section::new(path, map, 0), v_seen: 0, f_rec: 0, rec_at: 0 };
     Ok(Opened { info: make_info(nv, nf, comments), positions, body: Box::new(body), range_grid: None, spilled_vertices: nv })
 }
 
 /// Second pass: streams the faces (see the module docs).
 struct ObjBody {
-    path: PathBuf,
-    map: Arc<Mapped>,
-    /// Start of the next unread line.
-    pos: usize,
-    /// `v` lines before `pos` (for negative indices).
+    sec: Section,
+    /// `v` lines before the section's position (for negative indices).
     v_seen: u64,
-    /// `f` lines before `pos`.
+    /// `f` lines before it.
     f_rec: u64,
-    /// The current polygon.
-    fan: PolygonFan,
     /// Where the current polygon's line starts.
     rec_at: usize,
 }
 
 impl ObjBody {
-    /// Parses the corners of an `f` line into `self.fan`.
+    /// Parses the corners of an `f` line into `self.sec.fan`.
     fn parse_face(&mut self, data: &[u8], rest: &[u8], nv: u32, at: usize) -> Result<(), Error> {
-        self.fan.clear();
+        self.sec.fan.clear();
         let record = self.f_rec;
         for tok in words(rest) {
             let num = match tok.iter().position(|&b| b == b'/') {
                 Some(n) => &tok[..n],
                 None => tok,
             };
-            let bad = |kind, msg: String| err_at(Error::new(kind, &self.path, msg), data, "f", record, at);
+            let bad = |kind, msg: String| err_at(Error::new(kind, &self.sec.path, msg), data, "f", record, at);
             let i = parse_i64(num).ok_or_else(|| bad(ErrorKind::Format, format!("expected a vertex index, found {}", show_token(tok))))?;
             let abs = match i {
                 0 => return Err(bad(ErrorKind::Index, "vertex index 0 (OBJ indices start at 1)".into())),
@@ -192,27 +187,19 @@ impl ObjBody {
                     format!("vertex index {i} is out of range ({} vertices in the file, {} defined before this line)", nv, self.v_seen),
                 ));
             }
-            self.fan.push(abs as u32);
+            self.sec.fan.push(abs as u32);
         }
         Ok(())
     }
 }
 
 impl FaceLines for ObjBody {
-    fn path(&self) -> &Path {
-        &self.path
+    fn section(&self) -> &Section {
+        &self.sec
     }
 
-    fn map(&self) -> Arc<Mapped> {
-        self.map.clone()
-    }
-
-    fn pos_done(&self) -> usize {
-        self.pos
-    }
-
-    fn state(&mut self) -> (&mut PolygonFan, &mut usize) {
-        (&mut self.fan, &mut self.pos)
+    fn section_mut(&mut self) -> &mut Section {
+        &mut self.sec
     }
 
     fn locate(&self, e: Error, data: &[u8]) -> Error {

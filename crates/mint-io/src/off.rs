@@ -15,17 +15,17 @@
 //! padding and rewrites it at `finish`.
 
 use std::borrow::Cow;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::Arc;
 
 use crate::error::{show_token, Error, ErrorKind};
 use crate::format::off_keyword;
 use crate::mapped::{Mapped, SpillFile};
 use crate::positions::Positions;
-use crate::backend::{ElementInfo, MeshInfo, Opened, PolygonFan};
+use crate::backend::{ElementInfo, MeshInfo, Opened};
 use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
 use crate::backend::WriteOptions;
-use crate::line_formats::{FaceLines, TextStyle, TextWriter};
+use crate::line_formats::{FaceLines, Section, TextStyle, TextWriter};
 use crate::Format;
 
 /// The next line with content, `#` comments removed: (start, content).
@@ -176,27 +176,24 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         spill.write_point(p)?;
     }
     let positions = Positions::spilled(Arc::new(spill.into_mapped()?), h.nv as u32);
-    let body = OffBody { path: path.to_path_buf(), map: map.clone(), pos: lines.pos.min(data.len()), nf: h.nf, rec: 0, fan: PolygonFan::default(), rec_at: 0 };
+    let body = OffBody { sec: Section::new(path, map.clone(), lines.pos.min(data.len())), nf: h.nf, rec: 0, rec_at: 0 };
     Ok(Opened { info: make_info(&h), positions, body: Box::new(body), range_grid: None, spilled_vertices: h.nv })
 }
 
 /// Streams OFF faces (see the module docs).
 struct OffBody {
-    path: PathBuf,
-    map: Arc<Mapped>,
-    pos: usize,
+    sec: Section,
     nf: u64,
     /// Face lines read.
     rec: u64,
-    fan: PolygonFan,
     rec_at: usize,
 }
 
 impl OffBody {
     fn parse_face(&mut self, data: &[u8], line: &[u8], a: usize, nv: u32) -> Result<(), Error> {
-        self.fan.clear();
+        self.sec.fan.clear();
         let r = self.rec;
-        let err = |kind, msg: String| at(Error::new(kind, &self.path, msg), data, "face", Some(r), a);
+        let err = |kind, msg: String| at(Error::new(kind, &self.sec.path, msg), data, "face", Some(r), a);
         let mut w = words(line);
         let first = w.next().unwrap_or(b"");
         let n = parse_i64(first)
@@ -208,27 +205,19 @@ impl OffBody {
             if i < 0 || i >= nv as i64 {
                 return Err(err(ErrorKind::Index, format!("vertex index {i} is out of range (the file has {nv} vertices)")));
             }
-            self.fan.push(i as u32);
+            self.sec.fan.push(i as u32);
         }
         Ok(())
     }
 }
 
 impl FaceLines for OffBody {
-    fn path(&self) -> &Path {
-        &self.path
+    fn section(&self) -> &Section {
+        &self.sec
     }
 
-    fn map(&self) -> Arc<Mapped> {
-        self.map.clone()
-    }
-
-    fn pos_done(&self) -> usize {
-        self.pos
-    }
-
-    fn state(&mut self) -> (&mut PolygonFan, &mut usize) {
-        (&mut self.fan, &mut self.pos)
+    fn section_mut(&mut self) -> &mut Section {
+        &mut self.sec
     }
 
     fn locate(&self, e: Error, data: &[u8]) -> Error {
@@ -241,7 +230,7 @@ impl FaceLines for OffBody {
             if let Some((a, line)) = content_line(lines) {
                 let tok = words(line).next().unwrap_or(b"");
                 return Err(at(
-                    Error::format(&self.path, format!("unexpected data after the last face: {} (the counts line does not match the body)", show_token(tok))),
+                    Error::format(&self.sec.path, format!("unexpected data after the last face: {} (the counts line does not match the body)", show_token(tok))),
                     data,
                     "face",
                     Some(self.nf),
@@ -253,7 +242,7 @@ impl FaceLines for OffBody {
         match content_line(lines) {
             Some((a, line)) => Ok(Some((a, Cow::Borrowed(line)))),
             None => Err(at(
-                Error::format(&self.path, format!("unexpected end of file: {} faces declared, {} found (truncated file?)", self.nf, self.rec)),
+                Error::format(&self.sec.path, format!("unexpected end of file: {} faces declared, {} found (truncated file?)", self.nf, self.rec)),
                 data,
                 "face",
                 Some(self.rec),
