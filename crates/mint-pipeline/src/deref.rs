@@ -29,12 +29,11 @@
 //! otherwise; the summary says which ran and why.
 
 use crate::error::PipelineError;
-use crate::discretize::{write_chunks, CHUNK_TRIANGLES};
+use crate::discretize::{discretize_on_pool, CHUNK_TRIANGLES};
 use crate::kernels::{discretize_slice, LocalMap};
 use crate::progress::{Phase, Progress};
 use mint_core::grid::Grid;
 use mint_core::primitives::Transform;
-use mint_core::Intercept;
 use mint_io::{MeshReader, TriangleChunk, TriangleRecords, VertexPositions};
 use mint_store::{BucketReader, Buckets, Record, ShardWriter, StoreError};
 use serde::{Deserialize, Serialize};
@@ -545,23 +544,23 @@ fn join_blocks<C: Coord>(scatter: Vec<Mutex<BucketReader<Corner>>>, blocks: &Blo
 /// discretized chunk by chunk into `store`; six times each chunk's signed
 /// volume, in chunk order.
 fn assemble<C: Coord>(gather: Vec<BucketReader<Resolved<C>>>, blocks: &Blocks, store: &mut ShardWriter, job: &SortJob, nfaces: u64) -> Result<Vec<f64>, PipelineError> {
-    use crossbeam_channel::bounded;
     let SortJob { grid, threads, progress, xf, .. } = *job;
     let [_, nb, _] = grid.local_dims();
     let local = LocalMap::new(grid);
     let axis = grid.slab_axis;
     let gather: Vec<Mutex<BucketReader<Resolved<C>>>> = gather.into_iter().map(Mutex::new).collect();
     let gather = &gather;
-    let (tx, rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
-    let mut volumes = vec![0.0f64; blocks.chunks.len()];
     let local = &local;
     progress.start(ASSEMBLE, nfaces);
     // Each worker assembles whole face blocks into its own triangles.
-    let (failed, _, written) = mint_core::pool::run(
+    discretize_on_pool(
         threads,
         blocks.spans.len() as u64,
-        move |_| (tx.clone(), Vec::<[[f64; 3]; 3]>::new()),
-        |(tx, tris), b| {
+        blocks.chunks.len(),
+        store,
+        progress,
+        |_| Vec::<[[f64; 3]; 3]>::new(),
+        |tris, tx, b| {
             if progress.cancelled() {
                 return Err(PipelineError::Cancelled);
             }
@@ -592,13 +591,5 @@ fn assemble<C: Coord>(gather: Vec<BucketReader<Resolved<C>>>, blocks: &Blocks, s
             }
             Ok(())
         },
-        drop,
-        |stop| write_chunks(rx, &mut volumes, store, stop),
-    );
-    if let Some(e) = failed {
-        return Err(e);
-    }
-    written?;
-    progress.finish();
-    Ok(volumes)
+    )
 }

@@ -12,6 +12,7 @@ use mint_core::primitives::Transform;
 use mint_core::{discretize_triangle, Intercept};
 use mint_io::{MeshReader, TriangleChunk, TriangleRecords};
 use mint_store::{ShardWriter, StoreError};
+use crossbeam_channel::Sender;
 use std::sync::atomic::Ordering;
 
 /// Triangles per chunk handed from the reader to the workers. Parts of a
@@ -140,69 +141,86 @@ pub(crate) fn discretize_direct(
     progress: &dyn Progress,
     xf: Option<&Transform>,
 ) -> Result<(u64, Vec<f64>), PipelineError> {
-    use crossbeam_channel::bounded;
     let [_, nb, _] = grid.local_dims();
     let local = LocalMap::new(grid);
     let chunk = CHUNK_TRIANGLES as u64;
     let chunks = end.saturating_sub(first).div_ceil(chunk);
-    let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
     progress.start(crate::progress::DISCRETIZE, end.saturating_sub(first));
-    let mut volumes = vec![0.0f64; chunks as usize];
     let local = &local;
+    let volumes = discretize_on_pool(threads, chunks, chunks as usize, store, progress, |_| (), |_, tx, c| {
+        if progress.cancelled() {
+            return Err(PipelineError::Cancelled);
+        }
+        let (a, b) = (first + c * chunk, (first + (c + 1) * chunk).min(end));
+        // Keep the disk busy READ_AHEAD chunks ahead of the workers
+        // (each worker asks for the chunk that far past its own).
+        let ahead = a + READ_AHEAD * chunk;
+        records.read_ahead(ahead, (ahead + chunk).min(end));
+        let mut recs = Vec::with_capacity(1024);
+        let mut volume = 0.0;
+        let visited = match (grid.slab_axis, xf) {
+            (0, None) => visit_chunk::<0>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
+            (1, None) => visit_chunk::<1>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
+            (_, None) => visit_chunk::<2>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
+            (_, Some(t)) => visit_chunk::<3>(&ChunkJob { records, a, b, local, xf: Some(t), nb, progress }, &mut recs, &mut volume),
+        };
+        match visited {
+            Ok(true) => {}
+            Ok(false) => return Err(PipelineError::Cancelled),
+            Err(e) => return Err(e.into()),
+        }
+        progress.advance(b - a);
+        // A closed channel: the writer stopped on an error and raised `stop`.
+        let _ = tx.send((c as usize, recs, volume));
+        Ok(())
+    })?;
+    Ok((end.saturating_sub(first), volumes))
+}
+
+/// A chunk of records on its way to the shard writer: its number, its
+/// records, six times its signed volume.
+pub(crate) type ChunkOut = (usize, Vec<Intercept>, f64);
+
+/// The parallel discretize passes' one shape (direct and sorted): `work`
+/// runs over `items` on the worker pool, each worker with its own state from
+/// `make` and a sender of [`ChunkOut`]s; beside them the one shard writer
+/// appends each chunk's records to `store` as they come (order does not
+/// matter: readers sort) and files each chunk's volume under its number
+/// (`chunks` of them). A store error stops the workers; the first error of
+/// either side is returned. Returns the volumes, in chunk order.
+pub(crate) fn discretize_on_pool<W: Send>(
+    threads: usize,
+    items: u64,
+    chunks: usize,
+    store: &mut ShardWriter,
+    progress: &dyn Progress,
+    make: impl FnMut(usize) -> W,
+    work: impl Fn(&mut W, &Sender<ChunkOut>, u64) -> Result<(), PipelineError> + Sync,
+) -> Result<Vec<f64>, PipelineError> {
+    let (tx, rx) = crossbeam_channel::bounded::<ChunkOut>(threads * 2);
+    let mut volumes = vec![0.0f64; chunks];
+    let mut make = make;
     let (failed, _, written) = mint_core::pool::run(
         threads,
-        chunks,
-        move |_| rec_tx.clone(),
-        |rec_tx, c| {
-            if progress.cancelled() {
-                return Err(PipelineError::Cancelled);
+        items,
+        move |w| (tx.clone(), make(w)),
+        |(tx, state), i| work(state, tx, i),
+        drop,
+        |stop| -> Result<(), StoreError> {
+            for (seq, recs, volume) in rx {
+                volumes[seq] = volume;
+                if let Err(e) = store.append(&recs) {
+                    stop.store(true, Ordering::Relaxed);
+                    return Err(e);
+                }
             }
-            let (a, b) = (first + c * chunk, (first + (c + 1) * chunk).min(end));
-            // Keep the disk busy READ_AHEAD chunks ahead of the workers
-            // (each worker asks for the chunk that far past its own).
-            let ahead = a + READ_AHEAD * chunk;
-            records.read_ahead(ahead, (ahead + chunk).min(end));
-            let mut recs = Vec::with_capacity(1024);
-            let mut volume = 0.0;
-            let visited = match (grid.slab_axis, xf) {
-                (0, None) => visit_chunk::<0>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
-                (1, None) => visit_chunk::<1>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
-                (_, None) => visit_chunk::<2>(&ChunkJob { records, a, b, local, xf: None, nb, progress }, &mut recs, &mut volume),
-                (_, Some(t)) => visit_chunk::<3>(&ChunkJob { records, a, b, local, xf: Some(t), nb, progress }, &mut recs, &mut volume),
-            };
-            match visited {
-                Ok(true) => {}
-                Ok(false) => return Err(PipelineError::Cancelled),
-                Err(e) => return Err(e.into()),
-            }
-            progress.advance(b - a);
-            // A closed channel: the writer stopped on an error and raised `stop`.
-            let _ = rec_tx.send((c as usize, recs, volume));
             Ok(())
         },
-        drop,
-        |stop| write_chunks(rec_rx, &mut volumes, store, stop),
     );
     if let Some(e) = failed {
         return Err(e);
     }
     written?;
     progress.finish();
-    Ok((end.saturating_sub(first), volumes))
-}
-
-/// The one shard writer of the parallel discretize passes (direct and
-/// sorted): appends each chunk's records to `store` as the workers send
-/// them (order does not matter: readers sort) and files each chunk's volume
-/// under its number. On a store error it raises `stop` for the workers and
-/// returns the error.
-pub(crate) fn write_chunks(rx: crossbeam_channel::Receiver<(usize, Vec<Intercept>, f64)>, volumes: &mut [f64], store: &mut ShardWriter, stop: &std::sync::atomic::AtomicBool) -> Result<(), StoreError> {
-    for (seq, recs, volume) in rx {
-        volumes[seq] = volume;
-        if let Err(e) = store.append(&recs) {
-            stop.store(true, Ordering::Relaxed);
-            return Err(e);
-        }
-    }
-    Ok(())
+    Ok(volumes)
 }
