@@ -72,5 +72,14 @@ printf '\021\001\000\000\000\020\000\000\000\020\000\000\000\020\000\002\001\000
 put resample tet-res tetrahedron
 put resample cube-res cube
 put resample open-res open-tetrahedron-parity
+# OFF whose keyword and first count run together (public test files have it).
+printf 'OFF8 6 12\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n4 0 2 3 1\n4 4 5 7 6\n4 0 1 5 4\n4 2 6 7 3\n4 0 4 6 2\n4 1 3 7 5\n' > glued.off
+put read_off glued.off glued-keyword.off
+# Staged runs' plans (read_plan): resample, strict, bool, csg.
+echo '{"difference": [{"sphere": {"radius": 1}}, {"cylinder": {"radius": 0.5, "height": 3}}]}' > s.json
+"$MINT" stage plan resample sphere.ply o.ply --cells 1000 --work w1 --parts 2 --slabs 3 -q > p1; put read_plan p1 resample.json
+"$MINT" stage plan resample sphere.ply o3.obj --cells 500 --signs orient --axis z --work w3 -q > p3; put read_plan p3 strict.json
+"$MINT" stage plan bool difference sphere.ply torus.ply o2.ply --cell-size 0.05 --signs parity --double --work w2 -q > p2; put read_plan p2 bool.json
+"$MINT" stage plan csg s.json o4.ply --cells 2000 --work w4 -q > p4; put read_plan p4 csg.json
 ls -R "$C" | head -80
 du -sh "$C"

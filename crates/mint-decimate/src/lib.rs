@@ -19,26 +19,13 @@
 use mint_core::grid::GridSize;
 use mint_io::{Format, MeshReader, MeshWriter, TriangleChunk, WriteOptions};
 use mint_pipeline::discretize::CHUNK_TRIANGLES;
-use mint_pipeline::progress::{Progress, BOUNDS};
+use mint_pipeline::progress::{check_cancel, Progress, BOUNDS};
 use mint_pipeline::{run, PipelineError, ResampleSummary, RunSpec, Tuning, WriteSpec};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 use std::time::Instant;
 
-/// `Err(Cancelled)` once the run is cancelled.
-fn check_cancel(progress: &dyn Progress) -> Result<(), PipelineError> {
-    if progress.cancelled() {
-        Err(PipelineError::Cancelled)
-    } else {
-        Ok(())
-    }
-}
-
-/// A one-line error naming `path`.
-fn refuse(path: &Path, message: String) -> PipelineError {
-    PipelineError::Stage { path: path.to_path_buf(), message }
-}
 
 /// The least default intermediate size. Small targets need an intermediate
 /// finer than `4 N` for the simplifier to choose the shape: measured on
@@ -118,7 +105,7 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
     let t0 = Instant::now();
     let format = Format::from_path(output)?;
     if o.target_faces < 4 {
-        return Err(refuse(output, format!("--faces {}: a closed surface needs at least 4 faces", o.target_faces)));
+        return Err(PipelineError::stage(output, format!("--faces {}: a closed surface needs at least 4 faces", o.target_faces)));
     }
     let threads = o.tuning.thread_count();
     // 1. Area, then the cell size for the intermediate target.
@@ -212,7 +199,7 @@ fn simplify_and_write(
     let t = Instant::now();
     let (p, f, sr) = mint_mesh::simplify_with(&positions, &tris, so, &|| progress.cancelled()).map_err(|e| match e {
         mint_mesh::MeshError::Cancelled => PipelineError::Cancelled,
-        e => refuse(input, format!("simplifying: {e}")),
+        e => PipelineError::stage(input, format!("simplifying: {e}")),
     })?;
     drop((positions, tris));
     let seconds_simplify = t.elapsed().as_secs_f64();
@@ -299,7 +286,7 @@ pub fn simplify_file(input: &Path, output: &Path, o: &SimplifyFileOptions, progr
     let t0 = Instant::now();
     let format = Format::from_path(output)?;
     if o.target_faces < 4 {
-        return Err(refuse(output, format!("--faces {}: a closed surface needs at least 4 faces", o.target_faces)));
+        return Err(PipelineError::stage(output, format!("--faces {}: a closed surface needs at least 4 faces", o.target_faces)));
     }
     let (mut positions, mut tris) = mint_io::read_mesh(input)?;
     if tris.is_empty() {

@@ -52,7 +52,7 @@ pub enum PipelineError {
 
 impl PipelineError {
     /// A [`PipelineError::Stage`] error.
-    pub(crate) fn stage(path: impl Into<PathBuf>, message: impl Into<String>) -> PipelineError {
+    pub fn stage(path: impl Into<PathBuf>, message: impl Into<String>) -> PipelineError {
         PipelineError::Stage { path: path.into(), message: message.into() }
     }
 }

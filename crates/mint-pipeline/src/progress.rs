@@ -15,7 +15,7 @@ pub const RECONSTRUCT: Phase = Phase::named("reconstruct");
 pub const WRITE: Phase = Phase::named("write");
 
 /// `Err(Cancelled)` once the run is cancelled (Ctrl-C, SIGTERM).
-pub(crate) fn check_cancel(progress: &dyn Progress) -> Result<(), crate::error::PipelineError> {
+pub fn check_cancel(progress: &dyn Progress) -> Result<(), crate::error::PipelineError> {
     if progress.cancelled() {
         Err(crate::error::PipelineError::Cancelled)
     } else {

@@ -34,6 +34,7 @@ pub const TARGETS: &[Target] = &[
     ("read_aln", read_aln),
     ("read_rgrid", read_rgrid),
     ("parse_scene", parse_scene),
+    ("read_plan", read_plan),
     ("discretize", discretize),
     ("resample", resample),
     ("simplify", simplify),
@@ -300,6 +301,28 @@ pub fn parse_scene(data: &[u8]) {
         }
         Ok(s) => {
             assert!(!s.operands.is_empty(), "a scene without operands");
+        }
+    }
+}
+
+/// A staged run's `plan.json` (mint-pipeline's `Plan::parse`): as given,
+/// and resealed (its checksum recomputed after the mutation, so that what
+/// the plan claims is judged, not only its checksum). A refusal is one line
+/// naming the file; an accepted plan's stages follow from its spec.
+pub fn read_plan(data: &[u8]) {
+    let path = Path::new("w/plan.json");
+    let judge = |bytes: &[u8]| match mint_pipeline::Plan::parse(bytes, path) {
+        Err(e) => one_line_naming(&e, path),
+        Ok(p) => {
+            assert!(p.parts >= 1 && p.slabs >= 1 && p.parts <= mint_pipeline::plan::MAX_TASKS && p.slabs <= mint_pipeline::plan::MAX_TASKS);
+            assert!(p.stages.iter().all(|s| s.tasks <= mint_pipeline::plan::MAX_TASKS), "a stage of {:?} tasks", p.stages);
+        }
+    };
+    judge(data);
+    if let Ok(mut v) = serde_json::from_slice::<serde_json::Value>(data) {
+        if v.is_object() {
+            mint_pipeline::plan::seal(&mut v);
+            judge(serde_json::to_string(&v).unwrap().as_bytes());
         }
     }
 }
