@@ -483,3 +483,70 @@ fn debris_of_killed_runs_is_removed_by_the_next_run() {
     }
     assert_eq!(debris(), vec![live]);
 }
+
+/// A task killed with SIGKILL leaves its temporary directory; `stage status`
+/// reports it as stale (no live process holds it), not as running forever,
+/// and running the task again removes it. A task a live process is writing
+/// stays "running" (issue 26).
+#[test]
+fn a_killed_task_is_reported_stale_and_redone() {
+    let d = tempfile::tempdir().unwrap();
+    let input = d.path().join("s.ply");
+    assert!(std::process::Command::new(mint_bin()).args(["gen", "sphere"]).arg(&input).args(["--faces", "2000000"]).output().unwrap().status.success());
+    let work = d.path().join("w");
+    let out = d.path().join("o.ply");
+    let o = std::process::Command::new(mint_bin())
+        .args(["stage", "plan", "resample"]).arg(&input).arg(&out)
+        .args(["--cells", "3000000", "--work"]).arg(&work).args(["--parts", "1", "--slabs", "1", "--quiet"])
+        .output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let status = || -> serde_json::Value {
+        let o = std::process::Command::new(mint_bin()).args(["stage", "status"]).arg(&work).arg("--json").output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let stage = |v: &serde_json::Value, name: &str| v["stages"].as_array().unwrap().iter().find(|s| s["name"] == name).unwrap().clone();
+    let task = |stage: &str| {
+        std::process::Command::new(mint_bin()).args(["stage", "run"]).arg(&work).args([stage, "0", "--threads", "1"]).output().unwrap()
+    };
+    assert!(task("bounds").status.success());
+    // Kill the discretize task while its temporary directory exists.
+    let mut killed = false;
+    for wait_ms in [60u64, 40, 30, 80, 20, 50, 120, 10, 200, 400, 35, 45, 25, 15] {
+        let mut child = std::process::Command::new(mint_bin()).args(["stage", "run"]).arg(&work).args(["discretize", "0", "--threads", "1", "--quiet"])
+            .stderr(std::process::Stdio::null()).spawn().unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(wait_ms));
+        let _ = child.kill();
+        let _ = child.wait();
+        let s = stage(&status(), "discretize");
+        if s["done"] == 0 && s["stale"] == 1 {
+            assert_eq!(s["running"], 0, "{s}");
+            killed = true;
+            break;
+        }
+        assert_eq!(s["running"], 0, "a dead task counted as running: {s}");
+        if s["done"] == 1 {
+            let _ = std::fs::remove_dir_all(work.join("discretize"));
+        }
+    }
+    assert!(killed, "no discretize task was killed while it was writing");
+    let text = std::process::Command::new(mint_bin()).args(["stage", "status"]).arg(&work).output().unwrap();
+    assert!(String::from_utf8_lossy(&text.stdout).contains("stale: 1 task"), "{}", String::from_utf8_lossy(&text.stdout));
+    // A live writer (its lock held) is running, not stale.
+    let live = work.join("census").join(".00000.tmp-1-1");
+    std::fs::create_dir_all(&live).unwrap();
+    let held = mint_pipeline::workdir::OwnerLock::of_dir(&live).unwrap();
+    let s = stage(&status(), "census");
+    assert_eq!((s["running"].as_u64(), s["stale"].as_u64()), (Some(1), Some(0)), "{s}");
+    drop(held);
+    assert_eq!(stage(&status(), "census")["stale"], 1);
+    std::fs::remove_dir_all(&live).unwrap();
+    // Running the task again redoes it and removes the debris.
+    let o = task("discretize");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = stage(&status(), "discretize");
+    assert_eq!((s["done"].as_u64(), s["running"].as_u64(), s["stale"].as_u64()), (Some(1), Some(0), Some(0)), "{s}");
+    let names: Vec<String> = std::fs::read_dir(work.join("discretize")).unwrap().flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect();
+    assert!(names.iter().all(|n| !n.contains(".tmp-")), "{names:?}");
+    assert!(!work.join("discretize").join("00000").join(".owner").exists(), "the lock file stays out of the result");
+}

@@ -19,7 +19,7 @@ use crate::progress::Progress;
 use crate::scene::{Operand, Scene};
 use crate::spec::{Job, RunSpec, Tuning};
 use crate::stages::{run_stage_task, Ctx, DiscretizeResult};
-use crate::workdir::{disk_bytes, is_done, task_dir, temp_tasks, TaskBuild, PLAN_FILE};
+use crate::workdir::{disk_bytes, is_done, task_dir, temp_tasks, Owner, TaskBuild, PLAN_FILE};
 use mint_core::signs::SignRule;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -188,8 +188,10 @@ fn run_job(spec: &RunSpec, scene: Option<Scene>, tuning: &Tuning, progress: &dyn
     let plan = plan_run(spec, Some(scene.clone()), tuning, &dir)?;
     // Task directories abandoned by a process that died.
     for stage in &plan.stages {
-        for t in temp_tasks(&dir, stage.name) {
-            let _ = std::fs::remove_dir_all(t);
+        for (t, owner) in temp_tasks(&dir, stage.name) {
+            if owner == Owner::Dead {
+                let _ = std::fs::remove_dir_all(t);
+            }
         }
     }
     // The output was removed after a finished run: write it again.
@@ -375,8 +377,12 @@ pub struct StageStatus {
     pub name: Stage,
     pub tasks: u32,
     pub done: u32,
-    /// Task directories being written (or abandoned by a process that died).
+    /// Task directories being written by a live process (or by one whose
+    /// liveness cannot be told).
     pub running: u32,
+    /// Task directories abandoned by a process that died (no live process
+    /// holds their lock); the next run of the task removes them.
+    pub stale: u32,
     pub left: u32,
     /// Bytes on disk of the stage's results.
     pub bytes: u64,
@@ -402,12 +408,15 @@ pub fn status(dir: &Path) -> Result<RunStatus, PipelineError> {
     let mut stages = Vec::new();
     for st in &plan.stages {
         let done = (0..st.tasks).filter(|&t| is_done(dir, st.name, t)).count() as u32;
-        let running = temp_tasks(dir, st.name).len() as u32;
+        let temps = temp_tasks(dir, st.name);
+        let stale = temps.iter().filter(|(_, o)| *o == Owner::Dead).count() as u32;
+        let running = temps.len() as u32 - stale;
         stages.push(StageStatus {
             name: st.name,
             tasks: st.tasks,
             done,
             running,
+            stale,
             left: st.tasks - done,
             bytes: disk_bytes(&dir.join(st.name.dir_name())),
         });

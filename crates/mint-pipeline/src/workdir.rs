@@ -125,6 +125,7 @@ pub struct TaskBuild {
     tmp: PathBuf,
     target: PathBuf,
     committed: bool,
+    _owner: OwnerLock,
 }
 
 impl TaskBuild {
@@ -134,8 +135,22 @@ impl TaskBuild {
         std::fs::create_dir_all(&stage_dir).map_err(io(&stage_dir, "creating the stage directory"))?;
         let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.subsec_nanos()).unwrap_or(0);
         let tmp = stage_dir.join(format!(".{task:05}.tmp-{}-{nanos}", std::process::id()));
+        // Copies of this task abandoned by a process that died.
+        let mine = format!(".{task:05}.tmp-");
+        for (p, owner) in temp_tasks(dir, stage) {
+            if owner == Owner::Dead && p.file_name().is_some_and(|n| n.to_string_lossy().starts_with(&mine)) {
+                let _ = std::fs::remove_dir_all(p);
+            }
+        }
         std::fs::create_dir(&tmp).map_err(io(&tmp, "creating a task directory"))?;
-        Ok(TaskBuild { tmp, target: task_dir(dir, stage, task), committed: false })
+        let owner = match OwnerLock::of_dir(&tmp) {
+            Ok(o) => o,
+            Err(e) => {
+                let _ = std::fs::remove_dir_all(&tmp);
+                return Err(e);
+            }
+        };
+        Ok(TaskBuild { tmp, target: task_dir(dir, stage, task), committed: false, _owner: owner })
     }
 
     /// Where the task writes its files.
@@ -158,6 +173,9 @@ impl TaskBuild {
             Ok(())
         };
         write().map_err(io(&path, "writing a task result"))?;
+        // The lock file stays out of the result; the lock itself is held
+        // (through the open file) until this build is dropped.
+        let _ = std::fs::remove_file(self.tmp.join(OWNER_FILE));
         match std::fs::rename(&self.tmp, &self.target) {
             Ok(()) => {
                 self.committed = true;
@@ -262,12 +280,38 @@ pub fn disk_bytes(path: &Path) -> u64 {
 }
 
 /// Temporary task directories present in a stage (tasks being written, or
-/// abandoned by a process that died).
-pub fn temp_tasks(dir: &Path, stage: Stage) -> Vec<PathBuf> {
+/// abandoned by a process that died), each with the state of its owner.
+pub fn temp_tasks(dir: &Path, stage: Stage) -> Vec<(PathBuf, Owner)> {
     let Ok(rd) = std::fs::read_dir(dir.join(stage.dir_name())) else { return Vec::new() };
     let mut v: Vec<PathBuf> = rd.flatten().map(|e| e.path()).filter(|p| p.file_name().is_some_and(|n| n.to_string_lossy().contains(".tmp-"))).collect();
     v.sort();
-    v
+    v.into_iter().map(|p| {
+        let o = owner_of(&p);
+        (p, o)
+    }).collect()
+}
+
+/// Who holds a temporary directory.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Owner {
+    /// A live process holds its lock.
+    Live,
+    /// Its lock is free: the process that made it died.
+    Dead,
+    /// It has no lock file (being set up or committed, or made by an older
+    /// mint); treated as live.
+    Unknown,
+}
+
+/// The state of the owner of the directory `dir` (see [`OwnerLock`]). The
+/// lock is taken and released at once when free. On a shared file system
+/// this needs working `flock` (NFSv4 and Lustre with `flock` do).
+pub fn owner_of(dir: &Path) -> Owner {
+    match File::open(dir.join(OWNER_FILE)) {
+        Err(_) => Owner::Unknown,
+        Ok(f) if try_flock(&f) => Owner::Dead,
+        Ok(_) => Owner::Live,
+    }
 }
 
 /// The owner lock of a temporary work directory: an exclusive
@@ -308,18 +352,11 @@ pub fn remove_dead(root: &Path, prefix: &str) -> Vec<PathBuf> {
     let Ok(rd) = std::fs::read_dir(root) else { return Vec::new() };
     let mut removed = Vec::new();
     for e in rd.flatten() {
-        if !e.file_name().to_string_lossy().starts_with(prefix) {
+        if !e.file_name().to_string_lossy().starts_with(prefix) || !e.file_type().map(|t| t.is_dir()).unwrap_or(false) {
             continue;
         }
         let path = e.path();
-        if !e.file_type().map(|t| t.is_dir()).unwrap_or(false) {
-            continue;
-        }
-        let Ok(f) = File::open(path.join(OWNER_FILE)) else { continue };
-        if !try_flock(&f) {
-            continue; // a live run holds it
-        }
-        if std::fs::remove_dir_all(&path).is_ok() {
+        if owner_of(&path) == Owner::Dead && std::fs::remove_dir_all(&path).is_ok() {
             removed.push(path);
         }
     }

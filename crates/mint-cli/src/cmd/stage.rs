@@ -21,7 +21,7 @@ pub enum StageCommand {
     Plan(JobCommand),
     /// Run one task of one stage (a no-op if it is already done).
     Run(RunArgs),
-    /// Show, per stage, the tasks done, running and left, and the bytes on disk.
+    /// Show, per stage, the tasks done, running, stale (left by a dead process) and left, and the bytes on disk.
     Status(StatusArgs),
 }
 
@@ -102,9 +102,14 @@ pub fn cmd_stage(c: StageCommand) -> Result<()> {
 
 fn print_status(st: &mint_pipeline::RunStatus) {
     println!("{} -> {}  ({} parts, {} slabs, {} on disk)", st.job, st.output, st.parts, st.slabs, human_bytes(st.bytes));
-    println!("  {:<12} {:>6} {:>6} {:>8} {:>6} {:>10}", "stage", "tasks", "done", "running", "left", "bytes");
+    println!("  {:<12} {:>6} {:>6} {:>8} {:>6} {:>6} {:>10}", "stage", "tasks", "done", "running", "stale", "left", "bytes");
     for s in &st.stages {
-        println!("  {:<12} {:>6} {:>6} {:>8} {:>6} {:>10}", s.name, s.tasks, s.done, s.running, s.left, human_bytes(s.bytes));
+        println!("  {:<12} {:>6} {:>6} {:>8} {:>6} {:>6} {:>10}", s.name, s.tasks, s.done, s.running, s.stale, s.left, human_bytes(s.bytes));
+    }
+    let stale: u32 = st.stages.iter().map(|s| s.stale).sum();
+    if stale > 0 {
+        println!("  stale: {stale} task{} left half-written by a process that died (no live process holds {}); running {} again redoes and removes {}",
+            if stale > 1 { "s" } else { "" }, if stale > 1 { "them" } else { "it" }, if stale > 1 { "them" } else { "it" }, if stale > 1 { "them" } else { "it" });
     }
     println!("  {}", if st.complete { "complete: the output is written" } else { "not complete" });
 }
