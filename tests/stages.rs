@@ -550,3 +550,69 @@ fn a_killed_task_is_reported_stale_and_redone() {
     assert!(names.iter().all(|n| !n.contains(".tmp-")), "{names:?}");
     assert!(!work.join("discretize").join("00000").join(".owner").exists(), "the lock file stays out of the result");
 }
+
+/// Asks to stop as soon as the write phase has finished: the output is in
+/// place by then.
+#[derive(Default)]
+struct CancelAfterWrite {
+    writing: std::sync::atomic::AtomicBool,
+    cancel: std::sync::atomic::AtomicBool,
+}
+impl mint_core::progress::Progress for CancelAfterWrite {
+    fn start(&self, phase: mint_core::progress::Phase, _total: u64) {
+        if phase == mint_pipeline::progress::WRITE {
+            self.writing.store(true, std::sync::atomic::Ordering::SeqCst);
+        }
+    }
+    fn finish(&self) {
+        if self.writing.load(std::sync::atomic::Ordering::SeqCst) {
+            self.cancel.store(true, std::sync::atomic::Ordering::SeqCst);
+        }
+    }
+    fn cancelled(&self) -> bool {
+        self.cancel.load(std::sync::atomic::Ordering::SeqCst)
+    }
+}
+
+/// Resume messages that do not lie (issue 26): a cancel that arrives after
+/// the output is written does not report "no output written", and a damaged
+/// task result with the output deleted fails before writing anything
+/// instead of writing the output and then exiting 1.
+#[test]
+fn a_late_cancel_and_a_damaged_result_tell_the_truth() {
+    let d = tempfile::tempdir().unwrap();
+    let input = write_mesh(d.path(), "g.ply", |s| drop(mint_gen::genus(1, 20_000, s).unwrap()));
+    let out = d.path().join("o.ply");
+    let o = opts(20_000).with(|o| o.tuning.work_dir = Some(d.path().join("w")));
+    let s = resample(&input, &out, &o, &CancelAfterWrite::default());
+    assert!(s.is_ok(), "{:?}", s.err().map(|e| e.to_string()));
+    assert!(out.exists());
+    let want = std::fs::read(&out).unwrap();
+    // A cancel before the write stage: no output, and it says so.
+    std::fs::remove_file(&out).unwrap();
+    struct Stop;
+    impl mint_core::progress::Progress for Stop {
+        fn cancelled(&self) -> bool {
+            true
+        }
+    }
+    let e = resample(&input, &out, &o, &Stop).unwrap_err().to_string();
+    assert!(e.contains("interrupted; no output written") && !out.exists(), "{e}");
+    // A damaged bounds result, output deleted: one line, nothing written.
+    let result = d.path().join("w").join("bounds").join("00000").join("result.json");
+    let good = std::fs::read(&result).unwrap();
+    let mut bad = good.clone();
+    let at = bad.len() / 2;
+    bad[at] ^= 0x01;
+    std::fs::write(&result, &bad).unwrap();
+    let o2 = std::process::Command::new(mint_bin()).arg("resample").arg(&input).arg(&out)
+        .args(["--cells", "20000", "--threads", "2", "--quiet", "--work"]).arg(d.path().join("w")).output().unwrap();
+    let err = String::from_utf8_lossy(&o2.stderr);
+    assert_eq!(o2.status.code(), Some(1), "{err}");
+    one_line_error(&err, "damaged task result");
+    assert!(!out.exists(), "an output was written by a run that then failed");
+    // Repaired: the same bytes.
+    std::fs::write(&result, &good).unwrap();
+    assert!(resample(&input, &out, &o, &NoProgress).is_ok());
+    assert!(std::fs::read(&out).unwrap() == want);
+}

@@ -147,10 +147,14 @@ fn verify_inputs(plan: &Plan) -> Result<(), PipelineError> {
     Ok(())
 }
 
+/// Runs one task and commits it. Cancellation is checked before the task
+/// starts (and inside it, by its loops); a task whose work is complete is
+/// committed even if a cancel arrives meanwhile, so that a write task that
+/// has put the output in place never reports "no output written".
 fn run_one(ctx: &Ctx, stage: Stage, task: u32) -> Result<(), PipelineError> {
+    check_cancel(ctx.progress)?;
     let build = TaskBuild::begin(&ctx.dir, stage, task)?;
     let result = run_stage_task(ctx, stage, task, &build)?;
-    check_cancel(ctx.progress)?;
     build.commit(&result)
 }
 
@@ -212,7 +216,6 @@ fn run_job(spec: &RunSpec, scene: Option<Scene>, tuning: &Tuning, progress: &dyn
             run_one(&ctx, stage.name, task)?;
             ran += 1;
         }
-        check_cancel(progress)?;
         seconds.insert(stage.name, t.elapsed().as_secs_f64());
     }
     let mut s = summarize(&ctx)?;
