@@ -196,3 +196,26 @@ fn intercept_counts_add_up_even_when_the_result_is_empty() {
         assert_eq!(s.intercepts_kept, s.output_vertices - s.synthesized_vertices);
     }
 }
+
+/// A VCGLIB-style ascii PLY whose face lines carry more numbers than the
+/// header declares resamples, and the run says so once (issue 26: it was
+/// refused).
+#[test]
+fn undeclared_values_on_ascii_ply_lines_are_read_and_reported() {
+    let d = tempfile::tempdir().unwrap();
+    let input = d.path().join("vcg.ply");
+    let body = "ply\nformat ascii 1.0\ncomment VCGLIB generated\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+element face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n\
+3 0 2 1 6 0 0 1 0 0 1\n3 0 1 3 6 0 0 1 0 0 1\n3 0 3 2\n3 1 2 3\n";
+    std::fs::write(&input, body).unwrap();
+    let out = d.path().join("o.ply");
+    let o = std::process::Command::new(mint_bin()).arg("resample").arg(&input).arg(&out).args(["--cells", "1000", "--json"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let w = v["warnings"].as_array().unwrap();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(w[0].as_str().unwrap().contains("line 15: element 'face'"), "{w:?}");
+    assert_eq!(err.matches("mint: warning:").count(), 1, "{err}");
+    assert_eq!(v["output_faces"].as_u64().map(|f| f > 0), Some(true));
+}

@@ -85,7 +85,7 @@ pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, j
 
 /// Warnings about a run that succeeded: an empty output, and why.
 pub(crate) fn summary_warnings(s: &mint_pipeline::ResampleSummary) -> Vec<String> {
-    let mut w = Vec::new();
+    let mut w = s.input_warnings.clone();
     if s.output_faces == 0 {
         let why = if s.intercepts_found == 0 {
             "no grid line crosses the surface (it is flat between grid lines or smaller than a cell; use smaller cells)"

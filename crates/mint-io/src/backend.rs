@@ -107,6 +107,11 @@ pub(crate) trait FaceStream: Send {
     fn ignored_trailing_bytes(&self) -> u64 {
         0
     }
+    /// What the format accepted but a user should know, one line each
+    /// naming the file (see [`crate::MeshReader::warnings`]).
+    fn warnings(&self) -> Vec<String> {
+        Vec::new()
+    }
     /// The number of face records, when every record has the same size if
     /// it is a triangle, so that records `first .. end` can be read alone
     /// (binary PLY with one face element, binary STL). `None` otherwise.

@@ -462,6 +462,7 @@ impl MeshReader {
         if n > 0 {
             w.push(format!("{}: {n} bytes after the last element the header declares were ignored (the header counts may not match the body)", self.path.display()));
         }
+        w.extend(self.body.warnings());
         w
     }
 }

@@ -273,6 +273,11 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
             }
         }
         s.deref_spilled_bytes += m.sort.map_or(0, |st| st.bytes_spilled);
+        for w in &m.warnings {
+            if !s.input_warnings.contains(w) {
+                s.input_warnings.push(w.clone());
+            }
+        }
     }
     s.deref = derefs.join("; ");
     let (rules, census) = ctx.rules()?;

@@ -73,6 +73,9 @@ pub struct MeshPart {
     pub deref: Option<DerefChoice>,
     #[serde(default)]
     pub sort: Option<SortStats>,
+    /// What the reader accepted but a user should know (one line each).
+    #[serde(default)]
+    pub warnings: Vec<String>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -610,6 +613,7 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
         let choice = choose(ctx.deref, direct.as_ref(), &positions, range);
         let mut result = None;
         let mut sort_stats = None;
+        let mut warnings = Vec::new();
         if let Some(records) = &direct {
             let mut writer = ShardWriter::create(&make_dir(&dir)?, ns + 1);
             let run = if choice.sort {
@@ -644,11 +648,12 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
                 } else {
                     discretize_all(&mut reader, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), expected)?
                 };
+                warnings = reader.warnings();
                 (r, writer)
             }
         };
         let shards = writer.finish()?;
-        operands.push(Some(MeshPart { faces, chunk_volumes6, shards, deref: Some(choice), sort: sort_stats }));
+        operands.push(Some(MeshPart { faces, chunk_volumes6, shards, deref: Some(choice), sort: sort_stats, warnings }));
         check_cancel(ctx.progress)?;
     }
     Ok(DiscretizeResult { operands })

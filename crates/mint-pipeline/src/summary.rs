@@ -79,6 +79,10 @@ pub struct ResampleSummary {
     /// Temporary work directories that killed runs had left beside this
     /// one's, removed.
     pub removed_dead: Vec<String>,
+    /// What the readers accepted but a user should know, one line each
+    /// naming the file (undeclared values skipped, bytes after the body).
+    #[serde(default)]
+    pub input_warnings: Vec<String>,
     /// The tasks ran in other processes (`mint stage run`, Slurm): times
     /// are wall times between stage completions, and this process's memory
     /// says nothing of theirs.

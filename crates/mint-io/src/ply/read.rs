@@ -92,7 +92,9 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         bytes_done: 0,
         range_only: false,
         trailing: 0,
+        extra: Vec::new(),
     };
+    body.extra = vec![Default::default(); body.header.elements.len()];
     body.next_offset = body.header.body;
     let mut positions = Positions::empty();
     let mut spilled = 0;
@@ -230,6 +232,15 @@ trait Src {
     fn float(&mut self, ty: Scalar) -> Result<f64, SrcErr>;
     fn skip_n(&mut self, ty: Scalar, n: u64) -> Result<(), SrcErr>;
 
+    /// Ends a record whose declared values have all been read. Ascii: a
+    /// record is a line (as the format says, and as trimesh and numpy read
+    /// it), so values left on the line are skipped; returns the offset of
+    /// the first one. Binary: nothing to do.
+    #[inline]
+    fn end_record(&mut self) -> Option<usize> {
+        None
+    }
+
     /// Reads a list length.
     #[inline]
     fn list_len(&mut self, ty: Scalar) -> Result<u64, SrcErr> {
@@ -339,6 +350,53 @@ impl Src for Ascii<'_> {
         }
         Ok(())
     }
+    /// A line ends at `\n` or `\r` (CRLF and old Mac files alike).
+    #[inline]
+    fn end_record(&mut self) -> Option<usize> {
+        let d = self.t.data;
+        let mut i = self.t.pos;
+        while i < d.len() && matches!(d[i], b' ' | b'\t' | 0x0b | 0x0c) {
+            i += 1;
+        }
+        self.t.pos = i;
+        if i >= d.len() || matches!(d[i], b'\n' | b'\r') {
+            return None;
+        }
+        let first = i;
+        while i < d.len() && !matches!(d[i], b'\n' | b'\r') {
+            i += 1;
+        }
+        self.t.pos = i;
+        Some(first)
+    }
+}
+
+/// Records whose line held values beyond the declared ones (ascii), per
+/// element: the first such value's offset and how many lines.
+#[derive(Debug, Clone, Copy, Default)]
+struct Extra {
+    first: Option<usize>,
+    lines: u64,
+}
+
+impl Extra {
+    #[inline]
+    fn note(&mut self, at: Option<usize>) {
+        if let Some(at) = at {
+            self.first.get_or_insert(at);
+            self.lines += 1;
+        }
+    }
+    /// The same element read twice (skipped, then streamed) counts once.
+    fn merge(self, o: Extra) -> Extra {
+        Extra {
+            first: match (self.first, o.first) {
+                (Some(a), Some(b)) => Some(a.min(b)),
+                (a, b) => a.or(b),
+            },
+            lines: self.lines.max(o.lines),
+        }
+    }
 }
 
 /// Runs `$body` with `$s` bound to a [`Src`] of the right encoding over
@@ -434,6 +492,8 @@ struct Cursor {
     /// Reading a range of records (`MeshReader::open_range`): every record
     /// must be a triangle, so that records have one size.
     tri_only: bool,
+    /// Lines with values beyond the declared ones, so far.
+    extra: Extra,
 }
 
 /// Progress through one index list.
@@ -465,9 +525,16 @@ pub(crate) struct PlyBody {
     range_only: bool,
     /// Bytes after the last element, ignored.
     trailing: u64,
+    /// Per element: lines with undeclared values, skipped (ascii).
+    extra: Vec<std::cell::Cell<Extra>>,
 }
 
 impl PlyBody {
+    fn note_extra(&self, e: usize, x: Extra) {
+        let c = &self.extra[e];
+        c.set(c.get().merge(x));
+    }
+
     fn ctx<'a>(&'a self, data: &'a [u8], e: usize) -> Ctx<'a> {
         let el = &self.header.elements[e];
         Ctx { path: &self.path, data, ascii: self.header.encoding == Encoding::Ascii, elem: &el.name, count: el.count }
@@ -483,13 +550,17 @@ impl PlyBody {
                 return fixed_end(&ctx, start, size, el.count);
             }
         }
-        with_src!(self.header.encoding, data, start, |s| {
+        let mut extra = Extra::default();
+        let end = with_src!(self.header.encoding, data, start, |s| {
             for r in 0..el.count {
                 let at = s.mark();
                 s.skip_props(&el.props).map_err(|err| ctx.src(err, r, at))?;
+                extra.note(s.end_record());
             }
-            Ok(s.pos())
-        })
+            s.pos()
+        });
+        self.note_extra(e, extra);
+        Ok(end)
     }
 
     /// Makes the vertex element `e` index-addressable: in place for binary
@@ -521,6 +592,7 @@ impl PlyBody {
             }
         }
         // Spill: parse every record once into f64 triples.
+        let mut extra = Extra::default();
         let mut spill = SpillFile::new(spill_dir, &self.path)?;
         let role: Vec<u8> = (0..el.props.len())
             .map(|i| xyz.iter().position(|&k| k == i).map_or(0, |k| k as u8 + 1))
@@ -537,10 +609,12 @@ impl PlyBody {
                     };
                     res.map_err(|err| ctx.src(err, r, at))?;
                 }
+                extra.note(s.end_record());
                 spill.write_point(p)?;
             }
             s.pos()
         });
+        self.note_extra(e, extra);
         let map = Arc::new(spill.into_mapped()?);
         Ok((Positions::spilled(map, count), end, el.count))
     }
@@ -568,6 +642,7 @@ impl PlyBody {
         };
         let PropType::List { count: cty, item: ity } = el.props[list].ty else { unreachable!() };
         let mut cells = Vec::with_capacity((el.count as usize).min(data.len()));
+        let mut extra = Extra::default();
         let end = with_src!(self.header.encoding, data, start, |s| {
             for r in 0..el.count {
                 let at = s.mark();
@@ -596,9 +671,11 @@ impl PlyBody {
                 };
                 cells.push(cell);
                 s.skip_props(&el.props[list + 1..]).map_err(|err| ctx.src(err, r, at))?;
+                extra.note(s.end_record());
             }
             s.pos()
         });
+        self.note_extra(e, extra);
         Ok((RangeGrid { cols, rows, cells }, end))
     }
 
@@ -647,7 +724,7 @@ impl PlyBody {
         };
         let Role::Faces { list, strip } = self.roles[elem] else { unreachable!() };
         let count = self.header.elements[elem].count;
-        self.cur = Some(Cursor { elem, list, strip, count, record: 0, pos: start, rec_start: start, ls: None, walked, tri_only: false });
+        self.cur = Some(Cursor { elem, list, strip, count, record: 0, pos: start, rec_start: start, ls: None, walked, tri_only: false, extra: Extra::default() });
         Ok(())
     }
 
@@ -685,6 +762,7 @@ impl PlyBody {
         };
         self.bytes_done = cur.pos as u64;
         if done {
+            self.note_extra(cur.elem, cur.extra);
             if cur.walked {
                 self.next_offset = cur.pos;
                 self.next_elem = cur.elem + 1;
@@ -845,6 +923,7 @@ fn stream_records<S: Src>(
                 stats.short_faces += 1;
             }
             s.skip_props(&el.props[cur.list + 1..]).map_err(|e| ctx.src(e, cur.record, cur.rec_start))?;
+            cur.extra.note(s.end_record());
             cur.record += 1;
             completed += 1;
             if completed >= budget {
@@ -977,5 +1056,26 @@ impl FaceStream for PlyBody {
 
     fn ignored_trailing_bytes(&self) -> u64 {
         self.trailing
+    }
+
+    fn warnings(&self) -> Vec<String> {
+        let data = self.map.bytes();
+        let mut w = Vec::new();
+        for (el, x) in self.header.elements.iter().zip(&self.extra) {
+            let x = x.get();
+            if let Some(at) = x.first {
+                w.push(format!(
+                    "{}: line {}: element '{}' has more values on its line than the {} propert{} its header declares; the declared ones were read and the rest ignored ({} line{} like this)",
+                    self.path.display(),
+                    line_of(data, at),
+                    el.name,
+                    el.props.len(),
+                    if el.props.len() == 1 { "y" } else { "ies" },
+                    x.lines,
+                    if x.lines == 1 { "" } else { "s" }
+                ));
+            }
+        }
+        w
     }
 }

@@ -335,3 +335,49 @@ fn binary_files_read_in_ranges_give_the_whole_file_in_order() {
     got.extend(read_range(&stl, 6, 11, 4).unwrap());
     assert_eq!(got, whole);
 }
+
+/// An ascii PLY as VCGLIB writes some (a public test file trimesh reads):
+/// face lines carry more numbers than the header declares. The declared
+/// values are read, the rest of each line is ignored, and one warning names
+/// the element and the first such line; CRLF line ends count as line ends.
+/// Records still may span lines (the tokenizer reads on to the next line
+/// when a line holds too few values).
+#[test]
+fn ascii_ply_lines_with_undeclared_values_are_read_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    for eol in ["\n", "\r\n"] {
+        let lines = [
+            "ply",
+            "format ascii 1.0",
+            "comment VCGLIB generated",
+            "element vertex 4",
+            "property float x",
+            "property float y",
+            "property float z",
+            "element face 4",
+            "property list uchar int vertex_indices",
+            "end_header",
+            "0 0 0",
+            "1 0 0 0.5",
+            "0 1 0",
+            "0 0 1",
+            "3 0 2 1 6 0.1 0.2 0.3 0.4 0.5 0.6",
+            "3 0 1 3",
+            "3 0",
+            "  3 2",
+            "3 1 2 3 6 0 0 1 0 0 1 ",
+        ];
+        let text = lines.join(eol) + eol;
+        let p = write_file(dir.path(), "vcg.ply", text.as_bytes());
+        let (m, _) = read_all(&p, ReadOptions::default()).unwrap();
+        assert_eq!(m.faces, vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], "{eol:?}");
+        assert_eq!(m.positions[1], [1.0, 0.0, 0.0]);
+        let mut r = MeshReader::open(&p, ReadOptions::default()).unwrap();
+        let mut chunk = mint_io::TriangleChunk::new();
+        while r.next_chunk(&mut chunk).unwrap() {}
+        let w = r.warnings();
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(w[0].contains("vcg.ply: line 12: element 'vertex'") && w[0].contains("(1 line like this)"), "{w:?}");
+        assert!(w[1].contains("vcg.ply: line 15: element 'face'") && w[1].contains("1 property") && w[1].contains("(2 lines like this)"), "{w:?}");
+    }
+}
