@@ -219,3 +219,74 @@ element face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0
     assert_eq!(err.matches("mint: warning:").count(), 1, "{err}");
     assert_eq!(v["output_faces"].as_u64().map(|f| f > 0), Some(true));
 }
+
+/// A sphere whose pole vertex is moved along y to `y` (a spike of needle
+/// triangles), as a binary PLY.
+fn spiked_sphere(dir: &Path, name: &str, y: f64) -> PathBuf {
+    let mut m = sphere([0.0; 3], 1.0);
+    // The vertex with the largest fan: the spike's triangles are many.
+    let mut valence = vec![0u32; m.positions.len()];
+    for f in &m.faces {
+        for &v in f {
+            valence[v as usize] += 1;
+        }
+    }
+    let pole = (0..valence.len()).max_by_key(|&i| (valence[i], std::cmp::Reverse(i))).unwrap();
+    m.positions[pole][1] = y;
+    write_f64(dir, name, &m)
+}
+
+/// One spike makes decimate neither slow, hungry nor empty (issue 26: a
+/// vertex at y = 2^31 took 28 s and 2.8 GiB to write an empty mesh). A
+/// moderate spike is left out of the area estimate (the cells stay those of
+/// the sphere, the output is a watertight sphere); a far one, whose box no
+/// grid of those cells can hold, is refused at once with one line naming
+/// the largest needle; and a resampling that comes out empty is refused
+/// rather than written as an empty mesh.
+#[test]
+fn a_spike_does_not_sink_decimate() {
+    let d = tempfile::tempdir().unwrap();
+    let decimate = |input: &Path, out: &Path| {
+        let t = std::time::Instant::now();
+        let o = std::process::Command::new(mint_bin()).arg("decimate").arg(input).arg(out).args(["--faces", "500", "--json"]).output().unwrap();
+        (o, t.elapsed().as_secs_f64())
+    };
+    let plain = write_f64(d.path(), "plain.ply", &sphere([0.0; 3], 1.0));
+    let (o, _) = decimate(&plain, &d.path().join("p.ply"));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let p: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(p["needles_ignored"], 0);
+    let h0 = p["cell_size"].as_f64().unwrap();
+    // A spike 1000 radii long: left out, same cells, a clean sphere.
+    let spiked = spiked_sphere(d.path(), "spike.ply", 1000.0);
+    let out = d.path().join("s.ply");
+    let (o, _) = decimate(&spiked, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(s["needles_ignored"].as_u64().unwrap() > 0, "{s}");
+    let h = s["cell_size"].as_f64().unwrap();
+    assert!((h / h0 - 1.0).abs() < 0.05, "cells {h} against {h0} without the spike");
+    assert!(s["output_watertight"].as_bool().unwrap() && s["output_faces"].as_u64().unwrap() >= 400, "{s}");
+    let m = load(&out);
+    let r = m.positions.iter().map(|p| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt()).fold(0.0f64, f64::max);
+    assert!(r < 1.5, "the output reaches {r} from the centre");
+    // A spike to 2^31: refused at once, naming the needle.
+    let far = spiked_sphere(d.path(), "far.ply", 2f64.powi(31));
+    let out = d.path().join("f.ply");
+    let (o, secs) = decimate(&far, &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("far.ply") && err.contains("needle") && err.contains("face ") && err.contains("2.147e9 long"), "{err}");
+    assert!(secs < 10.0, "refusing took {secs} s");
+    assert!(!out.exists());
+    // An open sheet thinner than a cell resamples to nothing: refused.
+    let tri = TriMesh { positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], faces: vec![[0, 1, 2]] };
+    let sheet = write_f64(d.path(), "tri.ply", &tri);
+    let out = d.path().join("t.ply");
+    let (o, _) = decimate(&sheet, &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("the surface is empty") && err.contains("nothing written"), "{err}");
+    assert!(!out.exists());
+}

@@ -86,14 +86,7 @@ pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, j
 /// Warnings about a run that succeeded: an empty output, and why.
 pub(crate) fn summary_warnings(s: &mint_pipeline::ResampleSummary) -> Vec<String> {
     let mut w = s.input_warnings.clone();
-    if s.output_faces == 0 {
-        let why = if s.intercepts_found == 0 {
-            "no grid line crosses the surface (it is flat between grid lines or smaller than a cell; use smaller cells)"
-        } else if s.intercepts_kept == 0 {
-            "every crossing cancelled (the surface is thinner than a cell, or not closed)"
-        } else {
-            "no cell changes from outside to inside (the surface is thinner than a cell, not closed, or its holes were left open)"
-        };
+    if let Some(why) = s.empty_reason() {
         w.push(format!("{}: the output is empty: {why}", s.output));
     }
     w

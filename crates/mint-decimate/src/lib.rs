@@ -7,7 +7,12 @@
 //!    area `A`, and MI gives about `K · A / h²` faces for cells of size `h`
 //!    (`K` = [`FACES_PER_AREA_CELL`], measured), so `h = √(K·A/M)`. Overlapping
 //!    or noisy scans have more triangle area than surface, so `M` then
-//!    comes out smaller than asked; the summary reports both.
+//!    comes out smaller than asked; the summary reports both. Needles (a
+//!    spike or a stray vertex: triangles many cells long and narrower
+//!    than one) vanish in the resampling however large their area, so when
+//!    the largest of them hold most of `A` they are left out of it (see
+//!    [`LARGEST`]); a grid those needles would make too large is refused
+//!    up front, and so is a resampling that comes out empty.
 //! 2. **In core.** quadric edge collapse in f64 to `N` faces
 //!    (`mint_mesh::simplify`), which judges its result with `check` and
 //!    relaxes the target rather than hand over a mesh less clean than the
@@ -47,6 +52,20 @@ pub const INTERMEDIATE_FACTOR: u64 = 4;
 /// the default `M = 4 N` leaves room for that.
 pub const FACES_PER_AREA_CELL: f64 = 3.0;
 
+/// The largest triangles the area pass keeps (with their longest edges),
+/// to tell needles from surface when choosing the cell size.
+/// (A spike's fan is a vertex's valence, a few to a few hundred triangles.)
+pub const LARGEST: usize = 1024;
+
+/// A needle is at least this many cells long (and narrower than a cell):
+/// ordinary triangles about a cell in size are not needles.
+pub const NEEDLE_CELLS: f64 = 8.0;
+
+/// Needles are left out of the area only when they hold more than this
+/// share of it (the cell size then changes by more than a factor 2), so
+/// that a few long slivers in an ordinary scan change nothing.
+pub const NEEDLE_SHARE: f64 = 0.75;
+
 /// Options of [`decimate`].
 #[derive(Debug, Clone)]
 pub struct DecimateOptions {
@@ -75,6 +94,10 @@ pub struct DecimateSummary {
     pub output_precision: String,
     pub input_faces: u64,
     pub input_area: f64,
+    /// Needle triangles (many cells long, narrower than one) left out of
+    /// the area that sizes the cells, and the area they hold.
+    pub needles_ignored: u64,
+    pub needle_area: f64,
     pub cell_size: f64,
     pub intermediate_faces_asked: u64,
     pub intermediate_faces: u64,
@@ -110,14 +133,20 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
     let threads = o.tuning.thread_count();
     // 1. Area, then the cell size for the intermediate target.
     let t = Instant::now();
-    let (faces, area) = surface_area(input, threads, progress)?;
-    if faces == 0 || !(area > 0.0) || !area.is_finite() {
+    let pass = surface_area(input, threads, progress)?;
+    let (faces, area) = (pass.faces, pass.total);
+    if faces == 0 || !(area > 0.0) {
         return Err(PipelineError::Empty { path: input.to_path_buf() });
+    }
+    if !area.is_finite() {
+        return Err(PipelineError::stage(input, "the triangles' area overflows f64 (coordinates near 1e154 or beyond); scale the input down"));
     }
     let seconds_area = t.elapsed().as_secs_f64();
     // Never finer than the input itself: that adds no information.
     let m = o.intermediate_faces.unwrap_or((INTERMEDIATE_FACTOR * o.target_faces).max(INTERMEDIATE_FLOOR).min(faces)).max(o.target_faces);
-    let h = (FACES_PER_AREA_CELL * area / m as f64).sqrt();
+    let (h, needles) = cell_size(&pass, m);
+    let needle_area: f64 = needles.iter().map(|b| b.area).sum();
+    check_grid(input, &pass, h, m, &needles)?;
     // 2. Resample into a temporary file beside the output (or in tmp).
     let t = Instant::now();
     let (mut removed_dead, mut owner) = (Vec::new(), None);
@@ -143,6 +172,9 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
     spec.write.double = true;
     let rs = run(&spec, &o.tuning, progress)?;
     let seconds_resample = t.elapsed().as_secs_f64();
+    if let Some(why) = rs.empty_reason() {
+        return Err(PipelineError::stage(input, format!("resampled at cells of {h:.3e}, the surface is empty: {why}; nothing written")));
+    }
     // 3. In core: simplify and judge; 4. write.
     let t = Instant::now();
     let (positions, tris) = mint_io::read_mesh(&mid_path)?;
@@ -158,6 +190,8 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
         output_precision,
         input_faces: faces,
         input_area: area,
+        needles_ignored: needles.len() as u64,
+        needle_area,
         cell_size: h,
         intermediate_faces_asked: m,
         intermediate_faces: rs.output_faces,
@@ -321,46 +355,204 @@ pub fn simplify_file(input: &Path, output: &Path, o: &SimplifyFileOptions, progr
     })
 }
 
-/// The total area of `path`'s triangles and their count, in one streaming
-/// pass (workers over fixed-size records when the file has them, else the
-/// reader), summed per chunk in chunk order (the same for any thread count).
-fn surface_area(path: &Path, threads: usize, progress: &dyn Progress) -> Result<(u64, f64), PipelineError> {
-    let read = mint_io::ReadOptions { chunk_triangles: CHUNK_TRIANGLES, spill_dir: None, resolve_positions: true };
-    let mut reader = MeshReader::open(path, read)?;
-    let area = |p: &[[f64; 3]; 3]| {
+/// Refuses, before any resampling, a grid of cells of `h` around the input
+/// that the engine could not hold; names the needles that stretch it.
+fn check_grid(input: &Path, pass: &AreaPass, h: f64, m: u64, needles: &[Big]) -> Result<(), PipelineError> {
+    let Err(e) = mint_core::grid::Grid::around(pass.min, pass.max, GridSize::CellSize(h), [0.0; 3], None) else { return Ok(()) };
+    let far: Vec<&Big> = if needles.is_empty() { pass.largest.iter().filter(|b| b.is_needle(h)).collect() } else { needles.iter().collect() };
+    let e = match e {
+        mint_core::grid::GridError::TooManyCells { dims, .. } => format!("the box would be {}x{}x{} cells, more than the engine addresses", dims[0], dims[1], dims[2]),
+        e => e.to_string(),
+    };
+    let why = match far.first() {
+        Some(b) => format!(
+            "; {} needle triangle{} (many cells long, narrower than one) stretch{} the box: the largest, face {}, is {:.3e} long and {:.3e} wide (a spike or a stray vertex?); remove {} and run again",
+            far.len(),
+            if far.len() == 1 { "" } else { "s" },
+            if far.len() == 1 { "es" } else { "" },
+            b.face,
+            b.longest_edge,
+            b.width(),
+            if far.len() == 1 { "it" } else { "them" }
+        ),
+        None => "; pass --intermediate with fewer faces for larger cells".to_string(),
+    };
+    Err(PipelineError::stage(input, format!("cells of {h:.3e} (for about {m} intermediate faces) do not fit its bounding box: {e}{why}")))
+}
+
+/// One of the largest triangles of the input.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Big {
+    pub area: f64,
+    /// Its index among the input's triangles (polygons count as their fans).
+    pub face: u64,
+    pub longest_edge: f64,
+}
+
+impl Big {
+    /// Twice the area over the longest edge: the triangle's narrowest width.
+    pub fn width(&self) -> f64 {
+        if self.longest_edge > 0.0 { 2.0 * self.area / self.longest_edge } else { 0.0 }
+    }
+
+    /// At least [`NEEDLE_CELLS`] cells of `h` long and narrower than one:
+    /// it vanishes in the resampling, whatever its area.
+    pub fn is_needle(&self, h: f64) -> bool {
+        self.longest_edge > NEEDLE_CELLS * h && self.width() < h
+    }
+}
+
+/// What the area pass learns of the input.
+#[derive(Debug, Clone)]
+pub struct AreaPass {
+    pub faces: u64,
+    pub total: f64,
+    pub min: [f64; 3],
+    pub max: [f64; 3],
+    /// The [`LARGEST`] largest triangles, largest first (ties: lower index first).
+    pub largest: Vec<Big>,
+}
+
+/// Per chunk: the sum, the box and the largest triangles.
+struct ChunkArea {
+    sum: f64,
+    min: [f64; 3],
+    max: [f64; 3],
+    largest: Vec<Big>,
+}
+
+impl ChunkArea {
+    fn new() -> ChunkArea {
+        ChunkArea { sum: 0.0, min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3], largest: Vec::new() }
+    }
+    #[inline]
+    fn add(&mut self, face: u64, p: &[[f64; 3]; 3]) {
         let (u, v) = ([p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]], [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]]);
         let c = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
-        0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()
+        let area = 0.5 * (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+        self.sum += area;
+        for q in p {
+            for d in 0..3 {
+                self.min[d] = self.min[d].min(q[d]);
+                self.max[d] = self.max[d].max(q[d]);
+            }
+        }
+        if self.largest.len() < LARGEST || area > self.largest[LARGEST - 1].area {
+            let len = |a: [f64; 3], b: [f64; 3]| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt();
+            let longest_edge = len(p[0], p[1]).max(len(p[1], p[2])).max(len(p[2], p[0]));
+            self.largest.push(Big { area, face, longest_edge });
+            if self.largest.len() >= 2 * LARGEST || self.largest.len() == LARGEST {
+                keep_largest(&mut self.largest);
+            }
+        }
+    }
+}
+
+/// Sorts largest first (ties by index, so the result does not depend on the
+/// order chunks are merged in) and keeps [`LARGEST`].
+fn keep_largest(v: &mut Vec<Big>) {
+    v.sort_by(|a, b| b.area.total_cmp(&a.area).then(a.face.cmp(&b.face)));
+    v.truncate(LARGEST);
+}
+
+/// The area pass over `path`: the triangles' count, total area (summed per
+/// chunk in chunk order: the same for any thread count), box and largest
+/// triangles, in one streaming pass (workers over fixed-size records when
+/// the file has them, else the reader).
+pub fn surface_area(path: &Path, threads: usize, progress: &dyn Progress) -> Result<AreaPass, PipelineError> {
+    let read = mint_io::ReadOptions { chunk_triangles: CHUNK_TRIANGLES, spill_dir: None, resolve_positions: true };
+    let mut reader = MeshReader::open(path, read)?;
+    // Sums in chunk order; the largest triangles merged as chunks end (their
+    // order is total, so the merge order does not matter).
+    let largest = Mutex::new(Vec::new());
+    let add = |pass: &mut AreaPass, c: ChunkArea| {
+        pass.total += c.sum;
+        for d in 0..3 {
+            pass.min[d] = pass.min[d].min(c.min[d]);
+            pass.max[d] = pass.max[d].max(c.max[d]);
+        }
     };
+    let take_largest = |mut c: ChunkArea| {
+        let mut l = largest.lock().unwrap();
+        l.append(&mut c.largest);
+        keep_largest(&mut l);
+        c
+    };
+    let mut pass = AreaPass { faces: 0, total: 0.0, min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3], largest: Vec::new() };
     if let Some(records) = reader.triangle_records()? {
         let n = records.len();
         let chunks = n.div_ceil(CHUNK_TRIANGLES as u64);
         progress.start(BOUNDS, n);
-        let sums = Mutex::new(vec![0.0f64; chunks as usize]);
+        let sums: Mutex<Vec<Option<ChunkArea>>> = Mutex::new((0..chunks).map(|_| None).collect());
         mint_core::pool::for_each(threads, chunks, |_| (), |_, c| {
             if progress.cancelled() {
                 return Err(PipelineError::Cancelled);
             }
             let (a, b) = (c * CHUNK_TRIANGLES as u64, ((c + 1) * CHUNK_TRIANGLES as u64).min(n));
-            let mut sum = 0.0;
-            records.visit(a, b, &mut |p: &[[f64; 3]; 3]| sum += area(p))?;
-            sums.lock().unwrap()[c as usize] = sum;
+            let mut acc = ChunkArea::new();
+            let mut face = a;
+            records.visit(a, b, &mut |p: &[[f64; 3]; 3]| {
+                acc.add(face, p);
+                face += 1;
+            })?;
+            let acc = take_largest(acc);
+            sums.lock().unwrap()[c as usize] = Some(acc);
             progress.advance(b - a);
             Ok(())
         })?;
         check_cancel(progress)?;
         progress.finish();
-        return Ok((n, sums.into_inner().unwrap().iter().sum()));
+        for c in sums.into_inner().unwrap().into_iter().flatten() {
+            add(&mut pass, c);
+        }
+        pass.faces = n;
+        pass.largest = largest.into_inner().unwrap();
+        return Ok(pass);
     }
     progress.start(BOUNDS, reader.info().face_count.unwrap_or(0));
-    let (mut faces, mut total) = (0u64, 0.0f64);
+    let mut faces = 0u64;
     let mut chunk = TriangleChunk::new();
     while reader.next_chunk(&mut chunk)? {
         check_cancel(progress)?;
-        total += chunk.positions.iter().map(area).sum::<f64>();
+        let mut acc = ChunkArea::new();
+        for (i, p) in chunk.positions.iter().enumerate() {
+            acc.add(faces + i as u64, p);
+        }
+        let acc = take_largest(acc);
+        add(&mut pass, acc);
         faces += chunk.len() as u64;
         progress.advance(chunk.len() as u64);
     }
     progress.finish();
-    Ok((faces, total))
+    pass.faces = faces;
+    pass.largest = largest.into_inner().unwrap();
+    Ok(pass)
+}
+
+/// The cell size for about `m` intermediate faces: `h = √(K·A/m)`, with the
+/// needles among the largest triangles ([`Big::is_needle`]: they vanish in
+/// the resampling) left out of `A` when they hold more
+/// than [`NEEDLE_SHARE`] of it. Returns `h` and the needles left out.
+pub fn cell_size(pass: &AreaPass, m: u64) -> (f64, Vec<Big>) {
+    let of = |area: f64| (FACES_PER_AREA_CELL * area / m as f64).sqrt();
+    let h0 = of(pass.total);
+    let (mut h, mut needles) = (h0, Vec::new());
+    // Needles at h; h from the rest; again, until the set settles.
+    for _ in 0..16 {
+        let now: Vec<Big> = pass.largest.iter().filter(|b| b.is_needle(h)).copied().collect();
+        let held: f64 = now.iter().map(|b| b.area).sum();
+        let rest = pass.total - held;
+        if !(held > NEEDLE_SHARE * pass.total) || !(rest > 0.0) {
+            // Not (or no longer) needles holding most of the area: keep the
+            // last size at which they did, or the plain one.
+            return if needles.is_empty() { (h0, Vec::new()) } else { (h, needles) };
+        }
+        let next = of(rest);
+        let settled = now == needles && next == h;
+        (h, needles) = (next, now);
+        if settled {
+            break;
+        }
+    }
+    (h, needles)
 }

@@ -88,3 +88,19 @@ pub struct ResampleSummary {
     /// says nothing of theirs.
     pub distributed: bool,
 }
+
+impl ResampleSummary {
+    /// Why the output is empty, or `None` when it has faces.
+    pub fn empty_reason(&self) -> Option<&'static str> {
+        if self.output_faces > 0 {
+            return None;
+        }
+        Some(if self.intercepts_found == 0 {
+            "no grid line crosses the surface (it is flat between grid lines or smaller than a cell; use smaller cells)"
+        } else if self.intercepts_kept == 0 {
+            "every crossing cancelled (the surface is thinner than a cell, or not closed)"
+        } else {
+            "no cell changes from outside to inside (the surface is thinner than a cell, not closed, or its holes were left open)"
+        })
+    }
+}

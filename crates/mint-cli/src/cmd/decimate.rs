@@ -75,6 +75,13 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
     } else if !a.quiet.quiet {
         eprintln!("decimated {} -> {}", s.input, s.output);
         eprintln!("  input        {} faces, area {:.6}", s.input_faces, s.input_area);
+        if s.needles_ignored > 0 {
+            eprintln!(
+                "  needles      {} triangles many cells long and narrower than one ({:.1}% of the area) left out of the cell size: they vanish in the resampling",
+                s.needles_ignored,
+                100.0 * s.needle_area / s.input_area
+            );
+        }
         eprintln!("  resampled    {} faces (asked {}), cells of {:.6}, {}", s.intermediate_faces, s.intermediate_faces_asked, s.cell_size, if s.intermediate_watertight { "watertight" } else { "NOT watertight" });
         eprintln!("  simplified   {} faces (target {}), {} vertices, error {:.2e} of the extent; coordinates {}", s.output_faces, s.target_faces, s.output_vertices, s.simplify_error, s.output_precision);
         eprintln!(
