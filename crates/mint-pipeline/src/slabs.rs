@@ -15,11 +15,22 @@ use std::sync::{Condvar, Mutex};
 /// the record, its vertex, about two faces, active-cell ids, and slack.
 pub const BYTES_PER_RECORD_IN_SLAB: u64 = 128;
 
+/// Estimated heap bytes per plane of a slab being reconstructed, whatever
+/// its records: each plane holds a few vectors (records, edge vertices, S
+/// records; about 64 bytes each with the allocator's header) and about four
+/// copies of its node states (one bit per node of the cross-section).
+/// Without this a grid of many nearly empty layers (a needle 10⁷ cells long)
+/// planned sub-slabs of millions of planes and overran the budget 2-3×.
+pub fn bytes_per_plane(na: u32, nb: u32) -> u64 {
+    let nodes = (na as u64 + 1) * (nb as u64 + 1);
+    512 + 4 * nodes.div_ceil(64) * 8
+}
+
 /// Splits layers `first .. ns` into slabs `(k0, k1)`: layers `k0 .. k1`,
 /// reading planes `k0 ..= k1`. With `fixed`, every slab has that many
-/// layers; otherwise slabs grow while their planes' records fit `budget`
-/// bytes (never below one layer).
-pub fn plan_slabs(counts: &[u64], first: u32, ns: u32, fixed: Option<u32>, budget: u64) -> Vec<(u32, u32)> {
+/// layers; otherwise slabs grow while their planes (`plane_bytes` each) and
+/// records fit `budget` bytes (never below one layer).
+pub fn plan_slabs(counts: &[u64], first: u32, ns: u32, fixed: Option<u32>, budget: u64, plane_bytes: u64) -> Vec<(u32, u32)> {
     let mut slabs = Vec::new();
     let mut k0 = first;
     while k0 < ns {
@@ -27,7 +38,7 @@ pub fn plan_slabs(counts: &[u64], first: u32, ns: u32, fixed: Option<u32>, budge
         match fixed {
             Some(n) => k1 = (k0 + n.max(1)).min(ns),
             None => {
-                let bytes = |k: u32| counts.get(k as usize).copied().unwrap_or(0) * BYTES_PER_RECORD_IN_SLAB;
+                let bytes = |k: u32| counts.get(k as usize).copied().unwrap_or(0) * BYTES_PER_RECORD_IN_SLAB + plane_bytes;
                 let mut used = bytes(k0) + bytes(k1);
                 while k1 < ns && used + bytes(k1 + 1) <= budget {
                     k1 += 1;
@@ -126,19 +137,19 @@ mod tests {
     #[test]
     fn fixed_slabs_cover_every_layer_once() {
         let counts = vec![5u64; 11];
-        assert_eq!(plan_slabs(&counts, 0, 10, Some(3), 0), vec![(0, 3), (3, 6), (6, 9), (9, 10)]);
-        assert_eq!(plan_slabs(&counts, 0, 10, Some(1), 0).len(), 10);
+        assert_eq!(plan_slabs(&counts, 0, 10, Some(3), 0, 0), vec![(0, 3), (3, 6), (6, 9), (9, 10)]);
+        assert_eq!(plan_slabs(&counts, 0, 10, Some(1), 0, 0).len(), 10);
     }
 
     #[test]
     fn budget_slabs_grow_until_full_but_never_below_one_layer() {
         let counts = vec![10u64; 11];
         let per = 10 * BYTES_PER_RECORD_IN_SLAB;
-        assert_eq!(plan_slabs(&counts, 0, 10, None, 0).len(), 10);
+        assert_eq!(plan_slabs(&counts, 0, 10, None, 0, 0).len(), 10);
         // Room for 4 planes = 3 layers.
-        let s = plan_slabs(&counts, 0, 10, None, 4 * per);
+        let s = plan_slabs(&counts, 0, 10, None, 4 * per, 0);
         assert_eq!(s[0], (0, 3));
         assert_eq!(s.last().unwrap().1, 10);
-        assert_eq!(plan_slabs(&counts, 0, 10, None, u64::MAX), vec![(0, 10)]);
+        assert_eq!(plan_slabs(&counts, 0, 10, None, u64::MAX, 0), vec![(0, 10)]);
     }
 }

@@ -34,7 +34,7 @@ use mint_store::Budget;
 use crate::bounds::bounds;
 use crate::discretize::{discretize_all, discretize_direct, CHUNK_TRIANGLES};
 use crate::progress::check_cancel;
-use crate::slabs::{plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB};
+use crate::slabs::{bytes_per_plane, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB};
 use crate::plan::{OperandPlan, Plan, Stage};
 use crate::spec::Tuning;
 use crate::progress::Progress;
@@ -439,12 +439,14 @@ impl<'a> Ctx<'a> {
         if a >= b {
             return Ok(Vec::new());
         }
+        let [na, nb, _] = self.grid()?.local_dims();
+        let plane_bytes = bytes_per_plane(na, nb);
         let mut budget = self.budget.slab_in_flight();
         if self.threads > 1 {
-            let bytes = counts[a as usize..=b as usize].iter().sum::<u64>() * BYTES_PER_RECORD_IN_SLAB;
+            let bytes = counts[a as usize..=b as usize].iter().sum::<u64>() * BYTES_PER_RECORD_IN_SLAB + (b - a + 1) as u64 * plane_bytes;
             budget = budget.min((bytes / (4 * self.threads as u64)).max(MIN_SUB_SLAB_BYTES));
         }
-        Ok(plan_slabs(&counts, a, b, self.slab_layers, budget))
+        Ok(plan_slabs(&counts, a, b, self.slab_layers, budget, plane_bytes))
     }
 
     /// Warms every reduce a slab task needs, so that worker threads only read.
@@ -715,8 +717,12 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<Re
     let subs = ctx.sub_slabs(a, b)?;
     let counts = ctx.plane_counts()?;
     let mut r = ReconstructResult { layers: [a, b], sub_slabs: subs.len() as u64, ..Default::default() };
-    r.planned_slab_bytes =
-        subs.iter().map(|&(k0, k1)| counts[k0 as usize..=k1 as usize].iter().sum::<u64>() * BYTES_PER_RECORD_IN_SLAB).max().unwrap_or(0);
+    let [na, nb, _] = grid.local_dims();
+    r.planned_slab_bytes = subs
+        .iter()
+        .map(|&(k0, k1)| counts[k0 as usize..=k1 as usize].iter().sum::<u64>() * BYTES_PER_RECORD_IN_SLAB + (k1 - k0 + 1) as u64 * bytes_per_plane(na, nb))
+        .max()
+        .unwrap_or(0);
     let compute = |k0: u32, k1: u32| -> Result<Done, PipelineError> {
         let mut operands = ctx.operand_planes(k0, k1)?;
         if !strict {
