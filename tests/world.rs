@@ -290,3 +290,29 @@ fn a_spike_does_not_sink_decimate() {
     assert!(err.contains("the surface is empty") && err.contains("nothing written"), "{err}");
     assert!(!out.exists());
 }
+
+/// A needle 2·10⁵ cells long makes a grid of 1.5M nearly empty layers: the
+/// run stays within its memory budget (sub-slabs count their planes, not
+/// only their records), and a budget too small for the per-layer tables is
+/// refused at once with one line instead of exhausting memory (issue 26:
+/// 13.9 GiB under a 5.9 GiB budget for a longer needle).
+#[test]
+fn a_grid_of_many_empty_layers_stays_within_its_budget() {
+    let d = tempfile::tempdir().unwrap();
+    let input = spiked_sphere(d.path(), "needle.ply", 2e5);
+    let run = |mem: &str| {
+        std::process::Command::new(mint_bin()).arg("resample").arg(&input).arg(d.path().join(format!("o{mem}.ply")))
+            .args(["--cell-size", "0.1", "--mem", mem, "--json"]).output().unwrap()
+    };
+    let o = run("64M");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("layers along its slab axis") && err.contains("--mem"), "{err}");
+    let o = run("384M");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let peak = v["peak_heap_bytes"].as_u64().unwrap();
+    assert!(peak <= 384 << 20, "peak heap {} MiB over a 384 MiB budget", peak >> 20);
+    assert!(v["output_faces"].as_u64().unwrap() > 1000 && v["grid_cells"][1].as_u64().unwrap() > 1_000_000, "{v}");
+}

@@ -157,10 +157,11 @@ pub fn wait(dir: &Path, jobs: &[StageJob], poll: Duration, tick: &mut dyn FnMut(
             return Err(PipelineError::stage(
                 dir,
                 format!(
-                    "the run stopped: stage '{}' has {} of {} tasks not done and no job is left in the queue; see {}/slurm/{}-*.log, fix the cause, and run `mint slurm` again with the same --work to resume",
+                    "the run stopped: stage '{}' has {} of {} tasks not done and no job is left in the queue ({}); see {}/slurm/{}-*.log, fix the cause, and run `mint slurm` again with the same --work to resume",
                     stage.name,
                     stage.left,
                     stage.tasks,
+                    failure_cause(dir, stage.name, stage.tasks),
                     dir.display(),
                     stage.name
                 ),
@@ -168,6 +169,23 @@ pub fn wait(dir: &Path, jobs: &[StageJob], poll: Duration, tick: &mut dyn FnMut(
         }
         std::thread::sleep(poll);
     }
+}
+
+/// What the logs of a stage's undone tasks say: the last `mint: error:`
+/// line of the first task that has one, or that the tasks left none (killed
+/// by a signal, the node lost, or never started).
+pub fn failure_cause(dir: &Path, stage: crate::workdir::Stage, tasks: u32) -> String {
+    let undone: Vec<u32> = (0..tasks).filter(|&t| !crate::workdir::is_done(dir, stage, t)).collect();
+    for &t in &undone {
+        let log = dir.join("slurm").join(format!("{}-{t}.log", stage.dir_name()));
+        let Ok(text) = std::fs::read(&log) else { continue };
+        let text = String::from_utf8_lossy(&text);
+        if let Some(line) = text.lines().rev().find_map(|l| l.trim().strip_prefix("mint: error:")) {
+            return format!("task {t}: {}", line.trim());
+        }
+    }
+    let first = undone.first().copied().unwrap_or(0);
+    format!("task {first} left no error in its log: killed by a signal, its node lost, or never started")
 }
 
 #[cfg(test)]

@@ -256,6 +256,28 @@ impl<'a> Ctx<'a> {
         }
         let g = &self.plan.spec.grid;
         let grid = Grid::around(lo, hi, g.size, g.offset, g.axis.index()).map_err(|source| PipelineError::Grid { path: self.name(), source })?;
+        // Tables with an entry per layer (a count per plane in each part's
+        // result, as a number in its JSON, and their sum) grow with the
+        // layers, not the input: a needle 10^7 cells long must not exhaust
+        // memory before any slab is planned.
+        let layers = grid.local_dims()[2] as u64 + 1;
+        let meshes = self.scene.operands.iter().filter(|o| matches!(o, Operand::Mesh { .. })).count() as u64;
+        let need = layers * BYTES_PER_LAYER_ENTRY * (self.plan.parts as u64 * meshes + 1);
+        if need > self.budget.layer_tables() {
+            return Err(PipelineError::stage(
+                self.name(),
+                format!(
+                    "the grid has {} layers along its slab axis ({}x{}x{} cells of {:.3e}); its per-layer tables need about {} MiB, more than half the memory budget ({} MiB): use larger cells, or more --mem",
+                    layers - 1,
+                    grid.dims[0],
+                    grid.dims[1],
+                    grid.dims[2],
+                    grid.cell,
+                    need >> 20,
+                    self.budget.total() >> 20
+                ),
+            ));
+        }
         Ok(self.grid.get_or_init(|| grid))
     }
 
@@ -457,6 +479,10 @@ impl<'a> Ctx<'a> {
         Ok(())
     }
 }
+
+/// Heap bytes per layer per table of per-layer entries: the u64 count and
+/// its decimal text in a task result (the parsed copy replaces the writer's).
+const BYTES_PER_LAYER_ENTRY: u64 = 16;
 
 /// The smallest sub-slab worth a thread of its own, in planned bytes.
 const MIN_SUB_SLAB_BYTES: u64 = 1 << 20;

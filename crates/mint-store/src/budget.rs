@@ -88,6 +88,13 @@ impl Budget {
     /// One sub-slab in flight during reconstruction. Each worker holds one
     /// slab being built, and the ordered writer up to two finished ones
     /// waiting for their turn: `threads + 2` in all.
+    /// The engine's tables with one entry per slab-axis layer (records per
+    /// plane in every discretize result, their sum): half the working
+    /// memory. A grid with more layers than fit is refused.
+    pub fn layer_tables(&self) -> u64 {
+        self.working() / 2
+    }
+
     pub fn slab_in_flight(&self) -> u64 {
         self.working() / (self.threads + 2)
     }
