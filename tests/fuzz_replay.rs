@@ -67,6 +67,7 @@ fn fuzz_corpus_and_regressions_replay() {
 fn mutations(name: &str) -> usize {
     match name {
         "resample" => 800,
+        "stage" => 600,
         _ => 4000,
     }
 }

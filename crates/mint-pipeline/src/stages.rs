@@ -290,6 +290,23 @@ impl<'a> Ctx<'a> {
         for t in 0..self.plan.tasks(Stage::Discretize) {
             v.push(read_result::<DiscretizeResult>(&self.dir, Stage::Discretize, t)?);
         }
+        // What the results claim, checked before anything indexes by it.
+        let planes = self.grid()?.local_dims()[2] + 1;
+        for (t, r) in v.iter().enumerate() {
+            let path = crate::workdir::task_dir(&self.dir, Stage::Discretize, t as u32).join(crate::workdir::RESULT_FILE);
+            if r.operands.len() != self.scene.operands.len() {
+                return Err(PipelineError::stage(&path, format!("damaged task result: {} operands, the plan has {}; remove its task directory and run the task again", r.operands.len(), self.scene.operands.len())));
+            }
+            for (j, m) in r.operands.iter().enumerate() {
+                let Some(m) = m else { continue };
+                if !matches!(self.scene.operands[j], Operand::Mesh { .. }) {
+                    return Err(PipelineError::stage(&path, format!("damaged task result: shards for operand {j}, which is not a mesh; remove its task directory and run the task again")));
+                }
+                if let Err(what) = m.shards.validate(planes) {
+                    return Err(PipelineError::stage(&path, format!("damaged task result: {what}; remove its task directory and run the task again")));
+                }
+            }
+        }
         for (j, op) in self.scene.operands.iter().enumerate() {
             if let Operand::Mesh { path, .. } = op {
                 if v.iter().map(|r| r.operands.get(j).and_then(|o| o.as_ref()).map_or(0, |m| m.faces)).sum::<u64>() == 0 {

@@ -83,6 +83,36 @@ pub struct ShardManifest {
 }
 
 impl ShardManifest {
+    /// Checks what the manifest claims against the `planes` its grid has and
+    /// the shape [`ShardWriter`] gives: the plane count, planes per shard,
+    /// one count per plane, shards in order within range, lengths that are
+    /// whole records. `Err` says what is wrong.
+    pub fn validate(&self, planes: u32) -> Result<(), String> {
+        let planes = planes.max(1);
+        if self.planes != planes {
+            return Err(format!("a shard manifest for {} planes, the grid has {planes}", self.planes));
+        }
+        let pps = planes.div_ceil(MAX_SHARDS);
+        if self.planes_per_shard != pps {
+            return Err(format!("{} planes per shard, {pps} expected", self.planes_per_shard));
+        }
+        if self.counts.len() != planes as usize {
+            return Err(format!("{} plane counts for {planes} planes", self.counts.len()));
+        }
+        let shards = planes.div_ceil(pps);
+        if !self.shards.windows(2).all(|w| w[0].index < w[1].index) || self.shards.iter().any(|s| s.index >= shards) {
+            return Err(format!("shard numbers out of order or past {shards}"));
+        }
+        if let Some(s) = self.shards.iter().find(|s| s.len % RECORD as u64 != 0) {
+            return Err(format!("shard {} of {} bytes, not whole records", s.index, s.len));
+        }
+        let total: u128 = self.counts.iter().map(|&c| c as u128).sum();
+        if total * RECORD as u128 != self.shards.iter().map(|s| s.len as u128).sum::<u128>() {
+            return Err("plane counts that do not add up to the shards' records".into());
+        }
+        Ok(())
+    }
+
     /// Total records.
     pub fn records(&self) -> u64 {
         self.counts.iter().sum()
@@ -211,14 +241,34 @@ impl ShardSet {
             }
             let last_in = last.min(m.planes - 1);
             let (s0, s1) = (first / m.planes_per_shard, last_in / m.planes_per_shard);
+            // Records per plane as read, against the manifest's counts: a
+            // shard whose checksum was made to match but whose records
+            // were cut, added or moved to other planes is refused.
+            let mut seen = vec![0u64; (last_in - first + 1) as usize];
             for shard in m.shards.iter().filter(|s| s.index >= s0 && s.index <= s1) {
                 let path = dir.join(shard_name(shard.index));
                 read_shard(&path, shard, &mut buf, |r| {
-                    if r.plane < first || r.plane > last || (boundary_last && r.plane == last && r.family() == FAMILY_S) {
+                    if r.plane < first || r.plane > last {
+                        return;
+                    }
+                    if r.plane <= last_in {
+                        seen[(r.plane - first) as usize] += 1;
+                    }
+                    if boundary_last && r.plane == last && r.family() == FAMILY_S {
                         return;
                     }
                     out[(r.plane - first) as usize].push(r);
                 })?;
+            }
+            for (i, &n) in seen.iter().enumerate() {
+                let k = first + i as u32;
+                let want = m.counts.get(k as usize).copied().unwrap_or(0);
+                if n != want {
+                    return Err(StoreError::Corrupt {
+                        path: dir.join(shard_name(k / m.planes_per_shard)),
+                        what: format!("plane {k} holds {n} records, its manifest says {want}"),
+                    });
+                }
             }
         }
         Ok(out)

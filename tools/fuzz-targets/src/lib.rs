@@ -35,6 +35,7 @@ pub const TARGETS: &[Target] = &[
     ("read_rgrid", read_rgrid),
     ("parse_scene", parse_scene),
     ("read_plan", read_plan),
+    ("stage", stage),
     ("discretize", discretize),
     ("resample", resample),
     ("simplify", simplify),
@@ -327,6 +328,238 @@ pub fn read_plan(data: &[u8]) {
     }
 }
 
+// ------------------------------------------------------- work directories
+
+/// The stage template: a finished staged run (a UV sphere, 2 parts, 2
+/// slabs, hole closing on) in this thread's scratch directory, made once.
+/// Returns (input, output, work directory, spec, tuning).
+fn stage_template() -> (PathBuf, PathBuf, PathBuf, mint_pipeline::RunSpec, mint_pipeline::Tuning) {
+    use mint_core::sink::MeshSink;
+    let root = scratch().join("stage-template");
+    let (input, output, work) = (root.join("in.ply"), root.join("out.ply"), root.join("w"));
+    let spec = mint_pipeline::RunSpec::resample(&input, &output, mint_core::GridSize::Cells(3000));
+    let tuning = mint_pipeline::Tuning { threads: 1, mem_bytes: 64 << 20, parts: 2, slabs: 2, work_dir: Some(work.clone()), tmp_dir: Some(root.clone()), ..Default::default() };
+    if !root.join("done").exists() {
+        let _ = std::fs::remove_dir_all(&root);
+        std::fs::create_dir_all(&root).unwrap();
+        let (n_lat, n_lon) = (12usize, 16usize);
+        let mut w = mint_io::MeshWriter::create(&input, mint_io::Format::Ply, Default::default()).unwrap();
+        let at = |i: usize, j: usize| {
+            let (th, ph) = (std::f64::consts::PI * i as f64 / n_lat as f64, 2.0 * std::f64::consts::PI * j as f64 / n_lon as f64);
+            [th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()]
+        };
+        // Poles once, rings between.
+        let id = |i: usize, j: usize| -> u32 {
+            if i == 0 { 0 } else if i == n_lat { 1 + ((n_lat - 1) * n_lon) as u32 } else { (1 + (i - 1) * n_lon + j % n_lon) as u32 }
+        };
+        w.vertex(at(0, 0)).unwrap();
+        for i in 1..n_lat {
+            for j in 0..n_lon {
+                w.vertex(at(i, j)).unwrap();
+            }
+        }
+        w.vertex(at(n_lat, 0)).unwrap();
+        for i in 0..n_lat {
+            for j in 0..n_lon {
+                let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+                if i != 0 {
+                    w.face([a, b, d]).unwrap();
+                }
+                if i != n_lat - 1 {
+                    w.face([b, c, d]).unwrap();
+                }
+            }
+        }
+        w.finish().unwrap();
+        mint_pipeline::run(&spec, &tuning, &mint_pipeline::NoProgress).expect("the stage template runs");
+        std::fs::write(root.join("done"), b"").unwrap();
+    }
+    (input, output, work, spec, tuning)
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap().flatten() {
+        let (src, dst) = (e.path(), to.join(e.file_name()));
+        if e.file_type().unwrap().is_dir() {
+            copy_dir(&src, &dst);
+        } else {
+            std::fs::copy(&src, &dst).unwrap();
+        }
+    }
+}
+
+/// Files under `dir`, relative, sorted.
+fn files_under(dir: &Path, rel: &Path, out: &mut Vec<PathBuf>) {
+    let mut es: Vec<_> = std::fs::read_dir(dir.join(rel)).unwrap().flatten().collect();
+    es.sort_by_key(|e| e.file_name());
+    for e in es {
+        let r = rel.join(e.file_name());
+        if e.file_type().unwrap().is_dir() {
+            files_under(dir, &r, out);
+        } else {
+            out.push(r);
+        }
+    }
+}
+
+/// Writes a task result's body with its checksum line recomputed.
+fn reseal_result(path: &Path, bytes: &[u8]) {
+    let body = match bytes.strip_prefix(b"crc32 ") {
+        Some(rest) => rest.iter().position(|&b| b == b'\n').map_or(&b""[..], |nl| &rest[nl + 1..]),
+        None => bytes,
+    };
+    let body = body.strip_suffix(b"\n").unwrap_or(body);
+    let mut out = format!("crc32 {:08x}\n", crc32fast::hash(body)).into_bytes();
+    out.extend_from_slice(body);
+    out.push(b'\n');
+    std::fs::write(path, out).unwrap();
+}
+
+/// Replaces, anywhere in `v`, an object's `{len: old.0, crc32: old.1}` by `new`.
+fn replace_sum(v: &mut serde_json::Value, old: (u64, u32), new: (u64, u32)) {
+    match v {
+        serde_json::Value::Object(m) => {
+            if m.get("len").and_then(|x| x.as_u64()) == Some(old.0) && m.get("crc32").and_then(|x| x.as_u64()) == Some(old.1 as u64) {
+                m.insert("len".into(), new.0.into());
+                m.insert("crc32".into(), new.1.into());
+            }
+            for x in m.values_mut() {
+                replace_sum(x, old, new);
+            }
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(|x| replace_sum(x, old, new)),
+        _ => {}
+    }
+}
+
+/// Numbers a JSON edit puts in place of another.
+const EDGE_NUMBERS: [f64; 12] = [0.0, -1.0, 1.0, 2.0, 65536.0, 4294967295.0, 4294967296.0, 9007199254740993.0, 1e308, -1e308, 0.5, 1e-300];
+
+/// The `k`-th number leaf of `v` (in document order), replaced by `x`.
+fn edit_number(v: &mut serde_json::Value, k: &mut usize, x: f64) -> bool {
+    match v {
+        serde_json::Value::Number(_) => {
+            if *k == 0 {
+                *v = if x.fract() == 0.0 && x >= 0.0 && x < 1.8e19 { (x as u64).into() } else if x.fract() == 0.0 && x > -9.2e18 && x < 0.0 { (x as i64).into() } else { serde_json::Number::from_f64(x).map_or(serde_json::Value::Null, serde_json::Value::Number) };
+                return true;
+            }
+            *k -= 1;
+            false
+        }
+        serde_json::Value::Object(m) => m.values_mut().any(|x2| edit_number(x2, k, x)),
+        serde_json::Value::Array(a) => a.iter_mut().any(|x2| edit_number(x2, k, x)),
+        _ => false,
+    }
+}
+
+/// Work directories turned against mint (issue 26): a small finished staged
+/// run's files (plan, task results, shards, slab files); byte 0 picks one,
+/// byte 1 the edit (0: bytes overwritten at the positions the rest gives;
+/// 1: truncated; 2: replaced by the rest; 3: a number of the JSON set to
+/// an edge value), and every checksum that guards it is recomputed: a
+/// result's own line, the `{len, crc32}` of a data file in the result that
+/// lists it, the plan's seal. Later stages' tasks and the output are
+/// removed and the run resumed. It must end `Ok` with a readable output, or
+/// with one line naming a file; it must never panic, hang or index past a
+/// table. (Checksums catch accidents; what a file claims must be checked.)
+pub fn stage(data: &[u8]) {
+    if data.len() < 2 {
+        return;
+    }
+    let (input, output, template, spec, tuning) = stage_template();
+    let work = scratch().join("stage-w");
+    let _ = std::fs::remove_dir_all(&work);
+    copy_dir(&template, &work);
+    let mut files = Vec::new();
+    files_under(&work, Path::new(""), &mut files);
+    let rel = files[data[0] as usize % files.len()].clone();
+    let path = work.join(&rel);
+    let old = std::fs::read(&path).unwrap();
+    let rest = &data[2..];
+    let new: Vec<u8> = match data[1] % 4 {
+        0 => {
+            let mut b = old.clone();
+            for e in rest.chunks_exact(3) {
+                if !b.is_empty() {
+                    let at = u16::from_le_bytes([e[0], e[1]]) as usize % b.len();
+                    b[at] = e[2];
+                }
+            }
+            b
+        }
+        1 => {
+            let n = rest.first().map_or(0, |&x| x as usize) * old.len() / 256;
+            old[..n].to_vec()
+        }
+        2 => rest.to_vec(),
+        _ => {
+            let body = if old.starts_with(b"crc32 ") { &old[old.iter().position(|&b| b == b'\n').map_or(old.len(), |n| n + 1)..] } else { &old[..] };
+            let Ok(mut v) = serde_json::from_slice::<serde_json::Value>(body) else { return };
+            let mut k = rest.first().map_or(0, |&x| x as usize);
+            let x = EDGE_NUMBERS[rest.get(1).map_or(0, |&x| x as usize) % EDGE_NUMBERS.len()];
+            if !edit_number(&mut v, &mut k, x) {
+                return;
+            }
+            serde_json::to_string_pretty(&v).unwrap().into_bytes()
+        }
+    };
+    let name = rel.file_name().unwrap().to_string_lossy().into_owned();
+    if name == "plan.json" {
+        match serde_json::from_slice::<serde_json::Value>(&new) {
+            Ok(mut v) if v.is_object() => {
+                mint_pipeline::plan::seal(&mut v);
+                std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
+            }
+            _ => std::fs::write(&path, &new).unwrap(),
+        }
+    } else if name == "result.json" {
+        reseal_result(&path, &new);
+    } else {
+        std::fs::write(&path, &new).unwrap();
+        // The result that lists this data file: in its task directory.
+        let mut dir = path.parent().unwrap().to_path_buf();
+        while !dir.join("result.json").is_file() && dir.starts_with(&work) && dir != work {
+            dir = dir.parent().unwrap().to_path_buf();
+        }
+        let result = dir.join("result.json");
+        if result.is_file() {
+            let text = std::fs::read(&result).unwrap();
+            let nl = text.iter().position(|&b| b == b'\n').unwrap();
+            let mut v: serde_json::Value = serde_json::from_slice(&text[nl + 1..]).unwrap();
+            replace_sum(&mut v, (old.len() as u64, crc32fast::hash(&old)), (new.len() as u64, crc32fast::hash(&new)));
+            reseal_result(&result, serde_json::to_string_pretty(&v).unwrap().as_bytes());
+        }
+    }
+    // Later stages run again (and the output is written again).
+    let order = ["bounds", "discretize", "census", "reconstruct", "reopen", "write"];
+    let first = rel.components().next().unwrap().as_os_str().to_string_lossy().into_owned();
+    if let Some(i) = order.iter().position(|s| *s == first) {
+        for later in &order[i + 1..] {
+            let _ = std::fs::remove_dir_all(work.join(later));
+        }
+    } else {
+        // plan.json: every task's result stays; the plan decides.
+    }
+    // The copy describes the template's run: the same input and output.
+    let out = output;
+    let _ = std::fs::remove_file(&out);
+    let tuning = mint_pipeline::Tuning { work_dir: Some(work.clone()), ..tuning };
+    let r = mint_pipeline::run(&spec, &tuning, &mint_pipeline::NoProgress);
+    match r {
+        Err(e) => {
+            let s = e.to_string();
+            assert!(!s.trim().is_empty() && !s.contains('\n'), "error not one line: {s:?}");
+            let names_one = [&work, &out, &input].iter().any(|p| s.contains(&*p.to_string_lossy()) || s.contains(&*p.file_name().unwrap().to_string_lossy()));
+            assert!(names_one, "error names no file of the run: {s:?}");
+            assert!(!out.exists(), "an error left the output behind: {s}");
+        }
+        Ok(_) => {
+            mint_io::read_mesh(&out).expect("a finished run's output reads back");
+        }
+    }
+}
+
 // ------------------------------------------------------------- geometry
 
 /// A coordinate on the lattice of multiples of 0.5 in [-4, 4] (17 values).
@@ -490,7 +723,7 @@ pub fn resample(data: &[u8]) {
     // Nothing of the run is left in the scratch directory but our files.
     for e in std::fs::read_dir(scratch()).unwrap() {
         let name = e.unwrap().file_name().into_string().unwrap();
-        assert!(name.starts_with("input.") || name.starts_with("again.") || name == "out.ply", "the run left {name} behind");
+        assert!(name.starts_with("input.") || name.starts_with("again.") || name.starts_with("stage-") || name == "out.ply", "the run left {name} behind");
     }
 }
 
