@@ -347,3 +347,13 @@ pub(crate) fn write_point(out: &mut Vec<u8>, prefix: &[u8], p: [f64; 3], double:
     write_coord(out, p[2], double);
     out.extend_from_slice(suffix);
 }
+
+/// Progress through a file of `total` bytes read as `count` equal items,
+/// `done` of them read (all of it when there are none).
+pub(crate) fn share_done(total: u64, done: u64, count: u64) -> u64 {
+    if count == 0 {
+        total
+    } else {
+        (total as f64 * done as f64 / count as f64) as u64
+    }
+}

@@ -14,6 +14,11 @@ use std::path::Path;
 use crate::error::Error;
 use crate::text::{is_space, words, Lines};
 
+/// True when `head` starts a binary glTF container (magic `glTF`).
+pub(crate) fn is_glb(head: &[u8]) -> bool {
+    head.len() >= 12 && &head[..4] == b"glTF"
+}
+
 /// A mesh file format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Format {
@@ -33,6 +38,8 @@ pub enum Format {
     Vrml,
     /// Autodesk 3D Studio, binary chunks.
     ThreeDs,
+    /// glTF 2.0: `.gltf` (JSON and buffers) or `.glb` (binary container).
+    Gltf,
 }
 
 impl Format {
@@ -72,6 +79,7 @@ impl Format {
             "raw" => Some(Format::Raw),
             "wrl" | "vrml" => Some(Format::Vrml),
             "3ds" => Some(Format::ThreeDs),
+            "gltf" | "glb" => Some(Format::Gltf),
             _ => None,
         }
     }
@@ -81,6 +89,9 @@ impl Format {
     pub fn sniff(head: &[u8], file_len: u64) -> Option<Format> {
         if head.starts_with(b"ply\n") || head.starts_with(b"ply\r\n") {
             return Some(Format::Ply);
+        }
+        if is_glb(head) {
+            return Some(Format::Gltf);
         }
         if head.starts_with(b"#VRML") {
             return Some(Format::Vrml);
@@ -128,6 +139,7 @@ impl Format {
             Format::Raw => "raw",
             Format::Vrml => "wrl",
             Format::ThreeDs => "3ds",
+            Format::Gltf => "glb",
         }
     }
 }
@@ -143,6 +155,7 @@ impl fmt::Display for Format {
             Format::Raw => "raw",
             Format::Vrml => "VRML 2.0",
             Format::ThreeDs => "3DS",
+            Format::Gltf => "glTF",
         })
     }
 }

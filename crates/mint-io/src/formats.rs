@@ -10,7 +10,7 @@ use crate::backend::{FormatWriter, MeshInfo, Opened, WriteOptions};
 use crate::error::Error;
 use crate::format::Format;
 use crate::mapped::Mapped;
-use crate::{mesh, obj, off, ply, raw, stl, three_ds, vrml};
+use crate::{gltf, mesh, obj, off, ply, raw, stl, three_ds, vrml};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -24,6 +24,9 @@ pub(crate) struct Backend {
     pub(crate) create: fn(&Path, &WriteOptions) -> Result<Box<dyn FormatWriter>, Error>,
     /// The format stores positions as f32 whatever `--double` asks.
     pub(crate) f32_only: bool,
+    /// It stores them relative to an origin it carries in f64 (glTF: the
+    /// node's translation), so f32 need hold only the model's extent.
+    pub(crate) origin: bool,
 }
 
 fn boxed<W: FormatWriter + 'static>(w: Result<W, Error>) -> Result<Box<dyn FormatWriter>, Error> {
@@ -38,15 +41,17 @@ pub(crate) fn backend(format: Format) -> Backend {
             open: ply::read::open,
             create: |path, o| boxed(ply::write::PlyWriter::create(path, o)),
             f32_only: false,
+            origin: false,
         },
-        Format::Obj => Backend { info: obj::info, open: obj::open, create: |path, o| boxed(obj::writer(path, o)), f32_only: false },
-        Format::Stl => Backend { info: stl::info, open: stl::open, create: |path, o| boxed(stl::StlWriter::create(path, o)), f32_only: true },
-        Format::Off => Backend { info: off::info, open: off::open, create: |path, o| boxed(off::writer(path, o)), f32_only: false },
-        Format::Mesh => Backend { info: mesh::info, open: mesh::open, create: |path, o| boxed(mesh::writer(path, o)), f32_only: false },
-        Format::Raw => Backend { info: raw::info, open: raw::open, create: |path, o| boxed(raw::RawWriter::create(path, o)), f32_only: false },
-        Format::Vrml => Backend { info: vrml::info, open: vrml::open, create: |path, o| boxed(vrml::VrmlWriter::create(path, o)), f32_only: false },
+        Format::Obj => Backend { info: obj::info, open: obj::open, create: |path, o| boxed(obj::writer(path, o)), f32_only: false, origin: false },
+        Format::Stl => Backend { info: stl::info, open: stl::open, create: |path, o| boxed(stl::StlWriter::create(path, o)), f32_only: true, origin: false },
+        Format::Off => Backend { info: off::info, open: off::open, create: |path, o| boxed(off::writer(path, o)), f32_only: false, origin: false },
+        Format::Mesh => Backend { info: mesh::info, open: mesh::open, create: |path, o| boxed(mesh::writer(path, o)), f32_only: false, origin: false },
+        Format::Raw => Backend { info: raw::info, open: raw::open, create: |path, o| boxed(raw::RawWriter::create(path, o)), f32_only: false, origin: false },
+        Format::Vrml => Backend { info: vrml::info, open: vrml::open, create: |path, o| boxed(vrml::VrmlWriter::create(path, o)), f32_only: false, origin: false },
+        Format::Gltf => Backend { info: gltf::info, open: gltf::open, create: |path, o| boxed(gltf::GltfWriter::create(path, o)), f32_only: true, origin: true },
         Format::ThreeDs => {
-            Backend { info: three_ds::info, open: three_ds::open, create: |path, o| boxed(three_ds::ThreeDsWriter::create(path, o)), f32_only: true }
+            Backend { info: three_ds::info, open: three_ds::open, create: |path, o| boxed(three_ds::ThreeDsWriter::create(path, o)), f32_only: true, origin: false }
         }
     }
 }

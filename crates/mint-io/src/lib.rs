@@ -30,9 +30,11 @@
 pub mod atomic;
 mod backend;
 pub mod convert;
+mod coords;
 pub mod error;
 pub mod format;
 mod formats;
+pub mod gltf;
 mod line_formats;
 mod mapped;
 mod mesh;

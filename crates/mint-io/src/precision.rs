@@ -12,25 +12,7 @@ use crate::error::Error;
 use crate::format::Format;
 use std::path::Path;
 
-/// The largest error of rounding a coordinate of magnitude at most
-/// `max_abs` to f32: half the spacing of f32 values there (of denormals,
-/// 2⁻¹⁴⁹, below the normal range); infinite beyond f32's range.
-pub fn f32_error(max_abs: f64) -> f64 {
-    if !(max_abs <= f32::MAX as f64) {
-        return f64::INFINITY;
-    }
-    if max_abs < f32::MIN_POSITIVE as f64 {
-        return 2f64.powi(-150);
-    }
-    // The binary exponent of max_abs: f32 values in [2^e, 2^(e+1)) are 2^(e-23) apart.
-    let e = ((max_abs.to_bits() >> 52) & 0x7ff) as i32 - 1023;
-    2f64.powi(e - 24)
-}
-
-/// The largest magnitude of a coordinate in the box `[lo, hi]`.
-pub fn max_abs(lo: [f64; 3], hi: [f64; 3]) -> f64 {
-    (0..3).map(|d| lo[d].abs().max(hi[d].abs())).fold(0.0, f64::max)
-}
+pub use crate::coords::{f32_error, max_abs, origin_for};
 
 /// Why an output is written in f64 when it is (`None`: f32 places every
 /// coordinate of the box `[lo, hi]` within `tolerance`). The text names
@@ -45,12 +27,29 @@ pub fn needs_f64(lo: [f64; 3], hi: [f64; 3], tolerance: f64) -> Option<String> {
 /// or when [`needs_f64`] says so, with the reason; an f32-only `format`
 /// that would need f64 is refused with one line naming `path` and the fix.
 pub fn choose(path: &Path, format: Format, asked_double: bool, lo: [f64; 3], hi: [f64; 3], tolerance: f64) -> Result<(bool, String), Error> {
+    let backend = crate::formats::backend(format);
+    if backend.origin {
+        // f32 offsets from the box's centre (or none, near the origin).
+        let o = origin_for(lo, hi);
+        let (rlo, rhi) = ([0, 1, 2].map(|d| lo[d] - o[d]), [0, 1, 2].map(|d| hi[d] - o[d]));
+        if asked_double {
+            return Err(Error::unsupported(path, format!("{format} stores f32 positions only, so --double cannot apply: write .ply or .obj for f64")));
+        }
+        return match needs_f64(rlo, rhi, tolerance) {
+            None if o == [0.0; 3] => Ok((false, "f32".into())),
+            None => Ok((false, format!("f32 relative to an origin ({:.6e}, {:.6e}, {:.6e}) in the node's translation", o[0], o[1], o[2]))),
+            Some(why) => Err(Error::unsupported(
+                path,
+                format!("{format} stores f32 positions, and even relative to the box's centre {why}: write .ply or .obj (f64), or scale the input up (tiny models)"),
+            )),
+        };
+    }
     if asked_double {
         return Ok((true, "f64 (asked with --double)".into()));
     }
     match needs_f64(lo, hi, tolerance) {
         None => Ok((false, "f32".into())),
-        Some(why) if crate::formats::backend(format).f32_only => Err(Error::unsupported(
+        Some(why) if backend.f32_only => Err(Error::unsupported(
             path,
             format!("{} stores f32 coordinates, and {why}: write .ply or .obj (f64), or move the input towards the origin (large coordinates) or scale it up (tiny ones)", format),
         )),

@@ -112,11 +112,7 @@ impl FaceStream for RawBody {
     }
 
     fn bytes_done(&self) -> u64 {
-        if self.tris == 0 {
-            self.total
-        } else {
-            (self.total as f64 * self.next as f64 / self.tris as f64) as u64
-        }
+        crate::backend::share_done(self.total, self.next, self.tris)
     }
 }
 

@@ -7,6 +7,7 @@
 //! `util`.
 mod bad_input;
 mod features;
+mod gltf;
 mod real_data;
 mod roundtrip;
 mod streaming;

@@ -1,0 +1,813 @@
+//! glTF 2.0, as `.gltf` (JSON, with `.bin` buffers or `data:` URIs) and
+//! `.glb` (binary container): triangle geometry in and out.
+//!
+//! **Reading.** Every triangle primitive (modes TRIANGLES, TRIANGLE_STRIP,
+//! TRIANGLE_FAN; points and lines are skipped and counted) of the default
+//! scene, or of every scene when none is default, or of every root node
+//! when the file has no scene, with the node transforms applied in f64 —
+//! the `matrix`, or `translation`/`rotation`/`scale` — so that a
+//! geo-referenced model whose vertices are f32 offsets from a large node
+//! translation keeps its world coordinates. (The `gltf` crate stores
+//! transforms as f32, which puts a UTM translation on a half-metre lattice;
+//! hence this reader over serde_json: see docs/DEPENDENCIES.md.) Positions:
+//! FLOAT VEC3, any byte stride, sparse accessors; indices: UNSIGNED_BYTE,
+//! _SHORT and _INT, any stride, sparse, or none (sequential). Positions go
+//! to a spill file in world coordinates, triangles to another; both are
+//! streamed from there. Every offset, count and index is checked; an error
+//! is one line naming the file and the JSON path (`accessors[3]: …`).
+//!
+//! **Writing.** Positions as f32 relative to an origin carried by the
+//! node's `translation` (f64 in the JSON): the centre of the box when the
+//! model is far from the origin, else none. So a building at 5·10⁶ m keeps
+//! micrometres, where absolute f32 would keep half metres. Indices as
+//! UNSIGNED_INT. `.glb` is refused when it would pass the format's 4 GiB
+//! limit, naming `.gltf` or `.ply` instead; `.gltf` writes `NAME.bin`
+//! beside it. Both are written beside the target and renamed.
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use serde_json::Value;
+
+use crate::backend::{ElementInfo, FaceStream, FormatWriter, MeshInfo, Opened, OutFile, ReadStats, WriteOptions};
+use crate::error::Error;
+use crate::format::{is_glb, Format};
+use crate::coords::origin_for;
+use crate::mapped::{Mapped, SpillFile};
+use crate::positions::{not_finite, Emit, Positions, Reject};
+
+const GLB_MAGIC: &[u8; 4] = b"glTF";
+const CHUNK_JSON: u32 = 0x4E4F_534A;
+const CHUNK_BIN: u32 = 0x004E_4942;
+/// Nested nodes deeper than this are refused (a cycle, or a hostile file).
+const MAX_DEPTH: usize = 256;
+
+type Mat = [[f64; 4]; 4];
+const IDENTITY: Mat = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+
+fn mul(a: &Mat, b: &Mat) -> Mat {
+    let mut m = [[0.0; 4]; 4];
+    for (i, row) in m.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            *x = (0..4).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    m
+}
+
+fn apply(m: &Mat, p: [f64; 3]) -> [f64; 3] {
+    // Translation added last, so that a large offset meets the small,
+    // already transformed coordinates once (exactly when the rest is identity).
+    let r = |i: usize| m[i][0] * p[0] + m[i][1] * p[1] + m[i][2] * p[2];
+    [r(0) + m[0][3], r(1) + m[1][3], r(2) + m[2][3]]
+}
+
+/// The parsed document and its buffers.
+struct Doc<'a> {
+    path: &'a Path,
+    json: Value,
+    buffers: Vec<Buf>,
+}
+
+/// A buffer's bytes: a range of the mapped GLB, a mapped external file, or
+/// decoded `data:` bytes.
+enum Buf {
+    Map(Arc<Mapped>, usize, usize),
+    Bytes(Vec<u8>),
+}
+
+impl Buf {
+    fn bytes(&self) -> &[u8] {
+        match self {
+            Buf::Map(m, a, b) => &m.bytes()[*a..*b],
+            Buf::Bytes(v) => v,
+        }
+    }
+}
+
+fn bad(path: &Path, at: &str, msg: impl std::fmt::Display) -> Error {
+    Error::format(path, format!("{at}: {msg}"))
+}
+
+/// Splits a GLB into its JSON and the byte range of its BIN chunk.
+fn glb_chunks<'d>(path: &Path, data: &'d [u8]) -> Result<(&'d [u8], Option<(usize, usize)>), Error> {
+    let u32_at = |o: usize| u32::from_le_bytes([data[o], data[o + 1], data[o + 2], data[o + 3]]);
+    if data.len() < 20 {
+        return Err(Error::format(path, "a GLB shorter than its 12-byte header and first chunk header"));
+    }
+    let version = u32_at(4);
+    if version != 2 {
+        return Err(Error::unsupported(path, format!("GLB version {version} (mint reads glTF 2.0)")));
+    }
+    let total = (u32_at(8) as usize).min(data.len());
+    let (mut at, mut json, mut bin) = (12usize, None, None);
+    while at + 8 <= total {
+        let (len, kind) = (u32_at(at) as usize, u32_at(at + 4));
+        let (a, b) = (at + 8, (at + 8).checked_add(len).filter(|&b| b <= total).ok_or_else(|| {
+            Error::format(path, format!("a GLB chunk of {len} bytes at byte {at} runs past the end of the file ({total} bytes)"))
+        })?);
+        match kind {
+            CHUNK_JSON if json.is_none() => json = Some(&data[a..b]),
+            CHUNK_BIN if bin.is_none() => bin = Some((a, b)),
+            _ => {}
+        }
+        at = b + (4 - len % 4) % 4;
+    }
+    let json = json.ok_or_else(|| Error::format(path, "a GLB without a JSON chunk"))?;
+    Ok((json, bin))
+}
+
+fn base64(path: &Path, at: &str, s: &str) -> Result<Vec<u8>, Error> {
+    let val = |c: u8| -> Option<u32> {
+        Some(match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' | b'-' => 62,
+            b'/' | b'_' => 63,
+            _ => return None,
+        } as u32)
+    };
+    let mut out = Vec::with_capacity(s.len() * 3 / 4);
+    let (mut acc, mut bits) = (0u32, 0u32);
+    for &c in s.as_bytes() {
+        if c == b'=' {
+            break;
+        }
+        let v = val(c).ok_or_else(|| bad(path, at, format!("a data URI with the character {:?}, not base64", c as char)))?;
+        acc = (acc << 6) | v;
+        bits += 6;
+        if bits >= 8 {
+            bits -= 8;
+            out.push((acc >> bits) as u8);
+            acc &= (1 << bits) - 1;
+        }
+    }
+    Ok(out)
+}
+
+fn arr<'v>(v: &'v Value, key: &str) -> &'v [Value] {
+    v.get(key).and_then(Value::as_array).map_or(&[], |a| a.as_slice())
+}
+
+/// `v[key]` as an index below `len`.
+fn index(path: &Path, at: &str, v: &Value, key: &str, len: usize) -> Result<Option<usize>, Error> {
+    match v.get(key) {
+        None => Ok(None),
+        Some(x) => match x.as_u64() {
+            Some(i) if (i as usize) < len => Ok(Some(i as usize)),
+            _ => Err(bad(path, at, format!("'{key}' is {x}, not an index below {len}"))),
+        },
+    }
+}
+
+fn uint(path: &Path, at: &str, v: &Value, key: &str, default: u64) -> Result<u64, Error> {
+    match v.get(key) {
+        None => Ok(default),
+        Some(x) => x.as_u64().ok_or_else(|| bad(path, at, format!("'{key}' is {x}, not a non-negative integer"))),
+    }
+}
+
+impl<'a> Doc<'a> {
+    fn parse(path: &'a Path, map: &Arc<Mapped>, spill_dir: &Path) -> Result<Doc<'a>, Error> {
+        let data = map.bytes();
+        let (json_bytes, bin) = if is_glb(data) { glb_chunks(path, data)? } else { (data, None) };
+        let json: Value = serde_json::from_slice(json_bytes).map_err(|e| Error::format(path, format!("not glTF JSON ({e})")))?;
+        if !json.is_object() {
+            return Err(Error::format(path, "not glTF: the JSON is not an object"));
+        }
+        let version = json.get("asset").and_then(|a| a.get("version")).and_then(Value::as_str).unwrap_or("");
+        if !version.starts_with("2.") {
+            return Err(Error::unsupported(path, format!("glTF asset version {version:?} (mint reads 2.x)")));
+        }
+        // A required extension changes what the file means; those that only
+        // touch materials, lights or image codecs leave the geometry alone.
+        for (i, e) in arr(&json, "extensionsRequired").iter().enumerate() {
+            let name = e.as_str().unwrap_or("");
+            let harmless = name.starts_with("KHR_materials_")
+                || matches!(name, "KHR_texture_transform" | "KHR_lights_punctual" | "KHR_texture_basisu" | "EXT_texture_webp" | "EXT_texture_avif");
+            if !harmless {
+                let what = match name {
+                    "KHR_draco_mesh_compression" => " (Draco-compressed geometry; decompress it first, e.g. gltf-transform decompress)",
+                    "EXT_meshopt_compression" | "KHR_meshopt_compression" => " (meshopt-compressed buffers; decompress them first, e.g. gltf-transform decompress)",
+                    "KHR_mesh_quantization" => " (quantized positions; dequantize them first, e.g. gltf-transform dequantize)",
+                    _ => "",
+                };
+                return Err(Error::unsupported(path, format!("extensionsRequired[{i}]: the file requires extension {name:?}, which mint does not implement{what}")));
+            }
+        }
+        let mut buffers = Vec::new();
+        for (i, b) in arr(&json, "buffers").iter().enumerate() {
+            let at = format!("buffers[{i}]");
+            let len = uint(path, &at, b, "byteLength", 0)? as usize;
+            let buf = match b.get("uri").and_then(Value::as_str) {
+                None => match bin {
+                    Some((a, e)) if i == 0 => Buf::Map(map.clone(), a, e),
+                    _ => return Err(bad(path, &at, "a buffer without a URI outside a GLB's first buffer")),
+                },
+                Some(uri) if uri.starts_with("data:") => {
+                    let comma = uri.find(',').ok_or_else(|| bad(path, &at, "a data URI without a comma"))?;
+                    if !uri[..comma].ends_with(";base64") {
+                        return Err(bad(path, &at, "a data URI that is not base64"));
+                    }
+                    Buf::Bytes(base64(path, &at, &uri[comma + 1..])?)
+                }
+                Some(uri) => {
+                    let rel = percent_decode(uri);
+                    if rel.contains("://") {
+                        return Err(bad(path, &at, format!("buffer URI {uri:?}: only files beside the .gltf are read")));
+                    }
+                    let file = path.parent().unwrap_or(Path::new(".")).join(&rel);
+                    let m = Mapped::open(&file, spill_dir).map_err(|e| bad(path, &at, format!("buffer {}: {e}", file.display())))?;
+                    let n = m.bytes().len();
+                    Buf::Map(Arc::new(m), 0, n)
+                }
+            };
+            if buf.bytes().len() < len {
+                return Err(bad(path, &at, format!("byteLength {len}, but the buffer holds {} bytes", buf.bytes().len())));
+            }
+            buffers.push(buf);
+        }
+        Ok(Doc { path, json, buffers })
+    }
+
+    /// The root nodes to draw and why.
+    fn roots(&self) -> Result<Vec<usize>, Error> {
+        let (path, nodes) = (self.path, arr(&self.json, "nodes"));
+        let scenes = arr(&self.json, "scenes");
+        let scene_nodes = |s: usize| -> Result<Vec<usize>, Error> {
+            let at = format!("scenes[{s}]");
+            arr(&scenes[s], "nodes").iter().map(|n| match n.as_u64() {
+                Some(i) if (i as usize) < nodes.len() => Ok(i as usize),
+                _ => Err(bad(path, &at, format!("node {n} is not an index below {}", nodes.len()))),
+            }).collect()
+        };
+        if let Some(s) = index(path, "scene", &self.json, "scene", scenes.len())? {
+            return scene_nodes(s);
+        }
+        if !scenes.is_empty() {
+            let mut all = Vec::new();
+            for s in 0..scenes.len() {
+                all.extend(scene_nodes(s)?);
+            }
+            return Ok(all);
+        }
+        // No scene: every node that is no other node's child.
+        let mut child = vec![false; nodes.len()];
+        for n in nodes {
+            for c in arr(n, "children") {
+                if let Some(i) = c.as_u64().filter(|&i| (i as usize) < nodes.len()) {
+                    child[i as usize] = true;
+                }
+            }
+        }
+        Ok((0..nodes.len()).filter(|&i| !child[i]).collect())
+    }
+
+    fn local(&self, n: usize) -> Result<Mat, Error> {
+        let node = &arr(&self.json, "nodes")[n];
+        let at = format!("nodes[{n}]");
+        let nums = |key: &str, len: usize| -> Result<Option<Vec<f64>>, Error> {
+            match node.get(key) {
+                None => Ok(None),
+                Some(v) => {
+                    let xs: Option<Vec<f64>> = v.as_array().map(|a| a.iter().map(Value::as_f64).collect::<Option<Vec<f64>>>()).flatten();
+                    match xs {
+                        Some(xs) if xs.len() == len && xs.iter().all(|x| x.is_finite()) => Ok(Some(xs)),
+                        _ => Err(bad(self.path, &at, format!("'{key}' is not {len} finite numbers"))),
+                    }
+                }
+            }
+        };
+        if let Some(m) = nums("matrix", 16)? {
+            // Column-major.
+            let mut r = [[0.0; 4]; 4];
+            for c in 0..4 {
+                for (row, x) in r.iter_mut().enumerate() {
+                    x[c] = m[4 * c + row];
+                }
+            }
+            return Ok(r);
+        }
+        let t = nums("translation", 3)?.unwrap_or(vec![0.0; 3]);
+        let q = nums("rotation", 4)?.unwrap_or(vec![0.0, 0.0, 0.0, 1.0]);
+        let s = nums("scale", 3)?.unwrap_or(vec![1.0; 3]);
+        let (x, y, z, w) = (q[0], q[1], q[2], q[3]);
+        let rot = [
+            [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w)],
+            [2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w)],
+            [2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y)],
+        ];
+        let mut m = IDENTITY;
+        for i in 0..3 {
+            for j in 0..3 {
+                m[i][j] = rot[i][j] * s[j];
+            }
+            m[i][3] = t[i];
+        }
+        Ok(m)
+    }
+
+    /// Every (mesh, world transform) to draw, in traversal order.
+    fn instances(&self) -> Result<Vec<(usize, Mat)>, Error> {
+        let nodes = arr(&self.json, "nodes");
+        let meshes = arr(&self.json, "meshes").len();
+        let mut out = Vec::new();
+        let mut stack: Vec<(usize, Mat, usize)> = self.roots()?.into_iter().rev().map(|n| (n, IDENTITY, 0)).collect();
+        // A node hierarchy is a forest: each node is drawn once. A root
+        // listed again (by another scene) is skipped; a node reached twice
+        // through children (two parents, or a cycle) is refused.
+        let mut seen: HashSet<usize> = HashSet::new();
+        while let Some((n, parent, depth)) = stack.pop() {
+            let at = format!("nodes[{n}]");
+            if depth > MAX_DEPTH {
+                return Err(bad(self.path, &at, "nodes nested deeper than 256"));
+            }
+            if !seen.insert(n) {
+                if depth == 0 {
+                    continue;
+                }
+                return Err(bad(self.path, &at, "a node with two parents, or a cycle in the node hierarchy"));
+            }
+            let world = mul(&parent, &self.local(n)?);
+            if let Some(m) = index(self.path, &at, &nodes[n], "mesh", meshes)? {
+                out.push((m, world));
+            }
+            let children = arr(&nodes[n], "children");
+            for c in children.iter().rev() {
+                match c.as_u64() {
+                    Some(i) if (i as usize) < nodes.len() => stack.push((i as usize, world, depth + 1)),
+                    _ => return Err(bad(self.path, &at, format!("child {c} is not an index below {}", nodes.len()))),
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// Decodes `%XX` escapes of a relative URI.
+fn percent_decode(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = |c: u8| (c as char).to_digit(16);
+        if b[i] == b'%' && i + 2 < b.len() {
+            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+                continue;
+            }
+        }
+        out.push(b[i]);
+        i += 1;
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// One accessor, resolved: where its elements are and how to read them.
+struct Accessor<'d> {
+    at: String,
+    count: usize,
+    /// (bytes, stride) of the bufferView part; None: all zeros.
+    data: Option<(&'d [u8], usize)>,
+    comp: u32,
+    /// Sparse substitutions: (element index, bytes of its value).
+    sparse: Vec<(usize, &'d [u8])>,
+}
+
+fn comp_size(path: &Path, at: &str, comp: u32) -> Result<usize, Error> {
+    match comp {
+        5120 | 5121 => Ok(1),
+        5122 | 5123 => Ok(2),
+        5125 | 5126 => Ok(4),
+        c => Err(bad(path, at, format!("componentType {c} is not a glTF component type"))),
+    }
+}
+
+impl<'d> Accessor<'d> {
+    fn new(doc: &'d Doc, i: usize, want_type: &str) -> Result<Accessor<'d>, Error> {
+        let path = doc.path;
+        let accs = arr(&doc.json, "accessors");
+        let at = format!("accessors[{i}]");
+        let a = accs.get(i).ok_or_else(|| bad(path, "accessors", format!("accessor {i} does not exist ({} accessors)", accs.len())))?;
+        let ty = a.get("type").and_then(Value::as_str).unwrap_or("");
+        if ty != want_type {
+            return Err(bad(path, &at, format!("type {ty:?}, {want_type:?} expected")));
+        }
+        let comps = if ty == "VEC3" { 3 } else { 1 };
+        let comp = uint(path, &at, a, "componentType", 0)? as u32;
+        let size = comp_size(path, &at, comp)?;
+        let count = uint(path, &at, a, "count", 0)?;
+        // No accessor can hold more elements than bytes in the file or 2^32.
+        if count > u32::MAX as u64 {
+            return Err(bad(path, &at, format!("count {count} is past 32-bit indices")));
+        }
+        let count = count as usize;
+        let elem = size * comps;
+        let view = |vi: usize, offset: usize, at: &str| -> Result<(&'d [u8], usize), Error> {
+            let views = arr(&doc.json, "bufferViews");
+            let v = views.get(vi).ok_or_else(|| bad(path, at, format!("bufferView {vi} does not exist ({} views)", views.len())))?;
+            let vat = format!("bufferViews[{vi}]");
+            let b = index(path, &vat, v, "buffer", doc.buffers.len())?.ok_or_else(|| bad(path, &vat, "no buffer"))?;
+            let (off, len) = (uint(path, &vat, v, "byteOffset", 0)? as usize, uint(path, &vat, v, "byteLength", 0)? as usize);
+            let bytes = doc.buffers[b].bytes();
+            let range = off.checked_add(len).filter(|&e| e <= bytes.len()).ok_or_else(|| {
+                bad(path, &vat, format!("bytes {off}..{} past the end of buffer {b} ({} bytes)", off as u128 + len as u128, bytes.len()))
+            })?;
+            let stride = uint(path, &vat, v, "byteStride", 0)? as usize;
+            let view = &bytes[off..range];
+            let view = view.get(offset..).ok_or_else(|| bad(path, at, format!("byteOffset {offset} past its view of {len} bytes")))?;
+            Ok((view, stride))
+        };
+        let data = match index(path, &at, a, "bufferView", usize::MAX)? {
+            None => None,
+            Some(vi) => {
+                let (bytes, stride) = view(vi, uint(path, &at, a, "byteOffset", 0)? as usize, &at)?;
+                let stride = if stride == 0 { elem } else { stride };
+                if stride < elem {
+                    return Err(bad(path, &at, format!("byteStride {stride} is shorter than an element ({elem} bytes)")));
+                }
+                if count > 0 && (count - 1) as u128 * stride as u128 + elem as u128 > bytes.len() as u128 {
+                    return Err(bad(path, &at, format!("{count} elements of stride {stride} need more than the {} bytes of its view", bytes.len())));
+                }
+                Some((bytes, stride))
+            }
+        };
+        let mut sparse = Vec::new();
+        if let Some(sp) = a.get("sparse") {
+            let sat = format!("{at}.sparse");
+            let n = uint(path, &sat, sp, "count", 0)? as usize;
+            if n > count {
+                return Err(bad(path, &sat, format!("count {n} is more than the accessor's {count}")));
+            }
+            let (idx, vals) = (sp.get("indices").unwrap_or(&Value::Null), sp.get("values").unwrap_or(&Value::Null));
+            let icomp = uint(path, &sat, idx, "componentType", 0)? as u32;
+            let isize = comp_size(path, &sat, icomp)?;
+            let iv = index(path, &sat, idx, "bufferView", usize::MAX)?.ok_or_else(|| bad(path, &sat, "indices without a bufferView"))?;
+            let vv = index(path, &sat, vals, "bufferView", usize::MAX)?.ok_or_else(|| bad(path, &sat, "values without a bufferView"))?;
+            let (ib, _) = view(iv, uint(path, &sat, idx, "byteOffset", 0)? as usize, &sat)?;
+            let (vb, _) = view(vv, uint(path, &sat, vals, "byteOffset", 0)? as usize, &sat)?;
+            if ib.len() < n * isize || vb.len() < n * elem {
+                return Err(bad(path, &sat, format!("{n} substitutions need more bytes than its views hold")));
+            }
+            for k in 0..n {
+                let e = read_uint(&ib[k * isize..], icomp) as usize;
+                if e >= count {
+                    return Err(bad(path, &sat, format!("substitution {k} names element {e} of {count}")));
+                }
+                sparse.push((e, &vb[k * elem..(k + 1) * elem]));
+            }
+        }
+        Ok(Accessor { at, count, data, comp, sparse })
+    }
+
+    /// Element `i`'s bytes (before sparse substitution).
+    fn raw(&self, i: usize) -> Option<&'d [u8]> {
+        self.data.map(|(b, stride)| &b[i * stride..])
+    }
+}
+
+fn read_uint(b: &[u8], comp: u32) -> u64 {
+    match comp {
+        5120 | 5121 => b[0] as u64,
+        5122 | 5123 => u16::from_le_bytes([b[0], b[1]]) as u64,
+        _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as u64,
+    }
+}
+
+fn read_vec3(b: &[u8]) -> [f64; 3] {
+    let f = |o: usize| f32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]) as f64;
+    [f(0), f(4), f(8)]
+}
+
+/// What a pass over the document found.
+#[derive(Default)]
+struct Counts {
+    vertices: u64,
+    triangles: u64,
+    primitives: u64,
+    /// Primitives of points or lines, skipped.
+    skipped: u64,
+}
+
+/// Walks every drawn primitive; with spills, writes world positions and
+/// triangles (0-based over all primitives).
+fn walk(doc: &Doc, mut spill: Option<(&mut SpillFile, &mut SpillFile)>) -> Result<Counts, Error> {
+    let path = doc.path;
+    let meshes = arr(&doc.json, "meshes");
+    let mut c = Counts::default();
+    for (m, world) in doc.instances()? {
+        for (p, prim) in arr(&meshes[m], "primitives").iter().enumerate() {
+            let at = format!("meshes[{m}].primitives[{p}]");
+            let mode = uint(path, &at, prim, "mode", 4)?;
+            if mode < 4 {
+                c.skipped += 1;
+                continue;
+            }
+            if mode > 6 {
+                return Err(bad(path, &at, format!("mode {mode} is not a glTF primitive mode")));
+            }
+            let attrs = prim.get("attributes").unwrap_or(&Value::Null);
+            let pos_i = index(path, &at, attrs, "POSITION", usize::MAX)?.ok_or_else(|| bad(path, &at, "no POSITION attribute"))?;
+            let pos = Accessor::new(doc, pos_i, "VEC3")?;
+            if pos.comp != 5126 {
+                return Err(Error::unsupported(path, format!("{}: POSITION of componentType {} (quantized positions, KHR_mesh_quantization, are not read; FLOAT is)", pos.at, pos.comp)));
+            }
+            let base = c.vertices;
+            if base + pos.count as u64 > u32::MAX as u64 {
+                return Err(bad(path, &at, format!("more than {} vertices in all (32-bit indices)", u32::MAX)));
+            }
+            let idx = match index(path, &at, prim, "indices", usize::MAX)? {
+                Some(i) => {
+                    let a = Accessor::new(doc, i, "SCALAR")?;
+                    if !matches!(a.comp, 5121 | 5123 | 5125) {
+                        return Err(bad(path, &a.at, format!("indices of componentType {}, not an unsigned integer type", a.comp)));
+                    }
+                    Some(a)
+                }
+                None => None,
+            };
+            let n = idx.as_ref().map_or(pos.count, |a| a.count);
+            let tris = match mode {
+                4 => n / 3,
+                _ => n.saturating_sub(2),
+            } as u64;
+            c.vertices += pos.count as u64;
+            c.triangles += tris;
+            c.primitives += 1;
+            let Some((vs, fs)) = spill.as_mut() else { continue };
+            // Positions, sparse values substituted, in world coordinates.
+            let mut sub: Vec<(usize, &[u8])> = pos.sparse.clone();
+            sub.sort_by_key(|s| s.0);
+            let mut next = 0;
+            for i in 0..pos.count {
+                let mut q = pos.raw(i).map_or([0.0; 3], read_vec3);
+                while next < sub.len() && sub[next].0 <= i {
+                    if sub[next].0 == i {
+                        q = read_vec3(sub[next].1);
+                    }
+                    next += 1;
+                }
+                vs.write_point(apply(&world, q))?;
+            }
+            // Indices, sparse substituted (rare: materialized).
+            let index_of = |k: usize| -> u64 {
+                match &idx {
+                    None => k as u64,
+                    Some(a) => a.raw(k).map_or(0, |b| read_uint(b, a.comp)),
+                }
+            };
+            let patched: Option<std::collections::HashMap<usize, u64>> =
+                idx.as_ref().filter(|a| !a.sparse.is_empty()).map(|a| a.sparse.iter().map(|&(e, b)| (e, read_uint(b, a.comp))).collect());
+            let get = |k: usize| -> Result<u32, Error> {
+                let v = patched.as_ref().and_then(|p| p.get(&k).copied()).unwrap_or_else(|| index_of(k));
+                if v >= pos.count as u64 {
+                    return Err(bad(path, &at, format!("index {v} (element {k}) is out of range ({} positions)", pos.count)));
+                }
+                Ok((base + v) as u32)
+            };
+            for t in 0..tris as usize {
+                let tri = match mode {
+                    4 => [get(3 * t)?, get(3 * t + 1)?, get(3 * t + 2)?],
+                    5 if t % 2 == 0 => [get(t)?, get(t + 1)?, get(t + 2)?],
+                    5 => [get(t + 1)?, get(t)?, get(t + 2)?],
+                    _ => [get(0)?, get(t + 1)?, get(t + 2)?],
+                };
+                let mut b = [0u8; 12];
+                for (k, v) in tri.iter().enumerate() {
+                    b[4 * k..4 * k + 4].copy_from_slice(&v.to_le_bytes());
+                }
+                fs.write_bytes(&b)?;
+            }
+        }
+    }
+    Ok(c)
+}
+
+fn make_info(doc: &Doc, glb: bool, c: &Counts) -> MeshInfo {
+    let generator = doc.json.get("asset").and_then(|a| a.get("generator")).and_then(Value::as_str).map(str::to_string);
+    MeshInfo {
+        format: Format::Gltf,
+        encoding: if glb { "glb" } else { "gltf" }.into(),
+        vertex_count: c.vertices,
+        face_count: Some(c.triangles),
+        elements: vec![
+            ElementInfo { name: "POSITION".into(), count: c.vertices, properties: vec!["float[3] x y z (node transforms applied)".into()] },
+            ElementInfo { name: "triangles".into(), count: c.triangles, properties: vec![format!("from {} primitives ({} of points or lines skipped)", c.primitives, c.skipped)] },
+        ],
+        comments: generator.into_iter().map(|g| format!("generator: {g}")).collect(),
+        obj_info: Vec::new(),
+    }
+}
+
+/// Counts the drawn vertices and triangles (reads the JSON and checks every
+/// accessor; no spill).
+pub(crate) fn info(path: &Path, data: &[u8]) -> Result<MeshInfo, Error> {
+    // The buffers are mapped again for the check: `info` has only the bytes.
+    let map = Arc::new(Mapped::open(path, &std::env::temp_dir())?);
+    let doc = Doc::parse(path, &map, &std::env::temp_dir())?;
+    let c = walk(&doc, None)?;
+    Ok(make_info(&doc, is_glb(data), &c))
+}
+
+pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Opened, Error> {
+    let doc = Doc::parse(path, &map, spill_dir)?;
+    let (mut vs, mut fs) = (SpillFile::new(spill_dir, path)?, SpillFile::new(spill_dir, path)?);
+    let c = walk(&doc, Some((&mut vs, &mut fs)))?;
+    let info = make_info(&doc, is_glb(map.bytes()), &c);
+    let positions = Positions::spilled(Arc::new(vs.into_mapped()?), c.vertices as u32);
+    let faces = Arc::new(fs.into_mapped()?);
+    let body = GltfBody { path: path.to_path_buf(), faces, tris: c.triangles, next: 0, total: map.bytes().len() as u64 };
+    Ok(Opened { info, positions, body: Box::new(body), range_grid: None, spilled_vertices: c.vertices })
+}
+
+struct GltfBody {
+    path: PathBuf,
+    faces: Arc<Mapped>,
+    tris: u64,
+    next: u64,
+    total: u64,
+}
+
+impl FaceStream for GltfBody {
+    fn fill(&mut self, out: &mut Emit, _stats: &mut ReadStats) -> Result<bool, Error> {
+        let b = self.faces.bytes();
+        while self.next < self.tris && out.room() {
+            let o = 12 * self.next as usize;
+            let v = |k: usize| u32::from_le_bytes([b[o + 4 * k], b[o + 4 * k + 1], b[o + 4 * k + 2], b[o + 4 * k + 3]]);
+            if let Err(Reject::NotFinite(x)) = out.tri_checked([v(0), v(1), v(2)]) {
+                return Err(not_finite(&self.path, x, out.pos).at_element("triangle").at_record(self.next));
+            }
+            self.next += 1;
+        }
+        Ok(self.next < self.tris)
+    }
+
+    fn bytes_done(&self) -> u64 {
+        crate::backend::share_done(self.total, self.next, self.tris)
+    }
+}
+
+// ---------------------------------------------------------------- writing
+
+/// The GLB container's limit: its length field is 32 bits.
+pub const GLB_MAX_BYTES: u64 = u32::MAX as u64;
+
+/// Streams vertices and triangles into spill files, then writes the glTF.
+pub(crate) struct GltfWriter {
+    path: PathBuf,
+    glb: bool,
+    vs: SpillFile,
+    fs: SpillFile,
+    lo: [f64; 3],
+    hi: [f64; 3],
+}
+
+impl GltfWriter {
+    pub(crate) fn create(path: &Path, opts: &WriteOptions) -> Result<GltfWriter, Error> {
+        let glb = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+        let dir = opts.spill_dir.clone().unwrap_or_else(|| path.parent().filter(|p| !p.as_os_str().is_empty()).map_or_else(|| PathBuf::from("."), Path::to_path_buf));
+        Ok(GltfWriter {
+            path: path.to_path_buf(),
+            glb,
+            vs: SpillFile::new(&dir, path)?,
+            fs: SpillFile::new(&dir, path)?,
+            lo: [f64::INFINITY; 3],
+            hi: [f64::NEG_INFINITY; 3],
+        })
+    }
+
+    fn limit(&self, vertices: u64, faces: u64) -> Result<(), Error> {
+        if self.glb && 12 * vertices + 12 * faces + (1 << 12) > GLB_MAX_BYTES {
+            return Err(Error::unsupported(
+                &self.path,
+                format!("{vertices} vertices and {faces} triangles pass GLB's 4 GiB limit: write .gltf (its buffer goes to a .bin beside it, no limit) or .ply"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl FormatWriter for GltfWriter {
+    fn vertex(&mut self, p: [f64; 3]) -> Result<(), Error> {
+        for d in 0..3 {
+            self.lo[d] = self.lo[d].min(p[d]);
+            self.hi[d] = self.hi[d].max(p[d]);
+        }
+        self.vs.write_point(p)?;
+        self.limit(self.vs.len() / 24, self.fs.len() / 12)
+    }
+
+    fn face(&mut self, f: [u32; 3]) -> Result<(), Error> {
+        let mut b = [0u8; 12];
+        for (k, v) in f.iter().enumerate() {
+            b[4 * k..4 * k + 4].copy_from_slice(&v.to_le_bytes());
+        }
+        self.fs.write_bytes(&b)?;
+        if self.fs.len() % (12 << 16) == 0 {
+            self.limit(self.vs.len() / 24, self.fs.len() / 12)?;
+        }
+        Ok(())
+    }
+
+    fn finish(self: Box<Self>, vertices: u64, faces: u64) -> Result<u64, Error> {
+        self.limit(vertices, faces)?;
+        let me = *self;
+        let origin = origin_for(me.lo, me.hi);
+        let vmap = me.vs.into_mapped()?;
+        let fmap = me.fs.into_mapped()?;
+        let (vb, fb) = (vmap.bytes(), fmap.bytes());
+        let rel = |i: usize| -> [f32; 3] {
+            let o = 24 * i;
+            let c = |k: usize| f64::from_le_bytes(vb[o + 8 * k..o + 8 * k + 8].try_into().unwrap());
+            [0, 1, 2].map(|d| (c(d) - origin[d]) as f32)
+        };
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for i in 0..vertices as usize {
+            let q = rel(i);
+            for d in 0..3 {
+                lo[d] = lo[d].min(q[d]);
+                hi[d] = hi[d].max(q[d]);
+            }
+        }
+        let (pos_len, idx_len) = (12 * vertices, 12 * faces);
+        let bin_len = pos_len + idx_len;
+        let bin_name = format!("{}.bin", me.path.file_stem().map_or("mesh".into(), |s| s.to_string_lossy()));
+        let mut node = serde_json::json!({ "name": "mint" });
+        if origin != [0.0; 3] {
+            node["translation"] = serde_json::json!(origin);
+        }
+        let mut doc = serde_json::json!({
+            "asset": { "version": "2.0", "generator": "mint" },
+            "scene": 0,
+            "scenes": [{ "nodes": [0] }],
+            "nodes": [node],
+        });
+        if faces > 0 {
+            doc["nodes"][0]["mesh"] = 0.into();
+            doc["meshes"] = serde_json::json!([{ "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1, "mode": 4 }] }]);
+            doc["accessors"] = serde_json::json!([
+                { "bufferView": 0, "componentType": 5126, "count": vertices, "type": "VEC3", "min": lo, "max": hi },
+                { "bufferView": 1, "componentType": 5125, "count": 3 * faces, "type": "SCALAR" },
+            ]);
+            doc["bufferViews"] = serde_json::json!([
+                { "buffer": 0, "byteOffset": 0, "byteLength": pos_len, "target": 34962 },
+                { "buffer": 0, "byteOffset": pos_len, "byteLength": idx_len, "target": 34963 },
+            ]);
+            let mut buffer = serde_json::json!({ "byteLength": bin_len });
+            if !me.glb {
+                buffer["uri"] = Value::String(bin_name.clone());
+            }
+            doc["buffers"] = serde_json::json!([buffer]);
+        }
+        let write_bin = |out: &mut OutFile| -> Result<(), Error> {
+            if faces == 0 {
+                return Ok(());
+            }
+            for i in 0..vertices as usize {
+                let q = rel(i);
+                let mut b = [0u8; 12];
+                for d in 0..3 {
+                    b[4 * d..4 * d + 4].copy_from_slice(&q[d].to_le_bytes());
+                }
+                out.put(&b)?;
+            }
+            out.put(&fb[..idx_len as usize])
+        };
+        let mut json = serde_json::to_vec(&doc).expect("a glTF document serializes");
+        if me.glb {
+            while json.len() % 4 != 0 {
+                json.push(b' ');
+            }
+            let bin_padded = if faces == 0 { 0 } else { bin_len.div_ceil(4) * 4 };
+            let total = 12 + 8 + json.len() as u64 + if faces == 0 { 0 } else { 8 + bin_padded };
+            let mut out = OutFile::create(&me.path)?;
+            out.put(GLB_MAGIC)?;
+            out.put(&2u32.to_le_bytes())?;
+            out.put(&(total as u32).to_le_bytes())?;
+            out.put(&(json.len() as u32).to_le_bytes())?;
+            out.put(&CHUNK_JSON.to_le_bytes())?;
+            out.put(&json)?;
+            if faces > 0 {
+                out.put(&(bin_padded as u32).to_le_bytes())?;
+                out.put(&CHUNK_BIN.to_le_bytes())?;
+                write_bin(&mut out)?;
+                out.put(&vec![0u8; (bin_padded - bin_len) as usize])?;
+            }
+            out.commit()
+        } else {
+            let mut n = 0;
+            if faces > 0 {
+                let bin_path = me.path.with_file_name(&bin_name);
+                let mut out = OutFile::create(&bin_path)?;
+                write_bin(&mut out)?;
+                n += out.commit()?;
+            }
+            let mut out = OutFile::create(&me.path)?;
+            out.put(&json)?;
+            Ok(n + out.commit()?)
+        }
+    }
+}
