@@ -87,7 +87,7 @@ fn staged_resample_equals_one_process_for_any_parts_slabs_and_task_order() {
     let reference = d.path().join("ref.ply");
     resample(&input, &reference, &opts(60_000), &NoProgress).unwrap();
     let want = std::fs::read(&reference).unwrap();
-    let job = || Job::Resample { input: input.clone() };
+    let job = || Job::Resample { inputs: vec![input.clone()] };
     for (i, (parts, slabs, order)) in
         [(1, 1, Order::Forward), (3, 4, Order::Reverse), (5, 2, Order::Shuffled(7)), (2, 9, Order::Shuffled(11)), (7, 40, Order::Reverse)].into_iter().enumerate()
     {
@@ -110,7 +110,7 @@ fn staged_bool_and_csg_equal_one_process() {
     let reference = d.path().join("ref.ply");
     boolean(BoolOp::Difference, &a, &b, &reference, &opts(50_000), &NoProgress).unwrap();
     let want = std::fs::read(&reference).unwrap();
-    let job = Job::Bool { op: BoolOp::Difference, a: a.clone(), b: b.clone() };
+    let job = Job::Bool { op: BoolOp::Difference, a: vec![a.clone()], b: vec![b.clone()] };
     let o = opts(50_000).with(|o| { o.spec.max_hole = None; });
     let got = staged_bytes(d.path(), "bool", job, &o, 3, 5, Order::Shuffled(5));
     assert!(got == want, "bool: output bytes differ");
@@ -259,7 +259,7 @@ fn a_bad_work_directory_gets_one_line_and_no_output() {
     one_line_error(&err, "stage 'discretize' is not complete: task 1 of 3 not done");
     std::fs::rename(&saved, &part).unwrap();
     // Damaged shards (checksum): every census task reads part 1's shards.
-    let shards: Vec<PathBuf> = std::fs::read_dir(part.join("op-0")).unwrap().flatten().map(|e| e.path()).filter(|p| std::fs::metadata(p).unwrap().len() > 32).collect();
+    let shards: Vec<PathBuf> = std::fs::read_dir(part.join("op-0-0")).unwrap().flatten().map(|e| e.path()).filter(|p| std::fs::metadata(p).unwrap().len() > 32).collect();
     assert!(!shards.is_empty());
     let good: Vec<Vec<u8>> = shards.iter().map(|p| std::fs::read(p).unwrap()).collect();
     for (p, g) in shards.iter().zip(&good) {
@@ -377,7 +377,7 @@ fn work_directories_compare_files_and_decimate_resumes() {
     let abs = d.path().join("s.ply");
     mint_in(&["resample", abs.to_str().unwrap(), "o.ply", "--cells", "5000", "--work", "w", "--quiet"]);
     let plan: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.path().join("w/plan.json")).unwrap()).unwrap();
-    assert_eq!(plan["spec"]["job"]["input"].as_str().unwrap(), abs.to_str().unwrap());
+    assert_eq!(plan["spec"]["job"]["inputs"][0].as_str().unwrap(), abs.to_str().unwrap());
     for out in ["d1.ply", "d2.ply"] {
         mint_in(&["decimate", "s.ply", out, "--faces", "2000", "--work", "dw", "--quiet"]);
     }
@@ -401,9 +401,9 @@ fn a_shard_record_outside_the_grid_is_refused_not_a_panic() {
     let task = work.join("discretize/00000");
     let text = std::fs::read_to_string(task.join("result.json")).unwrap();
     let mut v: serde_json::Value = serde_json::from_str(text.split_once('\n').unwrap().1).unwrap();
-    let shards = v["operands"][0]["shards"]["shards"].as_array_mut().unwrap();
+    let shards = v["operands"][0][0]["shards"]["shards"].as_array_mut().unwrap();
     let shard = shards.iter_mut().find(|s| s["len"].as_u64().unwrap() >= 16).unwrap();
-    let path = task.join(format!("op-0/shard-{:05}.bin", shard["index"].as_u64().unwrap()));
+    let path = task.join(format!("op-0-0/shard-{:05}.bin", shard["index"].as_u64().unwrap()));
     let mut bytes = std::fs::read(&path).unwrap();
     bytes[4..8].copy_from_slice(&1_000_000u32.to_le_bytes()); // family A, line 1,000,000
     std::fs::write(&path, &bytes).unwrap();

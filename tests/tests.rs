@@ -15,3 +15,4 @@ mod robustness;
 mod same_bytes;
 mod scans;
 mod stages;
+mod tiles;

@@ -185,6 +185,24 @@ fn mix(k: &[u64; 3]) -> u64 {
 /// Checks the mesh in `path` within `opts.mem_bytes` of heap; see the
 /// module docs. Returns the same report as reading the mesh whole, welding
 /// it (when `opts.weld`) and calling [`mint_mesh::check()`].
+/// Checks the files of one surface (tiles) as one mesh: several files are
+/// first written into one (f64 binary PLY in the spill directory, removed
+/// at the end), so that welding joins their seams; one file is checked
+/// as it is.
+pub fn check_files(paths: &[PathBuf], opts: &CheckOptions, progress: &dyn Progress) -> Result<(CheckReport, CheckStats), CheckError> {
+    if let [one] = paths {
+        return check_file(one, opts, progress);
+    }
+    let tmp_root = opts.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
+    let tmp = tempfile::Builder::new()
+        .prefix(".mint-check-")
+        .tempdir_in(&tmp_root)
+        .map_err(|source| CheckError::Temp { path: tmp_root.clone(), op: "creating the check's spill directory", source })?;
+    let joined = tmp.path().join("surface.ply");
+    mint_io::concatenate(paths, &joined, Some(tmp.path().to_path_buf()), &|| progress.cancelled()).map_err(|e| if progress.cancelled() { CheckError::Cancelled } else { e.into() })?;
+    check_file(&joined, opts, progress)
+}
+
 pub fn check_file(path: &Path, opts: &CheckOptions, progress: &dyn Progress) -> Result<(CheckReport, CheckStats), CheckError> {
     let tmp_root = opts.tmp_dir.clone().unwrap_or_else(std::env::temp_dir);
     let tmp = tempfile::Builder::new()

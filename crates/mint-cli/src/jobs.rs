@@ -198,10 +198,15 @@ fn parse_triple(s: &str) -> Result<[f64; 3], String> {
 
 #[derive(Args, Debug, Clone)]
 pub struct ResampleArgs {
-    /// Input mesh (PLY, OBJ, STL, OFF, …; a PLY range image is triangulated first).
-    pub input: PathBuf,
+    /// Input meshes (PLY, OBJ, STL, OFF, glTF/GLB, …), one surface: several
+    /// files (tiles), a directory (its mesh files) or @LIST (a file naming
+    /// one path a line) give the same output as one file holding all their
+    /// triangles, in any order. A single PLY range image is triangulated first.
+    #[arg(required = true, num_args = 1.., value_name = "IN")]
+    pub inputs: Vec<PathBuf>,
     /// Output mesh; the format follows the extension. Written to a temporary
     /// file beside it and renamed at the end, so it never exists half-written.
+    #[arg(value_name = "OUT")]
     pub output: PathBuf,
     #[command(flatten)]
     pub run: RunArgs,
@@ -214,9 +219,9 @@ pub struct BoolArgs {
     /// union, intersection or difference (A minus B).
     #[arg(value_parser = choice::<BoolOp>())]
     pub op: BoolOp,
-    /// First mesh (closed).
+    /// First mesh (closed): a file, a directory of tiles or @LIST.
     pub a: PathBuf,
-    /// Second mesh (closed).
+    /// Second mesh (closed): a file, a directory of tiles or @LIST.
     pub b: PathBuf,
     /// Output mesh.
     pub output: PathBuf,
@@ -232,6 +237,23 @@ pub struct CsgArgs {
     pub output: PathBuf,
     #[command(flatten)]
     pub run: RunArgs,
+}
+
+/// The files of one surface, from its arguments (see
+/// `mint_io::expand_inputs`).
+pub(crate) fn surface_files(args: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    Ok(mint_io::expand_inputs(args)?)
+}
+
+/// The files `mint resample` reads: the inputs, or, for a single PLY range
+/// image, its triangulation (see [`resample_input`]).
+pub(crate) fn resample_inputs(args: &[PathBuf], work: Option<&std::path::Path>, tmp: &std::path::Path) -> Result<(Vec<PathBuf>, Option<tempfile::NamedTempFile>)> {
+    let files = surface_files(args)?;
+    if let [one] = files.as_slice() {
+        let (f, t) = resample_input(one, work, tmp)?;
+        return Ok((vec![f], t));
+    }
+    Ok((files, None))
 }
 
 /// The mesh `mint resample` reads: the input itself, or, for a PLY range
@@ -274,12 +296,26 @@ pub fn load_mesh(path: &std::path::Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>
     Ok((whole.positions, whole.faces))
 }
 
+/// The files of one surface read into memory as one mesh (each file's
+/// faces offset by the vertices before it).
+pub fn load_meshes(paths: &[PathBuf]) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>)> {
+    let (mut positions, mut faces) = (Vec::new(), Vec::new());
+    for p in paths {
+        let (ps, fs) = load_mesh(p)?;
+        let base = u32::try_from(positions.len()).ok().filter(|b| (*b as u64) + ps.len() as u64 <= u32::MAX as u64);
+        let Some(base) = base else { bail!("{}: the files hold more than {} vertices together", p.display(), u32::MAX) };
+        positions.extend(ps);
+        faces.extend(fs.into_iter().map(|f| [f[0] + base, f[1] + base, f[2] + base]));
+    }
+    Ok((positions, faces))
+}
+
 /// The files a scene reads: the scene file and its meshes.
 pub(crate) fn scene_inputs<'a>(path: &'a std::path::Path, scene: &'a mint_pipeline::Scene) -> Vec<&'a std::path::Path> {
     let mut v = vec![path];
     for op in &scene.operands {
-        if let mint_pipeline::scene::Operand::Mesh { path, .. } = op {
-            v.push(path.as_path());
+        if let mint_pipeline::scene::Operand::Mesh { paths, .. } = op {
+            v.extend(paths.iter().map(|p| p.as_path()));
         }
     }
     v
@@ -349,13 +385,14 @@ impl JobCommand {
         let Some(work) = r.staged.work.clone() else { bail!("a staged run needs --work DIR (a directory every task can reach)") };
         let spec = match self {
             JobCommand::Resample(a) => {
-                crate::paths::check_output(&a.output, &[&a.input])?;
-                let (input, _) = resample_input(&a.input, Some(&work), &work)?;
-                r.spec(Job::Resample { input }, &a.output, Some(&a.holes))?
+                let (inputs, _) = resample_inputs(&a.inputs, Some(&work), &work)?;
+                crate::paths::check_output(&a.output, &inputs.iter().map(|p| p.as_path()).collect::<Vec<_>>())?;
+                r.spec(Job::Resample { inputs }, &a.output, Some(&a.holes))?
             }
             JobCommand::Bool(a) => {
-                crate::paths::check_output(&a.output, &[&a.a, &a.b])?;
-                r.spec(Job::Bool { op: a.op, a: a.a.clone(), b: a.b.clone() }, &a.output, None)?
+                let (fa, fb) = (surface_files(std::slice::from_ref(&a.a))?, surface_files(std::slice::from_ref(&a.b))?);
+                crate::paths::check_output(&a.output, &fa.iter().chain(&fb).map(|p| p.as_path()).collect::<Vec<_>>())?;
+                r.spec(Job::Bool { op: a.op, a: fa, b: fb }, &a.output, None)?
             }
             JobCommand::Csg(a) => {
                 let text = std::fs::read_to_string(&a.scene).with_context(|| format!("{}: cannot read the scene", a.scene.display()))?;

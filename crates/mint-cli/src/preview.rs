@@ -12,27 +12,39 @@ pub(crate) fn preview_path(output: &Path) -> PathBuf {
     output.with_extension("png")
 }
 
-/// Draws `meshes` side by side into the preview picture of `output`, and
-/// returns its path.
-fn draw_preview(meshes: &[&Path], output: &Path, bars: &Bars) -> Result<PathBuf> {
+/// Draws `meshes` (each one or more files) side by side into the preview
+/// picture of `output`, and returns its path.
+fn draw_preview(meshes: &[Vec<PathBuf>], output: &Path, bars: &Bars) -> Result<PathBuf> {
     let png = preview_path(output);
     let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, ..Default::default() };
-    mint_render::render_files(meshes, &png, &o, bars)?;
+    mint_render::render_surfaces(meshes, &png, &o, bars)?;
     Ok(png)
 }
 
+/// How a preview line names a surface: its file, or its first file and
+/// how many more.
+fn surface_name(files: &[PathBuf]) -> String {
+    let name = |p: &PathBuf| p.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    match files {
+        [one] => name(one),
+        [first, rest @ ..] => format!("{} and {} more", name(first), rest.len()),
+        [] => String::new(),
+    }
+}
+
 /// `--preview`: `OUT.png` beside `output`, the meshes side by side.
-pub(crate) fn write_preview(meshes: &[&Path], output: &Path, quiet: bool, bars: &Bars) -> Result<()> {
+pub(crate) fn write_preview(meshes: &[Vec<PathBuf>], output: &Path, quiet: bool, bars: &Bars) -> Result<()> {
     let png = draw_preview(meshes, output, bars)?;
     if !quiet {
-        eprintln!("preview: {} ({})", png.display(), meshes.iter().map(|m| m.file_name().map_or_else(String::new, |n| n.to_string_lossy().into_owned())).collect::<Vec<_>>().join(", "));
+        eprintln!("preview: {} ({})", png.display(), meshes.iter().map(|m| surface_name(m)).collect::<Vec<_>>().join(", "));
     }
     Ok(())
 }
 
-/// `--preview` of resample and decimate: the input left, the output right.
-pub(crate) fn write_before_after(input: &Path, output: &Path, quiet: bool, bars: &Bars) -> Result<()> {
-    let png = draw_preview(&[input, output], output, bars)?;
+/// `--preview` of resample and decimate: the input left (all its files),
+/// the output right.
+pub(crate) fn write_before_after(inputs: &[PathBuf], output: &Path, quiet: bool, bars: &Bars) -> Result<()> {
+    let png = draw_preview(&[inputs.to_vec(), vec![output.to_path_buf()]], output, bars)?;
     if !quiet {
         eprintln!("preview: {} (input left, output right)", png.display());
     }

@@ -25,7 +25,8 @@ pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, j
         let s = summary;
         eprintln!("resampled {} -> {}", s.input, s.output);
         eprintln!(
-            "  input        {} vertices, {} faces{}",
+            "  input        {}{} vertices, {} faces{}",
+            if s.input_files > 1 { format!("{} files, ", s.input_files) } else { String::new() },
             s.input_vertices,
             s.input_faces,
             if s.orientation_inverted { " (inside-out: signs reversed)" } else { "" }

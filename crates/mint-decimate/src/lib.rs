@@ -123,8 +123,11 @@ pub struct DecimateSummary {
     pub resample: ResampleSummary,
 }
 
-/// Decimates `input` into `output`; see the module docs.
-pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn Progress) -> Result<DecimateSummary, PipelineError> {
+/// Decimates `inputs` (one surface, one or more files) into `output`; see
+/// the module docs.
+pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress: &dyn Progress) -> Result<DecimateSummary, PipelineError> {
+    let Some(input) = inputs.first() else { return Err(PipelineError::stage(output, "no input file")) };
+    let input = input.as_path();
     let t0 = Instant::now();
     let format = Format::from_path(output)?;
     if o.target_faces < 4 {
@@ -133,7 +136,7 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
     let threads = o.tuning.thread_count();
     // 1. Area, then the cell size for the intermediate target.
     let t = Instant::now();
-    let pass = surface_area(input, threads, progress)?;
+    let pass = surface_area_of(inputs, threads, progress)?;
     let (faces, area) = (pass.faces, pass.total);
     if faces == 0 || !(area > 0.0) {
         return Err(PipelineError::Empty { path: input.to_path_buf() });
@@ -168,7 +171,7 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
             (mid.path().join("intermediate.ply"), Some(mid))
         }
     };
-    let mut spec = RunSpec::resample(input, &mid_path, GridSize::CellSize(h));
+    let mut spec = RunSpec::new(mint_pipeline::Job::Resample { inputs: inputs.to_vec() }, &mid_path, GridSize::CellSize(h));
     spec.write.double = true;
     let rs = run(&spec, &o.tuning, progress)?;
     let seconds_resample = t.elapsed().as_secs_f64();
@@ -185,7 +188,7 @@ pub fn decimate(input: &Path, output: &Path, o: &DecimateOptions, progress: &dyn
     // Reading the intermediate counts as simplifying.
     let seconds_simplify = t.elapsed().as_secs_f64() - seconds_write;
     Ok(DecimateSummary {
-        input: input.display().to_string(),
+        input: mint_pipeline::spec::files_name(inputs),
         output: output.display().to_string(),
         output_precision,
         input_faces: faces,
@@ -453,6 +456,24 @@ impl ChunkArea {
 fn keep_largest(v: &mut Vec<Big>) {
     v.sort_by(|a, b| b.area.total_cmp(&a.area).then(a.face.cmp(&b.face)));
     v.truncate(LARGEST);
+}
+
+/// The area pass over the files of one surface, merged in file order (a
+/// triangle's index counts on through the files).
+pub fn surface_area_of(paths: &[PathBuf], threads: usize, progress: &dyn Progress) -> Result<AreaPass, PipelineError> {
+    let mut all = AreaPass { faces: 0, total: 0.0, min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3], largest: Vec::new() };
+    for (k, p) in paths.iter().enumerate() {
+        let pass = surface_area(p, threads, progress).map_err(|e| mint_pipeline::error::in_file_list(e, k, paths.len()))?;
+        all.total += pass.total;
+        for d in 0..3 {
+            all.min[d] = all.min[d].min(pass.min[d]);
+            all.max[d] = all.max[d].max(pass.max[d]);
+        }
+        all.largest.extend(pass.largest.iter().map(|b| Big { face: b.face + all.faces, ..*b }));
+        keep_largest(&mut all.largest);
+        all.faces += pass.faces;
+    }
+    Ok(all)
 }
 
 /// The area pass over `path`: the triangles' count, total area (summed per

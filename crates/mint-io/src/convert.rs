@@ -158,3 +158,48 @@ pub fn convert_cancellable(
 fn weld_key(p: [f64; 3]) -> [u64; 3] {
     p.map(|c| if c == 0.0 { 0u64 } else { c.to_bits() })
 }
+
+/// Writes the files of one surface into `output` as one mesh (binary PLY,
+/// f64 coordinates, so nothing is rounded): every file's vertices in file
+/// order, then every file's triangles with its vertices' offset. Streams
+/// (positions through each file's map), so memory does not grow with the
+/// files. `cancelled` is polled between chunks. Returns the vertices and
+/// triangles written. Errors name the file that failed.
+pub fn concatenate(inputs: &[std::path::PathBuf], output: &Path, spill_dir: Option<std::path::PathBuf>, cancelled: &dyn Fn() -> bool) -> Result<(u64, u64), Error> {
+    let read = ReadOptions { chunk_triangles: 1 << 16, spill_dir: spill_dir.clone(), resolve_positions: false };
+    let mut counts = Vec::with_capacity(inputs.len());
+    let mut w = MeshWriter::create(output, Format::Ply, WriteOptions { ascii: false, double: true, spill_dir })?;
+    let mut total = 0u64;
+    for p in inputs {
+        let r = MeshReader::open(p, read.clone())?;
+        let pos = r.positions();
+        for i in 0..pos.len() {
+            if i % (1 << 16) == 0 && cancelled() {
+                return Err(Error::new(ErrorKind::Io, output, "interrupted"));
+            }
+            w.write_vertex(pos.get(i))?;
+        }
+        counts.push(pos.len() as u64);
+        total += pos.len() as u64;
+        if total > u32::MAX as u64 {
+            return Err(Error::new(ErrorKind::Format, p, format!("the files hold more than {} vertices together (u32 indices)", u32::MAX)));
+        }
+    }
+    let (mut base, mut faces) = (0u32, 0u64);
+    let mut chunk = TriangleChunk::new();
+    for (p, n) in inputs.iter().zip(counts) {
+        let mut r = MeshReader::open(p, read.clone())?;
+        while r.next_chunk(&mut chunk)? {
+            if cancelled() {
+                return Err(Error::new(ErrorKind::Io, output, "interrupted"));
+            }
+            for t in &chunk.indices {
+                w.write_face([t[0] + base, t[1] + base, t[2] + base])?;
+            }
+            faces += chunk.indices.len() as u64;
+        }
+        base += n as u32;
+    }
+    w.finish()?;
+    Ok((total, faces))
+}

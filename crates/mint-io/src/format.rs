@@ -62,7 +62,7 @@ impl Format {
         Format::sniff(&head, len).ok_or_else(|| {
             Error::unsupported(
                 path,
-                "unknown mesh format (the extension is not .ply, .obj, .stl, .off, .mesh, .raw, .wrl or .3ds and the content is none of them)",
+                "unknown mesh format (the extension is not .ply, .obj, .stl, .off, .mesh, .raw, .wrl, .3ds, .gltf or .glb and the content is none of them)",
             )
         })
     }

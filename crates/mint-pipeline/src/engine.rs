@@ -128,6 +128,7 @@ pub fn run_task(dir: &Path, stage: Stage, task: u32, topts: &TaskOptions, progre
     verify_inputs(&plan)?;
     let scene = plan.spec.job.scene()?;
     let tuning = topts.apply(&plan.tuning);
+    plan.check_scene(&scene, &dir.join(crate::workdir::PLAN_FILE))?;
     let ctx = Ctx::new(dir, plan, scene, &tuning, progress);
     run_one(&ctx, stage, task)?;
     Ok(TaskOutcome::Ran)
@@ -203,6 +204,7 @@ fn run_job(spec: &RunSpec, scene: Option<Scene>, tuning: &Tuning, progress: &dyn
         let _ = std::fs::remove_dir_all(task_dir(&dir, Stage::Write, 0));
     }
     let stages = plan.stages.clone();
+    plan.check_scene(&scene, &dir.join(crate::workdir::PLAN_FILE))?;
     let ctx = Ctx::new(&dir, plan, scene, tuning, progress);
     let (mut ran, mut resumed) = (0u64, 0u64);
     let mut seconds = std::collections::HashMap::new();
@@ -256,8 +258,9 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
     let parts: &[DiscretizeResult] = ctx.parts()?;
     let mut mesh_ops = Vec::new();
     for (j, op) in plan.operands.iter().enumerate() {
-        if let OperandPlan::Mesh { vertices, .. } = op {
-            s.input_vertices += vertices;
+        if let OperandPlan::Mesh { files } = op {
+            s.input_files += files.len() as u64;
+            s.input_vertices += files.iter().map(|f| f.vertices).sum::<u64>();
             s.input_faces += ctx.faces_and_volume(j)?.0;
             mesh_ops.push(j);
         }
@@ -358,6 +361,7 @@ pub fn summarize_dir(dir: &Path, progress: &dyn Progress) -> Result<ResampleSumm
     let scene = plan.spec.job.scene()?;
     let tuning = Tuning { threads: 1, ..plan.tuning.clone() };
     let stages = plan.stages.clone();
+    plan.check_scene(&scene, &dir.join(crate::workdir::PLAN_FILE))?;
     let ctx = Ctx::new(dir, plan, scene, &tuning, progress);
     let mut s = summarize(&ctx)?;
     // Wall times of a run whose tasks ran elsewhere: from the plan's

@@ -45,6 +45,9 @@ pub enum PipelineError {
     /// A scene file could not be read or parsed.
     #[error(transparent)]
     Scene(#[from] crate::scene::SceneError),
+    /// One of a surface's several files failed: which one of the list.
+    #[error("input {} of {count}: {source}", .index + 1)]
+    InFile { index: usize, count: usize, source: Box<PipelineError> },
     /// The user interrupted the run; temporary files were removed.
     #[error("interrupted; no output written")]
     Cancelled,
@@ -54,5 +57,15 @@ impl PipelineError {
     /// A [`PipelineError::Stage`] error.
     pub fn stage(path: impl Into<PathBuf>, message: impl Into<String>) -> PipelineError {
         PipelineError::Stage { path: path.into(), message: message.into() }
+    }
+}
+
+/// `e`, saying which of a surface's `count` files it concerns when there
+/// are several (a tile that fails to read is named with its position).
+pub fn in_file_list(e: PipelineError, index: usize, count: usize) -> PipelineError {
+    match e {
+        PipelineError::Cancelled | PipelineError::InFile { .. } => e,
+        _ if count <= 1 => e,
+        _ => PipelineError::InFile { index, count, source: Box::new(e) },
     }
 }

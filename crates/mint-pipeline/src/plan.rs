@@ -34,7 +34,8 @@ pub use crate::spec::absolute;
 
 /// The plan format's version; a plan of another version is refused.
 /// 2: plain JSON with the checksum inside, the run spec embedded as it is.
-pub const PLAN_VERSION: u32 = 2;
+/// 3: a surface may be several files (`inputs`, `files`).
+pub const PLAN_VERSION: u32 = 3;
 const PLAN_FORMAT: &str = "mint stage plan";
 /// The most parts or slabs a run may be split into.
 pub const MAX_TASKS: u32 = 1 << 16;
@@ -74,14 +75,24 @@ impl Fingerprint {
     }
 }
 
+/// One file of a mesh operand: its vertex count, its size, and its
+/// face-record count when its faces can be read in ranges (binary PLY,
+/// binary STL). Other files are read whole by one part.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshFile {
+    pub path: PathBuf,
+    pub bytes: u64,
+    pub vertices: u64,
+    pub split_faces: Option<u64>,
+}
+
 /// What the plan knows of one operand of the scene.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum OperandPlan {
-    /// A mesh file: its vertex count, and its face-record count when its
-    /// faces can be read in ranges (binary PLY, binary STL). Other files
-    /// are read whole by part 0.
-    Mesh { path: PathBuf, vertices: u64, split_faces: Option<u64> },
+    /// A surface of one or more mesh files, in the engine's order.
+    Mesh { files: Vec<MeshFile> },
     /// An analytic primitive (computed on demand; nothing to read).
     Primitive,
 }
@@ -185,13 +196,19 @@ impl Plan {
         for op in &scene.operands {
             operands.push(match op {
                 Operand::Primitive(_) => OperandPlan::Primitive,
-                Operand::Mesh { path, .. } => {
-                    let r = MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false })?;
-                    let path = absolute(path);
-                    if !files.contains(&path) {
-                        files.push(path.clone());
+                Operand::Mesh { paths, .. } => {
+                    let mut mesh_files = Vec::with_capacity(paths.len());
+                    for (k, path) in paths.iter().enumerate() {
+                        let r = MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false })
+                            .map_err(|e| crate::error::in_file_list(e.into(), k, paths.len()))?;
+                        let path = absolute(path);
+                        if !files.contains(&path) {
+                            files.push(path.clone());
+                        }
+                        let bytes = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
+                        mesh_files.push(MeshFile { path, bytes, vertices: r.vertex_count() as u64, split_faces: r.splittable_records() });
                     }
-                    OperandPlan::Mesh { path, vertices: r.vertex_count() as u64, split_faces: r.splittable_records() }
+                    OperandPlan::Mesh { files: mesh_files }
                 }
             });
         }
@@ -315,6 +332,27 @@ impl Plan {
         Ok(())
     }
 
+    /// Checks the plan's operands against the scene its spec describes
+    /// (kinds, files), before any task indexes one by the other.
+    pub fn check_scene(&self, scene: &Scene, path: &Path) -> Result<(), PipelineError> {
+        let refuse = |what: String| Err(PipelineError::stage(path, format!("field 'operands': {what}; plan the run again in a new directory")));
+        if self.operands.len() != scene.operands.len() {
+            return refuse(format!("{} operands, the scene has {}", self.operands.len(), scene.operands.len()));
+        }
+        for (j, (p, o)) in self.operands.iter().zip(&scene.operands).enumerate() {
+            match (p, o) {
+                (OperandPlan::Primitive, Operand::Primitive(_)) => {}
+                (OperandPlan::Mesh { files }, Operand::Mesh { paths, .. }) => {
+                    if files.len() != paths.len() || files.iter().zip(paths).any(|(f, p)| f.path != absolute(p)) {
+                        return refuse(format!("operand {j}: not the files of the scene's surface"));
+                    }
+                }
+                _ => return refuse(format!("operand {j}: not the kind of the scene's operand")),
+            }
+        }
+        Ok(())
+    }
+
     /// Checks that this (freshly made) plan describes the same run as the
     /// stored `other`: same spec, split and input files.
     pub fn check_same_run(&self, other: &Plan, dir: &Path) -> Result<(), PipelineError> {
@@ -350,7 +388,7 @@ mod tests {
     fn plan() -> Plan {
         let spec = RunSpec::resample("/data/in.ply", "/data/out.ply", GridSize::Cells(1000));
         let (parts, slabs) = (3, 2);
-        let operands = vec![OperandPlan::Mesh { path: "/data/in.ply".into(), vertices: 4, split_faces: Some(4) }];
+        let operands = vec![OperandPlan::Mesh { files: vec![MeshFile { path: "/data/in.ply".into(), bytes: 100, vertices: 4, split_faces: Some(4) }] }];
         Plan {
             format: PLAN_FORMAT.into(),
             version: PLAN_VERSION,

@@ -39,7 +39,8 @@ pub struct Scene {
 #[derive(Debug, Clone)]
 pub enum Operand {
     Primitive(Primitive),
-    Mesh { path: PathBuf, transform: Transform },
+    /// One surface, given as one or more files (in the engine's order).
+    Mesh { paths: Vec<PathBuf>, transform: Transform },
 }
 
 /// A scene error: `file:line: message`.
@@ -349,7 +350,7 @@ impl Builder<'_> {
                 if !path.is_file() {
                     return self.err(l, format!("key 'mesh': no such file {}", path.display()));
                 }
-                Operand::Mesh { path, transform: xf }
+                Operand::Mesh { paths: vec![path], transform: xf }
             }
             "sphere" => Operand::Primitive(prim(Shape::Sphere { radius: { let (fl, f) = self.field(l, k, x, "radius")?; self.positive(fl, "radius", f)? } })),
             "box" => {

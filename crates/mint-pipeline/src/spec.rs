@@ -67,10 +67,10 @@ impl SlabAxis {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
 pub enum Job {
-    /// Resample one mesh.
-    Resample { input: PathBuf },
-    /// `a op b` for two meshes.
-    Bool { op: BoolOp, a: PathBuf, b: PathBuf },
+    /// Resample one surface, given as one or more files.
+    Resample { inputs: Vec<PathBuf> },
+    /// `a op b` for two surfaces, each one or more files.
+    Bool { op: BoolOp, a: Vec<PathBuf>, b: Vec<PathBuf> },
     /// A CSG scene file.
     Csg { scene: PathBuf },
 }
@@ -78,9 +78,9 @@ pub enum Job {
 impl Job {
     /// The scene this job evaluates.
     pub fn scene(&self) -> Result<Scene, PipelineError> {
-        let mesh = |p: &Path| Operand::Mesh { path: p.to_path_buf(), transform: Default::default() };
+        let mesh = |p: &[PathBuf]| Operand::Mesh { paths: p.to_vec(), transform: Default::default() };
         Ok(match self {
-            Job::Resample { input } => Scene { expr: Expr::Operand(0), operands: vec![mesh(input)] },
+            Job::Resample { inputs } => Scene { expr: Expr::Operand(0), operands: vec![mesh(inputs)] },
             Job::Bool { op, a, b } => Scene { expr: Expr::Op(*op, vec![Expr::Operand(0), Expr::Operand(1)]), operands: vec![mesh(a), mesh(b)] },
             Job::Csg { scene } => {
                 let text = std::fs::read_to_string(scene)
@@ -93,8 +93,8 @@ impl Job {
     /// How the summary names the input.
     pub fn name(&self) -> String {
         match self {
-            Job::Resample { input } => input.display().to_string(),
-            Job::Bool { op, a, b } => format!("{} {op} {}", a.display(), b.display()),
+            Job::Resample { inputs } => files_name(inputs),
+            Job::Bool { op, a, b } => format!("{} {op} {}", files_name(a), files_name(b)),
             Job::Csg { scene } => scene.display().to_string(),
         }
     }
@@ -102,8 +102,8 @@ impl Job {
     /// The file errors about the whole job are reported against.
     pub fn path(&self) -> PathBuf {
         match self {
-            Job::Resample { input } => input.clone(),
-            Job::Bool { a, .. } => a.clone(),
+            Job::Resample { inputs } => first(inputs),
+            Job::Bool { a, .. } => first(a),
             Job::Csg { scene } => scene.clone(),
         }
     }
@@ -111,11 +111,25 @@ impl Job {
     /// The same job with every path made absolute (tasks may run in another
     /// directory, on another machine).
     pub fn absolute(&self) -> Job {
+        let all = |v: &[PathBuf]| v.iter().map(|p| absolute(p)).collect::<Vec<_>>();
         match self {
-            Job::Resample { input } => Job::Resample { input: absolute(input) },
-            Job::Bool { op, a, b } => Job::Bool { op: *op, a: absolute(a), b: absolute(b) },
+            Job::Resample { inputs } => Job::Resample { inputs: all(inputs) },
+            Job::Bool { op, a, b } => Job::Bool { op: *op, a: all(a), b: all(b) },
             Job::Csg { scene } => Job::Csg { scene: absolute(scene) },
         }
+    }
+}
+
+fn first(v: &[PathBuf]) -> PathBuf {
+    v.first().cloned().unwrap_or_default()
+}
+
+/// How a summary names the files of one surface.
+pub fn files_name(v: &[PathBuf]) -> String {
+    match v {
+        [] => String::new(),
+        [one] => one.display().to_string(),
+        [a, rest @ ..] => format!("{} and {} more file{}", a.display(), rest.len(), if rest.len() == 1 { "" } else { "s" }),
     }
 }
 
@@ -193,12 +207,12 @@ impl RunSpec {
 
     /// Resampling `input` into `output`.
     pub fn resample(input: impl Into<PathBuf>, output: impl Into<PathBuf>, size: GridSize) -> RunSpec {
-        RunSpec::new(Job::Resample { input: input.into() }, output, size)
+        RunSpec::new(Job::Resample { inputs: vec![input.into()] }, output, size)
     }
 
     /// `a op b` into `output`.
     pub fn boolean(op: BoolOp, a: impl Into<PathBuf>, b: impl Into<PathBuf>, output: impl Into<PathBuf>, size: GridSize) -> RunSpec {
-        RunSpec::new(Job::Bool { op, a: a.into(), b: b.into() }, output, size)
+        RunSpec::new(Job::Bool { op, a: vec![a.into()], b: vec![b.into()] }, output, size)
     }
 
     /// The scene file `scene` into `output`.
@@ -234,6 +248,14 @@ impl RunSpec {
             return Err(PipelineError::stage(&self.output, "--grid-offset: must be three finite numbers"));
         }
         mint_io::Format::from_path(&self.output)?;
+        let empty = match &self.job {
+            Job::Resample { inputs } => inputs.is_empty(),
+            Job::Bool { a, b, .. } => a.is_empty() || b.is_empty(),
+            Job::Csg { .. } => false,
+        };
+        if empty {
+            return Err(PipelineError::stage(&self.output, "a surface of the run names no input file"));
+        }
         Ok(())
     }
 }

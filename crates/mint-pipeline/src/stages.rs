@@ -35,7 +35,8 @@ use crate::bounds::bounds;
 use crate::discretize::{discretize_all, discretize_direct, CHUNK_TRIANGLES};
 use crate::progress::check_cancel;
 use crate::slabs::{bytes_per_plane, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB};
-use crate::plan::{OperandPlan, Plan, Stage};
+use crate::plan::{MeshFile, OperandPlan, Plan, Stage};
+use crate::error::in_file_list;
 use crate::spec::Tuning;
 use crate::progress::Progress;
 use crate::scene::{Operand, Scene};
@@ -61,9 +62,12 @@ pub struct BoundsResult {
     pub operands: Vec<Option<[[f64; 3]; 2]>>,
 }
 
-/// A discretize task's result for one mesh operand.
+/// A discretize task's result for one piece (a file, or a range of its
+/// faces) of a mesh operand; its shards are in `op-J-K` (operand J, file K).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct MeshPart {
+    /// The file of the operand (its index in the plan's `files`).
+    pub file: u32,
     pub faces: u64,
     /// Six times the signed volume of each chunk of faces, in grid units.
     pub chunk_volumes6: Vec<f64>,
@@ -80,7 +84,8 @@ pub struct MeshPart {
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct DiscretizeResult {
-    pub operands: Vec<Option<MeshPart>>,
+    /// Per operand, the pieces this task read, in file order.
+    pub operands: Vec<Vec<MeshPart>>,
 }
 
 /// A line census (see `mint_core::signs::LineCensus`).
@@ -174,6 +179,45 @@ pub fn part_range(n: u64, parts: u32, i: u32, chunk: u64) -> (u64, u64) {
     (at(i), at(i + 1))
 }
 
+/// The tasks `[s, e)` of `parts` that read file `i` of a surface: each
+/// file gets a share of the tasks by its size, at least one, in file
+/// order; many small files share a task, a large splittable one is split
+/// over several (a single file gets them all).
+pub fn file_tasks(files: &[MeshFile], parts: u32, i: usize) -> (u32, u32) {
+    let w = |f: &MeshFile| f.bytes.max(1) as u128;
+    let total: u128 = files.iter().map(w).sum();
+    let before: u128 = files[..i].iter().map(w).sum();
+    let p = parts.max(1) as u128;
+    let s = ((p * before / total.max(1)) as u32).min(parts.max(1) - 1);
+    let e = ((p * (before + w(&files[i])) / total.max(1)) as u32).clamp(s + 1, parts.max(1));
+    (s, e)
+}
+
+/// The pieces of a surface's files that task `task` reads: `(file, range)`
+/// with a range of vertices (`faces == false`) or of face records in whole
+/// chunks (`faces == true`). A file whose faces cannot be read in ranges
+/// is read whole by its first task (faces `(0, u64::MAX)`).
+pub fn pieces(files: &[MeshFile], parts: u32, task: u32, faces: bool) -> Vec<(usize, (u64, u64))> {
+    let mut v = Vec::new();
+    for (i, f) in files.iter().enumerate() {
+        let (s, e) = file_tasks(files, parts, i);
+        if task < s || task >= e {
+            continue;
+        }
+        let range = match (f.split_faces, faces) {
+            (Some(n), true) => part_range(n, e - s, task - s, CHUNK_TRIANGLES as u64),
+            (Some(_), false) => part_range(f.vertices, e - s, task - s, 1),
+            (None, _) if task != s => continue,
+            (None, true) => (0, u64::MAX),
+            (None, false) => (0, f.vertices),
+        };
+        if range.0 < range.1 {
+            v.push((i, range));
+        }
+    }
+    v
+}
+
 impl<'a> Ctx<'a> {
     pub fn new(dir: &Path, plan: Plan, scene: Scene, tuning: &Tuning, progress: &'a dyn Progress) -> Ctx<'a> {
         let threads = tuning.thread_count().max(1);
@@ -233,7 +277,7 @@ impl<'a> Ctx<'a> {
         for (j, op) in self.scene.operands.iter().enumerate() {
             boxes.push(match op {
                 Operand::Primitive(p) => p.bounds(),
-                Operand::Mesh { path, .. } => leaf[j].ok_or_else(|| PipelineError::Empty { path: path.clone() })?,
+                Operand::Mesh { paths, .. } => leaf[j].ok_or_else(|| PipelineError::Empty { path: paths.first().cloned().unwrap_or_default() })?,
             });
         }
         let (elo, ehi) = expr_bounds(&self.scene.expr, &boxes);
@@ -261,8 +305,12 @@ impl<'a> Ctx<'a> {
         // layers, not the input: a needle 10^7 cells long must not exhaust
         // memory before any slab is planned.
         let layers = grid.local_dims()[2] as u64 + 1;
-        let meshes = self.scene.operands.iter().filter(|o| matches!(o, Operand::Mesh { .. })).count() as u64;
-        let need = layers * BYTES_PER_LAYER_ENTRY * (self.plan.parts as u64 * meshes + 1);
+        // Pieces: at most a part per task and file of every mesh operand.
+        let pieces: u64 = self.plan.operands.iter().map(|o| match o {
+            OperandPlan::Mesh { files } => self.plan.parts as u64 + files.len() as u64,
+            OperandPlan::Primitive => 0,
+        }).sum();
+        let need = layers * BYTES_PER_LAYER_ENTRY * (pieces + 1);
         if need > self.budget.layer_tables() {
             return Err(PipelineError::stage(
                 self.name(),
@@ -297,20 +345,32 @@ impl<'a> Ctx<'a> {
             if r.operands.len() != self.scene.operands.len() {
                 return Err(PipelineError::stage(&path, format!("damaged task result: {} operands, the plan has {}; remove its task directory and run the task again", r.operands.len(), self.scene.operands.len())));
             }
-            for (j, m) in r.operands.iter().enumerate() {
-                let Some(m) = m else { continue };
-                if !matches!(self.scene.operands[j], Operand::Mesh { .. }) {
-                    return Err(PipelineError::stage(&path, format!("damaged task result: shards for operand {j}, which is not a mesh; remove its task directory and run the task again")));
+            for (j, ms) in r.operands.iter().enumerate() {
+                let files = match &self.plan.operands[j] {
+                    OperandPlan::Mesh { files } => files,
+                    OperandPlan::Primitive if ms.is_empty() => continue,
+                    OperandPlan::Primitive => {
+                        return Err(PipelineError::stage(&path, format!("damaged task result: shards for operand {j}, which is not a mesh; remove its task directory and run the task again")))
+                    }
+                };
+                let expected: Vec<usize> = pieces(files, self.plan.parts, t as u32, true).iter().map(|p| p.0).collect();
+                let got: Vec<usize> = ms.iter().map(|m| m.file as usize).collect();
+                // A piece may be missing (a file that turned out to hold no
+                // triangle), never unplanned or out of order.
+                if got.iter().any(|f| !expected.contains(f)) || got.windows(2).any(|w| w[0] >= w[1]) {
+                    return Err(PipelineError::stage(&path, format!("damaged task result: operand {j} lists files {got:?}, the plan gives this task {expected:?}; remove its task directory and run the task again")));
                 }
-                if let Err(what) = m.shards.validate(planes) {
-                    return Err(PipelineError::stage(&path, format!("damaged task result: {what}; remove its task directory and run the task again")));
+                for m in ms {
+                    if let Err(what) = m.shards.validate(planes) {
+                        return Err(PipelineError::stage(&path, format!("damaged task result: {what}; remove its task directory and run the task again")));
+                    }
                 }
             }
         }
         for (j, op) in self.scene.operands.iter().enumerate() {
-            if let Operand::Mesh { path, .. } = op {
-                if v.iter().map(|r| r.operands.get(j).and_then(|o| o.as_ref()).map_or(0, |m| m.faces)).sum::<u64>() == 0 {
-                    return Err(PipelineError::Empty { path: path.clone() });
+            if let Operand::Mesh { paths, .. } = op {
+                if v.iter().flat_map(|r| r.operands[j].iter()).map(|m| m.faces).sum::<u64>() == 0 {
+                    return Err(PipelineError::Empty { path: paths.first().cloned().unwrap_or_default() });
                 }
             }
         }
@@ -321,24 +381,33 @@ impl<'a> Ctx<'a> {
     pub fn shards(&self, j: usize) -> Result<ShardSet, PipelineError> {
         let mut set = ShardSet::new();
         for (t, r) in self.parts()?.iter().enumerate() {
-            if let Some(Some(m)) = r.operands.get(j) {
-                set.push(crate::workdir::task_dir(&self.dir, Stage::Discretize, t as u32).join(format!("op-{j}")), m.shards.clone());
+            for m in &r.operands[j] {
+                set.push(crate::workdir::task_dir(&self.dir, Stage::Discretize, t as u32).join(format!("op-{j}-{}", m.file)), m.shards.clone());
             }
         }
         Ok(set)
     }
 
     /// Faces, and the signed volume (grid units), of mesh operand `j`: the
-    /// chunk volumes summed in chunk order, as one process would.
+    /// chunk volumes summed file by file in the order of the files' paths
+    /// (not the order they were given in), each file's in chunk order, as
+    /// one process would: the same sum for any split and any order.
     pub fn faces_and_volume(&self, j: usize) -> Result<(u64, f64), PipelineError> {
         let mut faces = 0;
-        let mut sum = 0.0f64;
+        let OperandPlan::Mesh { files } = &self.plan.operands[j] else { return Ok((0, 0.0)) };
+        // Tasks in order hold a file's pieces in chunk order.
+        let mut pieces: Vec<(&Path, &[f64])> = Vec::new();
         for r in self.parts()? {
-            if let Some(Some(m)) = r.operands.get(j) {
+            for m in &r.operands[j] {
                 faces += m.faces;
-                for v in &m.chunk_volumes6 {
-                    sum += v;
-                }
+                pieces.push((files[m.file as usize].path.as_path(), &m.chunk_volumes6));
+            }
+        }
+        pieces.sort_by(|a, b| a.0.cmp(b.0));
+        let mut sum = 0.0f64;
+        for (_, vs) in pieces {
+            for v in vs {
+                sum += v;
             }
         }
         Ok((faces, sum / 6.0))
@@ -598,110 +667,119 @@ pub fn run_stage_task(ctx: &Ctx, stage: Stage, task: u32, build: &TaskBuild) -> 
 fn bounds_task(ctx: &Ctx, task: u32) -> Result<BoundsResult, PipelineError> {
     let mut operands = Vec::new();
     for (j, op) in ctx.scene.operands.iter().enumerate() {
-        let Operand::Mesh { path, .. } = op else {
+        let (Operand::Mesh { .. }, OperandPlan::Mesh { files }) = (op, &ctx.plan.operands[j]) else {
             operands.push(None);
             continue;
         };
-        let OperandPlan::Mesh { vertices, split_faces, .. } = &ctx.plan.operands[j] else { unreachable!() };
-        let range = match split_faces {
-            Some(_) => part_range(*vertices, ctx.plan.parts, task, 1),
-            None if task == 0 => (0, *vertices),
-            None => (0, 0),
-        };
-        if range.0 == range.1 {
-            operands.push(None);
-            continue;
+        let mut bx: Option<[[f64; 3]; 2]> = None;
+        for (k, range) in pieces(files, ctx.plan.parts, task, false) {
+            let path = &files[k].path;
+            let b = (|| {
+                let reader = MeshReader::open(path, ctx.read_options())?;
+                bounds(&reader.positions(), range, path, ctx.threads, ctx.progress, ctx.transform(j))
+            })()
+            .map_err(|e| in_file_list(e, k, files.len()))?;
+            if let Some((l, h)) = b {
+                let e = bx.get_or_insert([l, h]);
+                for d in 0..3 {
+                    e[0][d] = e[0][d].min(l[d]);
+                    e[1][d] = e[1][d].max(h[d]);
+                }
+            }
+            check_cancel(ctx.progress)?;
         }
-        let reader = MeshReader::open(path, ctx.read_options())?;
-        let b = bounds(&reader.positions(), range, path, ctx.threads, ctx.progress, ctx.transform(j))?;
-        operands.push(b.map(|(l, h)| [l, h]));
-        check_cancel(ctx.progress)?;
+        operands.push(bx);
     }
     Ok(BoundsResult { operands })
 }
 
 fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult, PipelineError> {
-    let grid = ctx.grid()?;
-    let [_, _, ns] = grid.local_dims();
     let mut operands = Vec::new();
     for (j, op) in ctx.scene.operands.iter().enumerate() {
-        let Operand::Mesh { path, .. } = op else {
-            operands.push(None);
+        let (Operand::Mesh { .. }, OperandPlan::Mesh { files }) = (op, &ctx.plan.operands[j]) else {
+            operands.push(Vec::new());
             continue;
         };
-        let OperandPlan::Mesh { split_faces, .. } = &ctx.plan.operands[j] else { unreachable!() };
-        let range = match split_faces {
-            Some(n) => part_range(*n, ctx.plan.parts, task, CHUNK_TRIANGLES as u64),
-            None if task == 0 => (0, u64::MAX),
-            None => {
-                operands.push(None);
-                continue;
-            }
-        };
-        let dir = out.join(format!("op-{j}"));
-        let reader = MeshReader::open(path, ctx.read_options())?;
-        // Files with fixed-size records are read directly by every worker;
-        // others (and, as one part, files that turn out to hold polygons)
-        // stream through the reader.
-        let mut direct = match split_faces {
-            Some(_) => reader.triangle_records()?,
-            None => None,
-        };
-        let positions = reader.positions();
-        if let Some(records) = direct.as_mut() {
-            let on = records.prefetch_pays(&positions, range);
-            records.set_prefetch(on);
-            // The bounds stage, complete before any discretize task (the
-            // grid is made from its results), checked every vertex finite.
-            records.set_positions_known_finite(true);
+        let mut parts = Vec::new();
+        for (k, range) in pieces(files, ctx.plan.parts, task, true) {
+            let dir = out.join(format!("op-{j}-{k}"));
+            let part = discretize_piece(ctx, j, &files[k], k as u32, range, &dir).map_err(|e| in_file_list(e, k, files.len()))?;
+            parts.push(part);
+            check_cancel(ctx.progress)?;
         }
-        let choice = choose(ctx.deref, direct.as_ref(), &positions, range);
-        let mut result = None;
-        let mut sort_stats = None;
-        let mut warnings = Vec::new();
-        if let Some(records) = &direct {
-            let mut writer = ShardWriter::create(&make_dir(&dir)?, ns + 1);
-            let run = if choice.sort {
-                let faces = Faces::Records { records, first: range.0, end: range.1 };
-                discretize_sorted(faces, &positions, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, &ctx.budget).map(|(n, v, st)| {
-                    sort_stats = Some(st);
-                    (n, v)
-                })
-            } else {
-                discretize_direct(records, range, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j))
-            };
-            match run {
-                Ok(r) => result = Some((r, writer)),
-                Err(PipelineError::Io(e)) if ctx.plan.parts == 1 && e.kind() == mint_io::ErrorKind::Unsupported => {
-                    drop(writer);
-                    std::fs::remove_dir_all(&dir).map_err(|source| PipelineError::Temp { path: dir.clone(), op: "removing a shard directory", source })?;
-                }
-                Err(e) => return Err(e),
-            }
-        }
-        let ((faces, chunk_volumes6), writer) = match result {
-            Some(r) => r,
-            None => {
-                let mut reader = if ctx.plan.parts > 1 && split_faces.is_some() { MeshReader::open_range(path, ctx.read_options(), range.0, range.1)? } else { reader };
-                let expected = if range.1 == u64::MAX { reader.info().face_count.unwrap_or(0) } else { range.1 - range.0 };
-                let mut writer = ShardWriter::create(&make_dir(&dir)?, ns + 1);
-                let r = if choice.sort {
-                    let positions = reader.positions();
-                    let (n, v, st) = discretize_sorted(Faces::Reader(&mut reader), &positions, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, &ctx.budget)?;
-                    sort_stats = Some(st);
-                    (n, v)
-                } else {
-                    discretize_all(&mut reader, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), expected)?
-                };
-                warnings = reader.warnings();
-                (r, writer)
-            }
-        };
-        let shards = writer.finish()?;
-        operands.push(Some(MeshPart { faces, chunk_volumes6, shards, deref: Some(choice), sort: sort_stats, warnings }));
-        check_cancel(ctx.progress)?;
+        operands.push(parts);
     }
     Ok(DiscretizeResult { operands })
+}
+
+/// Discretizes faces `range` of `file` (file `k` of mesh operand `j`) into
+/// shards in `dir`.
+fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u64), dir: &Path) -> Result<MeshPart, PipelineError> {
+    let grid = ctx.grid()?;
+    let [_, _, ns] = grid.local_dims();
+    let (path, split_faces) = (&file.path, file.split_faces);
+    // The whole file, read by this one task.
+    let whole = range.0 == 0 && split_faces.is_none_or(|n| range.1 >= n);
+    let reader = MeshReader::open(path, ctx.read_options())?;
+    // Files with fixed-size records are read directly by every worker;
+    // others (and, as one part, files that turn out to hold polygons)
+    // stream through the reader.
+    let mut direct = match split_faces {
+        Some(_) => reader.triangle_records()?,
+        None => None,
+    };
+    let positions = reader.positions();
+    if let Some(records) = direct.as_mut() {
+        let on = records.prefetch_pays(&positions, range);
+        records.set_prefetch(on);
+        // The bounds stage, complete before any discretize task (the
+        // grid is made from its results), checked every vertex finite.
+        records.set_positions_known_finite(true);
+    }
+    let choice = choose(ctx.deref, direct.as_ref(), &positions, range);
+    let mut result = None;
+    let mut sort_stats = None;
+    let mut warnings = Vec::new();
+    if let Some(records) = &direct {
+        let mut writer = ShardWriter::create(&make_dir(dir)?, ns + 1);
+        let run = if choice.sort {
+            let faces = Faces::Records { records, first: range.0, end: range.1 };
+            discretize_sorted(faces, &positions, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, &ctx.budget).map(|(n, v, st)| {
+                sort_stats = Some(st);
+                (n, v)
+            })
+        } else {
+            discretize_direct(records, range, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j))
+        };
+        match run {
+            Ok(r) => result = Some((r, writer)),
+            Err(PipelineError::Io(e)) if whole && e.kind() == mint_io::ErrorKind::Unsupported => {
+                drop(writer);
+                std::fs::remove_dir_all(dir).map_err(|source| PipelineError::Temp { path: dir.to_path_buf(), op: "removing a shard directory", source })?;
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    let ((faces, chunk_volumes6), writer) = match result {
+        Some(r) => r,
+        None => {
+            let mut reader = if !whole && split_faces.is_some() { MeshReader::open_range(path, ctx.read_options(), range.0, range.1)? } else { reader };
+            let expected = if range.1 == u64::MAX { reader.info().face_count.unwrap_or(0) } else { range.1 - range.0 };
+            let mut writer = ShardWriter::create(&make_dir(dir)?, ns + 1);
+            let r = if choice.sort {
+                let positions = reader.positions();
+                let (n, v, st) = discretize_sorted(Faces::Reader(&mut reader), &positions, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, &ctx.budget)?;
+                sort_stats = Some(st);
+                (n, v)
+            } else {
+                discretize_all(&mut reader, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), expected)?
+            };
+            warnings = reader.warnings();
+            (r, writer)
+        }
+    };
+    let shards = writer.finish()?;
+    Ok(MeshPart { file: k, faces, chunk_volumes6, shards, deref: Some(choice), sort: sort_stats, warnings })
 }
 
 fn make_dir(dir: &Path) -> Result<PathBuf, PipelineError> {

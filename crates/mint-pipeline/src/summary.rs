@@ -10,6 +10,8 @@ pub use crate::spec::defaults::MAX_LISTED;
 pub struct ResampleSummary {
     pub input: String,
     pub output: String,
+    /// Files read, over every mesh operand (tiles count one each).
+    pub input_files: u64,
     pub input_vertices: u64,
     pub input_faces: u64,
     /// Signed volume enclosed by the input (negative: inside-out).

@@ -509,6 +509,13 @@ pub struct RenderSummary {
 /// Renders `inputs` side by side (one column each, one row per view), all
 /// under the cameras fitted to their joint bounding box, into `output`.
 pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress: &dyn Progress) -> Result<RenderSummary, RenderError> {
+    let sets: Vec<Vec<PathBuf>> = inputs.iter().map(|p| vec![p.to_path_buf()]).collect();
+    render_surfaces(&sets, output, o, progress)
+}
+
+/// Renders surfaces side by side, each given as one or more files (tiles
+/// drawn together in one column), as [`render_files`] does.
+pub fn render_surfaces(inputs: &[Vec<PathBuf>], output: &Path, o: &RenderOptions, progress: &dyn Progress) -> Result<RenderSummary, RenderError> {
     let t = std::time::Instant::now();
     if o.width == 0 || o.height == 0 || o.width > 16384 || o.height > 16384 {
         return Err(RenderError::Option(format!("--size {}x{}: each side must be 1 to 16384 pixels", o.width, o.height)));
@@ -521,7 +528,7 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
     let read = ReadOptions { chunk_triangles: 1 << 16, spill_dir: None, resolve_positions: true };
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for path in inputs {
+    for path in inputs.iter().flatten() {
         let r = MeshReader::open(path, read.clone())?;
         let pos = r.positions();
         progress.start(BOUNDS_PHASE, pos.len() as u64);
@@ -546,7 +553,7 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
         progress.finish();
     }
     if !(lo[0] <= hi[0]) {
-        return Err(RenderError::Empty { path: inputs.first().map(|p| p.to_path_buf()).unwrap_or_default() });
+        return Err(RenderError::Empty { path: inputs.iter().flatten().next().cloned().unwrap_or_default() });
     }
     // 2. Every triangle of every input into its tiles (a strip on the right
     // for the colour bar when colouring by distance).
@@ -563,9 +570,14 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
     let mut distances: Vec<(usize, u32, u32, Vec<(usize, f64)>)> = Vec::new();
     let mut stash: Vec<(u32, u32, Canvas)> = Vec::new();
     let mut summary = RenderSummary { output: output.display().to_string(), width: picture.width, height: picture.height, ..Default::default() };
-    for (col, path) in inputs.iter().enumerate() {
+    for (col, paths) in inputs.iter().enumerate() {
         let cams: Vec<Camera> = views.iter().map(|&v| Camera::fit(v, lo, hi, o.width, o.height)).collect();
         summary.scale = cams[0].scale;
+        let mut tiles: Vec<Canvas> = views.iter().map(|_| Canvas::new(o.width, o.height)).collect();
+        // Triangles are numbered on through a column's files, so that ties
+        // in depth keep the earliest as one file would.
+        let mut first = 0u64;
+        for path in paths {
         let mut r = MeshReader::open(path, read.clone())?;
         progress.start(RENDER_PHASE, r.info().face_count.unwrap_or(0));
         // Workers draw whole chunks into tiles of their own; the tiles are
@@ -601,7 +613,7 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
                 .collect();
             drop(rx);
             let read: Result<(), RenderError> = (|| {
-                let mut base = 0u64;
+                let mut base = first;
                 loop {
                     if progress.cancelled() {
                         return Err(RenderError::Cancelled);
@@ -623,7 +635,6 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
             read?;
             Ok(tiles)
         })?;
-        let mut tiles: Vec<Canvas> = views.iter().map(|_| Canvas::new(o.width, o.height)).collect();
         for wt in &worker_tiles {
             for (tile, w) in tiles.iter_mut().zip(wt) {
                 tile.merge(w);
@@ -631,7 +642,9 @@ pub fn render_files(inputs: &[&Path], output: &Path, o: &RenderOptions, progress
         }
         drop(worker_tiles);
         summary.triangles += r.stats().triangles;
+        first += r.stats().triangles;
         progress.finish();
+        }
         // Lines may sit up to two pixels' worth of depth behind the surface
         // they lie on (rasterization rounding on slanted faces).
         let bias = (2.0 / cams[0].scale) as f32;

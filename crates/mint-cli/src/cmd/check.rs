@@ -4,7 +4,7 @@
 //! `mint_check::check_file` (and `mint_mesh::self_intersections` for
 //! `--self-intersections`).
 
-use crate::jobs::{load_mesh, JsonArg, MemArg, QuietArg};
+use crate::jobs::{JsonArg, MemArg, QuietArg};
 use crate::progress::Bars;
 use crate::summary::print_check;
 use crate::units::human_bytes;
@@ -14,8 +14,10 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct CheckArgs {
-    /// Mesh file.
-    pub file: PathBuf,
+    /// Mesh file; several files (tiles), a directory of them or @LIST are
+    /// checked as one surface (welding joins their seams).
+    #[arg(required = true, num_args = 1.., value_name = "FILE")]
+    pub files: Vec<PathBuf>,
     #[command(flatten)]
     pub json: JsonArg,
     /// Exit with code 3 when the mesh is not watertight (for scripts).
@@ -50,9 +52,11 @@ pub struct CheckArgs {
 pub(crate) fn cmd_check(a: CheckArgs) -> Result<()> {
     let threads = if a.threads == 0 { std::thread::available_parallelism().map_or(1, |n| n.get()) } else { a.threads };
     let opts = mint_check::CheckOptions { mem_bytes: a.mem.bytes(), weld: !a.no_weld, tmp_dir: a.tmp.clone(), threads, list_boundary: 0 };
-    let (r, stats) = mint_check::check_file(&a.file, &opts, &Bars::new(a.quiet.quiet || a.json.json))?;
+    let files = crate::jobs::surface_files(&a.files)?;
+    let name = mint_pipeline::spec::files_name(&files);
+    let (r, stats) = mint_check::check_files(&files, &opts, &Bars::new(a.quiet.quiet || a.json.json))?;
     let sx = if a.self_intersections {
-        let (mut positions, mut faces) = load_mesh(&a.file)?;
+        let (mut positions, mut faces) = crate::jobs::load_meshes(&files)?;
         if !a.no_weld {
             mint_mesh::weld(&mut positions, &mut faces);
         }
@@ -65,14 +69,17 @@ pub(crate) fn cmd_check(a: CheckArgs) -> Result<()> {
     }
     if a.json.json {
         let mut v = serde_json::to_value(&r)?;
-        v["file"] = a.file.display().to_string().into();
+        v["file"] = name.clone().into();
+        if files.len() > 1 {
+            v["files"] = files.len().into();
+        }
         v["spilled_bytes"] = stats.bytes_spilled.into();
         if let Some(x) = &sx {
             v["self_intersections"] = serde_json::to_value(x)?;
         }
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
-        print_check(&a.file.display().to_string(), &r);
+        print_check(&name, &r);
         if let Some(x) = &sx {
             let ex: Vec<String> = x.examples.iter().map(|[i, j]| format!("{i}-{j}")).collect();
             println!(

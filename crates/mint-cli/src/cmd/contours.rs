@@ -208,7 +208,7 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
     let s = run::reconstruct_file(&a.input, &output, method, write_options(a.ascii, a.double), &crate::progress::Bars::new(a.quiet.quiet || a.json.json))?;
     let line = contours_line(&s, &a.input.display().to_string(), &output);
     if a.preview {
-        crate::preview::write_preview(&[output.as_path()], &output, a.quiet.quiet || a.json.json, &crate::progress::Bars::new(a.quiet.quiet || a.json.json))?;
+        crate::preview::write_preview(&[vec![output.clone()]], &output, a.quiet.quiet || a.json.json, &crate::progress::Bars::new(a.quiet.quiet || a.json.json))?;
     }
     report(&s, &a.stats, a.quiet.quiet, a.json.json, line)
 }
@@ -236,7 +236,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
         let s = rebuild_roi(&a, &set, roi, sopts, method, &output)?;
         let line = contours_line(&s, &format!("{} {}", a.input.display(), roi.label()), &output);
         if a.preview {
-            crate::preview::write_preview(&[output.as_path()], &output, quiet, &crate::progress::Bars::new(quiet))?;
+            crate::preview::write_preview(&[vec![output.clone()]], &output, quiet, &crate::progress::Bars::new(quiet))?;
         }
         return report(&s, &a.stats, a.quiet.quiet, a.json.json, line);
     }
@@ -284,7 +284,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&v)?);
     }
     if a.preview && !written.is_empty() {
-        let paths: Vec<&Path> = written.iter().map(|p| p.as_path()).collect();
+        let paths: Vec<Vec<std::path::PathBuf>> = written.iter().map(|p| vec![p.clone()]).collect();
         crate::preview::write_preview(&paths, &dir.join("rois.ply"), quiet, &crate::progress::Bars::new(quiet))?;
     }
     if !quiet {

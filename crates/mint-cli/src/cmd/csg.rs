@@ -19,15 +19,15 @@ pub(crate) fn cmd_csg(a: CsgArgs) -> Result<()> {
     let bars = Bars::new(a.run.report.silent());
     let s = mint_pipeline::run_scene(&spec, &scene, &a.run.tuning(), &bars)?;
     if a.run.preview {
-        let mut meshes: Vec<&std::path::Path> = scene
+        let mut meshes: Vec<Vec<std::path::PathBuf>> = scene
             .operands
             .iter()
             .filter_map(|o| match o {
-                mint_pipeline::scene::Operand::Mesh { path, .. } => Some(path.as_path()),
+                mint_pipeline::scene::Operand::Mesh { paths, .. } => Some(paths.clone()),
                 _ => None,
             })
             .collect();
-        meshes.push(a.output.as_path());
+        meshes.push(vec![a.output.clone()]);
         write_preview(&meshes, &a.output, a.run.report.silent(), &bars)?;
     }
     report(&a.run.report, &s)

@@ -13,9 +13,12 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct DecimateArgs {
-    /// Input mesh (any format mint reads, any size).
-    pub input: PathBuf,
+    /// Input meshes (any format mint reads, any size), one surface: several
+    /// files (tiles), a directory of them, or @LIST (one path a line).
+    #[arg(required = true, num_args = 1.., value_name = "IN")]
+    pub inputs: Vec<PathBuf>,
     /// Output mesh; the format follows the extension.
+    #[arg(value_name = "OUT")]
     pub output: PathBuf,
     /// Faces of the output.
     #[arg(long)]
@@ -49,9 +52,11 @@ pub struct DecimateArgs {
 }
 
 pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
-    crate::paths::check_output(&a.output, &[&a.input])?;
+    let files = crate::jobs::surface_files(&a.inputs)?;
+    let refs: Vec<&std::path::Path> = files.iter().map(|p| p.as_path()).collect();
+    crate::paths::check_output(&a.output, &refs)?;
     if a.preview {
-        crate::paths::check_output(&preview_path(&a.output), &[&a.input])?;
+        crate::paths::check_output(&preview_path(&a.output), &refs)?;
     }
     let mem = a.mem.bytes();
     let o = mint_decimate::DecimateOptions {
@@ -62,10 +67,10 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         tuning: mint_pipeline::Tuning { mem_bytes: mem, threads: a.threads, tmp_dir: a.tmp.clone(), work_dir: a.work.clone(), ..Default::default() },
     };
     let bars = Bars::new(a.quiet.quiet || a.json.json);
-    let s = mint_decimate::decimate(&a.input, &a.output, &o, &bars)?;
+    let s = mint_decimate::decimate(&files, &a.output, &o, &bars)?;
     crate::summary::print_removed(&s.removed_dead);
     if a.preview {
-        write_before_after(&a.input, &a.output, a.quiet.quiet || a.json.json, &bars)?;
+        write_before_after(&files, &a.output, a.quiet.quiet || a.json.json, &bars)?;
     }
     if a.json.json {
         let mut v = serde_json::to_value(&s)?;

@@ -11,7 +11,9 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// The meshes to draw, then the PNG to write.
+    /// The meshes to draw, one column each, then the PNG to write. A
+    /// directory of tiles or @LIST (one path a line) is one surface, drawn
+    /// in one column.
     #[arg(required = true, num_args = 2.., value_name = "MESH... OUT.png")]
     pub files: Vec<PathBuf>,
     /// Size of each view, WIDTHxHEIGHT pixels.
@@ -80,7 +82,8 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     if output.extension().is_none_or(|e| !e.eq_ignore_ascii_case("png")) {
         bail!("{}: the picture is written as PNG; name it OUT.png", output.display());
     }
-    let refs: Vec<&std::path::Path> = inputs.iter().map(PathBuf::as_path).collect();
+    let columns: Vec<Vec<PathBuf>> = inputs.iter().map(|i| crate::jobs::surface_files(std::slice::from_ref(i))).collect::<Result<_>>()?;
+    let refs: Vec<&std::path::Path> = columns.iter().flatten().map(PathBuf::as_path).collect();
     crate::paths::check_output(output, &refs)?;
     let view = match a.view {
         ViewArg::Iso => mint_render::View::Iso,
@@ -107,7 +110,10 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     let mut boundary_edges = Vec::new();
     if a.show_boundary {
         const MOST: usize = 10_000_000;
-        for input in inputs {
+        for files in &columns {
+            let [input] = files.as_slice() else {
+                bail!("{}: --show-boundary draws one file a column, not yet a surface of {} files (check them with `mint check`)", mint_pipeline::spec::files_name(files), files.len());
+            };
             let opts = mint_check::CheckOptions { mem_bytes: a.mem.bytes(), weld: true, tmp_dir: None, threads, list_boundary: MOST };
             let (report, stats) = mint_check::check_file(input, &opts, &bars)?;
             let positions = mint_io::MeshReader::open(input, mint_io::ReadOptions::default())?.positions();
@@ -119,7 +125,7 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         }
     }
     let o = mint_render::RenderOptions { width: a.size.0, height: a.size.1, view, threads, distance_to, wireframe: a.wireframe, marks };
-    let s = mint_render::render_files(&refs, output, &o, &bars)?;
+    let s = mint_render::render_surfaces(&columns, output, &o, &bars)?;
     if a.json.json {
         let mut v = serde_json::to_value(&s)?;
         if a.show_boundary {

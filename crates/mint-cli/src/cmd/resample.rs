@@ -5,7 +5,7 @@
 //! `jobs::resample_input`); `mint demo` runs it through
 //! `resample_and_report`.
 
-use crate::jobs::{resample_input, ResampleArgs};
+use crate::jobs::{resample_inputs, surface_files, ResampleArgs};
 use crate::preview::write_before_after;
 use crate::progress::Bars;
 use crate::summary::print_resample_summary;
@@ -18,17 +18,20 @@ pub(crate) fn cmd_resample(a: ResampleArgs) -> Result<()> {
 }
 
 pub(crate) fn resample_and_report(a: &ResampleArgs) -> Result<mint_pipeline::ResampleSummary> {
-    crate::paths::check_output(&a.output, &[&a.input])?;
     let r = &a.run;
     let tuning = r.tuning();
     let tmp_root = r.tmp.clone().unwrap_or_else(|| a.output.parent().filter(|p| !p.as_os_str().is_empty()).map(PathBuf::from).unwrap_or_else(|| PathBuf::from(".")));
-    let (input, _range_mesh) = resample_input(&a.input, r.staged.work.as_deref(), &tmp_root)?;
-    let spec = r.spec(Job::Resample { input: input.clone() }, &a.output, Some(&a.holes))?;
+    let files = surface_files(&a.inputs)?;
+    crate::paths::check_output(&a.output, &files.iter().map(|p| p.as_path()).collect::<Vec<_>>())?;
+    let (inputs, _range_mesh) = resample_inputs(&a.inputs, r.staged.work.as_deref(), &tmp_root)?;
+    let spec = r.spec(Job::Resample { inputs: inputs.clone() }, &a.output, Some(&a.holes))?;
     let bars = Bars::new(r.report.silent());
     let mut summary = mint_pipeline::run(&spec, &tuning, &bars)?;
-    summary.input = a.input.display().to_string();
+    if let [one] = files.as_slice() {
+        summary.input = one.display().to_string();
+    }
     if r.preview {
-        write_before_after(&input, &a.output, r.report.silent(), &bars)?;
+        write_before_after(&inputs, &a.output, r.report.silent(), &bars)?;
     }
     print_resample_summary(&summary, r.report.json(), r.report.quiet(), tuning.mem_bytes)?;
     Ok(summary)

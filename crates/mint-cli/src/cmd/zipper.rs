@@ -83,7 +83,7 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
     let s = mint_range::merge_file(&a.set, &a.output, &opts, &bars)?;
     let (report, check, secs) = (&s.report, &s.check, s.seconds);
     if a.preview {
-        crate::preview::write_preview(&[a.output.as_path()], &a.output, a.json.json, &bars)?;
+        crate::preview::write_preview(&[vec![a.output.clone()]], &a.output, a.json.json, &bars)?;
     }
     if a.json.json {
         let key = report.method();

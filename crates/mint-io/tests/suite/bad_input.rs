@@ -260,7 +260,7 @@ fn unknown_format() {
     let e = read_err(&p);
     assert_eq!(
         e.to_string(),
-        format!("{}: unknown mesh format (the extension is not .ply, .obj, .stl, .off, .mesh, .raw, .wrl or .3ds and the content is none of them)", p.display())
+        format!("{}: unknown mesh format (the extension is not .ply, .obj, .stl, .off, .mesh, .raw, .wrl, .3ds, .gltf or .glb and the content is none of them)", p.display())
     );
     assert_eq!(e.kind(), ErrorKind::Unsupported);
     convert_fails_cleanly(&p, "o.ply");

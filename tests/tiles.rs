@@ -1,0 +1,164 @@
+//! Several files as one surface (issue 28): a mesh cut into tiles, each
+//! triangle in one tile and every tile with its own vertex array, in
+//! several formats, resamples to the bytes of the whole file, given in any
+//! order, as a directory or a list, in one process and staged; bool takes
+//! a directory as an operand; check and decimate read the tiles as one
+//! surface; broken tile sets get one line naming the file and its place.
+
+use crate::common::{load, write_trimesh};
+use mint_core::TriMesh;
+use mint_io::{Format, MeshWriter, WriteOptions};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn mint_bin() -> PathBuf {
+    PathBuf::from(env!("CARGO_BIN_EXE_mint"))
+}
+
+fn mint(args: &[&str]) -> std::process::Output {
+    Command::new(mint_bin()).args(args).output().unwrap()
+}
+
+fn ok(args: &[&str]) -> String {
+    let o = mint(args);
+    assert!(o.status.success(), "mint {}: {}", args.join(" "), String::from_utf8_lossy(&o.stderr));
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// `m` cut into `names.len()` tiles: triangle i goes to tile (i * 7919) mod
+/// n, so every tile is scattered over the surface; each keeps only the
+/// vertices it uses, renumbered.
+fn tiles(dir: &Path, m: &TriMesh, names: &[&str]) -> Vec<PathBuf> {
+    let n = names.len();
+    let mut out = Vec::new();
+    for (t, name) in names.iter().enumerate() {
+        let mut map = vec![u32::MAX; m.positions.len()];
+        let mut tile = TriMesh { positions: Vec::new(), faces: Vec::new() };
+        for (i, f) in m.faces.iter().enumerate() {
+            if (i * 7919) % n != t {
+                continue;
+            }
+            tile.faces.push(f.map(|v| {
+                if map[v as usize] == u32::MAX {
+                    map[v as usize] = tile.positions.len() as u32;
+                    tile.positions.push(m.positions[v as usize]);
+                }
+                map[v as usize]
+            }));
+        }
+        // f64 where the format can (the positions are f32 values, which
+        // text written as f32's shortest digits would not give back).
+        let path = dir.join(name);
+        let format = Format::from_path(&path).unwrap();
+        let double = !matches!(format, Format::Stl | Format::Gltf);
+        let mut w = MeshWriter::create(&path, format, WriteOptions { double, ..Default::default() }).unwrap();
+        for p in &tile.positions {
+            w.write_vertex(*p).unwrap();
+        }
+        for f in &tile.faces {
+            w.write_face(*f).unwrap();
+        }
+        w.finish().unwrap();
+        out.push(path);
+    }
+    out
+}
+
+#[test]
+fn tiles_resample_to_the_bytes_of_the_whole_file_in_any_order_and_split() {
+    let d = tempfile::tempdir().unwrap();
+    let whole = d.path().join("whole.ply");
+    ok(&["gen", "torus", s(&whole), "--faces", "20000"]);
+    // f32 positions, so that every tile format holds them exactly.
+    let m = load(&whole);
+    let td = d.path().join("tiles");
+    std::fs::create_dir(&td).unwrap();
+    let files = tiles(&td, &m, &["t0.ply", "t1.obj", "t2.stl", "t3.glb", "t4.off", "t5.ply", "t6.obj"]);
+    std::fs::write(td.join("notes.txt"), "not a mesh").unwrap();
+    let out = |n: &str| d.path().join(n);
+    ok(&["resample", s(&whole), s(&out("ref.ply")), "--cells", "30000", "--quiet"]);
+    let reference = std::fs::read(out("ref.ply")).unwrap();
+    // A directory; the files in another order; a list; staged in parts.
+    ok(&["resample", s(&td), s(&out("dir.ply")), "--cells", "30000", "--quiet"]);
+    let rev_out = out("rev.ply");
+    let mut rev: Vec<&str> = files.iter().rev().map(|p| s(p)).collect();
+    rev.push(s(&rev_out));
+    let mut args = vec!["resample"];
+    args.extend(rev);
+    args.extend(["--cells", "30000", "--quiet"]);
+    ok(&args);
+    let list = d.path().join("tiles.txt");
+    let names: Vec<String> = files.iter().map(|p| format!("tiles/{}", p.file_name().unwrap().to_string_lossy())).collect();
+    std::fs::write(&list, format!("# the tiles\n{}\n", names.join("\n"))).unwrap();
+    let at = format!("@{}", list.display());
+    ok(&["resample", &at, s(&out("list.ply")), "--cells", "30000", "--quiet"]);
+    let work = d.path().join("work");
+    let json = ok(&["resample", s(&td), s(&out("staged.ply")), "--cells", "30000", "--parts", "3", "--slabs", "2", "--work", s(&work), "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(v["input_files"], 7);
+    assert_eq!(v["input_faces"], 20000);
+    for n in ["dir.ply", "rev.ply", "list.ply", "staged.ply"] {
+        assert!(std::fs::read(out(n)).unwrap() == reference, "{n} differs from the whole file's resampling");
+    }
+    // More parts than files, and fewer.
+    for parts in ["2", "11"] {
+        let o = out(&format!("p{parts}.ply"));
+        ok(&["resample", s(&td), s(&o), "--cells", "30000", "--parts", parts, "--work", s(&d.path().join(format!("w{parts}"))), "--quiet"]);
+        assert!(std::fs::read(&o).unwrap() == reference, "--parts {parts}");
+    }
+    // bool with a directory operand: the same as with the whole file.
+    let cube = d.path().join("cube.ply");
+    write_trimesh(d.path(), "cube.ply", &crate::common::box_mesh([-0.2, -0.2, -0.2], [0.9, 0.9, 0.9]));
+    ok(&["bool", "difference", s(&whole), s(&cube), s(&out("b1.ply")), "--cells", "30000", "--quiet"]);
+    ok(&["bool", "difference", s(&td), s(&cube), s(&out("b2.ply")), "--cells", "30000", "--quiet"]);
+    assert!(std::fs::read(out("b1.ply")).unwrap() == std::fs::read(out("b2.ply")).unwrap());
+    // check: the tiles weld into the whole surface.
+    let c1: serde_json::Value = serde_json::from_str(&ok(&["check", s(&whole), "--json"])).unwrap();
+    let c2: serde_json::Value = serde_json::from_str(&ok(&["check", s(&td), "--json"])).unwrap();
+    for k in ["vertices", "faces", "watertight", "components", "genus", "boundary_edges"] {
+        assert_eq!(c1[k], c2[k], "check {k}");
+    }
+    assert_eq!(c2["files"], 7);
+    // decimate reads the tiles as one surface.
+    let dj: serde_json::Value = serde_json::from_str(&ok(&["decimate", s(&td), s(&out("dec.ply")), "--faces", "2000", "--json"])).unwrap();
+    assert_eq!(dj["input_faces"], 20000);
+    assert!(dj["output_watertight"].as_bool().unwrap(), "{dj}");
+    // render draws a directory as one column.
+    ok(&["render", s(&td), s(&whole), s(&out("r.png")), "--size", "64x48", "--quiet"]);
+}
+
+#[test]
+fn broken_tile_sets_give_one_line_naming_the_file_and_its_place() {
+    let d = tempfile::tempdir().unwrap();
+    let a = d.path().join("a.ply");
+    ok(&["gen", "sphere", s(&a), "--faces", "500"]);
+    let line = |args: &[&str], want: &[&str]| {
+        let o = mint(args);
+        let e = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+        for w in want {
+            assert!(e.contains(w), "{args:?}: {e} lacks {w}");
+        }
+    };
+    let out = d.path().join("o.ply");
+    // An empty directory, a list naming a missing file, a file twice.
+    let empty = d.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    line(&["resample", s(&empty), s(&out), "--cells", "1000"], &["empty", "holds no mesh file"]);
+    let list = d.path().join("l.txt");
+    std::fs::write(&list, "a.ply\nmissing.obj\n").unwrap();
+    let at = format!("@{}", list.display());
+    line(&["resample", &at, s(&out), "--cells", "1000"], &["l.txt: line 2", "missing.obj: no such file"]);
+    line(&["resample", s(&a), s(&a), s(&out), "--cells", "1000"], &["named twice"]);
+    // A tile that fails to read: its name and its place among the files.
+    let bad = d.path().join("b.obj");
+    std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").unwrap();
+    line(&["resample", s(&a), s(&bad), s(&out), "--cells", "1000"], &["input 2 of 2", "b.obj"]);
+    line(&["check", s(&a), s(&bad)], &["b.obj"]);
+    assert!(!out.exists());
+}
