@@ -4,6 +4,7 @@
 //! order, as a directory or a list, in one process and staged; bool takes
 //! a directory as an operand; check and decimate read the tiles as one
 //! surface; broken tile sets get one line naming the file and its place.
+//! Also glTF written by other tools, and pictures the right way up.
 
 use crate::common::{load, write_trimesh};
 use mint_core::TriMesh;
@@ -161,4 +162,66 @@ fn broken_tile_sets_give_one_line_naming_the_file_and_its_place() {
     line(&["resample", s(&a), s(&bad), s(&out), "--cells", "1000"], &["input 2 of 2", "b.obj"]);
     line(&["check", s(&a), s(&bad)], &["b.obj"]);
     assert!(!out.exists());
+}
+
+/// `../shared/data/…`, which CI must have: a missing file fails the test.
+fn shared(rel: &str) -> PathBuf {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data").join(rel);
+    assert!(p.is_file(), "{} is missing: ../shared must sit beside the project", p.display());
+    p
+}
+
+/// GLBs written by other tools (Blender's glTF exporters; provenance in
+/// ../shared/data/colour_scans/PROVENANCE.md) read with the counts their
+/// provenance states, as closed surfaces.
+#[test]
+fn glbs_written_by_other_tools_read_whole() {
+    for (rel, vertices, faces) in [("colour_scans/kiri_scan_glb/Untitled.glb", 11_313, 19_490), ("colour_scans/leeperrysmith_glb/LeePerrySmith.glb", 9_279, 17_684)] {
+        let p = shared(rel);
+        let info = mint_io::read_info(&p).unwrap();
+        assert_eq!((info.vertex_count, info.face_count), (vertices, Some(faces)), "{rel}");
+        let c: serde_json::Value = serde_json::from_str(&ok(&["check", s(&p), "--json"])).unwrap();
+        assert_eq!(c["faces"], faces, "{rel}");
+        assert!(c["watertight"].as_bool().unwrap(), "{rel}: {c}");
+    }
+}
+
+/// Widths (covered pixels per row) of the rows of a picture that hold
+/// the surface, top first.
+fn row_widths(png_path: &Path) -> Vec<u32> {
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png_path).unwrap()));
+    let mut r = dec.read_info().unwrap();
+    let mut buf = vec![0; r.output_buffer_size()];
+    let info = r.next_frame(&mut buf).unwrap();
+    let (w, h) = (info.width as usize, info.height as usize);
+    let ch = info.line_size / w;
+    let mut rows = Vec::new();
+    for y in 0..h {
+        let n = (0..w).filter(|&x| buf[y * info.line_size + x * ch..][..3] != [250, 250, 250]).count() as u32;
+        if n > 0 {
+            rows.push(n);
+        }
+    }
+    rows
+}
+
+/// A bust exported by MeshLab (y-up) is drawn right side up in the front
+/// view by default: narrow head at the top, wide shoulders at the bottom.
+/// With `--up z` (the old default) it was seen from the top of its head.
+#[test]
+fn a_y_up_bust_renders_right_side_up_in_the_front_view() {
+    let d = tempfile::tempdir().unwrap();
+    let bust = shared("colour_scans/laurana_meshlab/Laurana50k.ply");
+    let (front, z) = (d.path().join("front.png"), d.path().join("z.png"));
+    ok(&["render", s(&bust), s(&front), "--view", "front", "--size", "200x200", "--quiet"]);
+    ok(&["render", s(&bust), s(&z), "--view", "front", "--up", "z", "--size", "200x200", "--quiet"]);
+    let rows = row_widths(&front);
+    let k = rows.len() / 5;
+    let mean = |r: &[u32]| r.iter().sum::<u32>() as f64 / r.len() as f64;
+    let (top, bottom) = (mean(&rows[..k]), mean(&rows[rows.len() - k..]));
+    assert!(top < 0.6 * bottom, "head {top:.0} px wide, shoulders {bottom:.0}: not right side up");
+    // Taller than wide, as a bust stands; from above (z up) it is not.
+    assert!(rows.len() as f64 > 0.9 * *rows.iter().max().unwrap() as f64);
+    let zrows = row_widths(&z);
+    assert!((zrows.len() as f64) < 0.8 * *zrows.iter().max().unwrap() as f64, "--up z draws the bust from above");
 }

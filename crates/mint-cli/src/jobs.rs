@@ -129,6 +129,11 @@ pub struct RunArgs {
     /// side by side, under the same camera (see `mint render`).
     #[arg(long)]
     pub preview: bool,
+    /// The axis drawn upwards in the preview (and `mint render --up`): y
+    /// for glTF, most OBJ exporters, MeshLab and the Stanford scans; z for
+    /// CAD, terrain and medical stacks.
+    #[arg(long, value_enum, default_value_t = crate::preview::UpArg::Y)]
+    pub up: crate::preview::UpArg,
     #[command(flatten)]
     pub report: ReportArgs,
 }

@@ -7,6 +7,25 @@ use crate::progress::Bars;
 use anyhow::Result;
 use std::path::{Path, PathBuf};
 
+/// `--up`: the world axis drawn upwards in pictures.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum UpArg {
+    X,
+    #[default]
+    Y,
+    Z,
+}
+
+impl UpArg {
+    pub(crate) fn axis(self) -> mint_render::Up {
+        match self {
+            UpArg::X => mint_render::Up::X,
+            UpArg::Y => mint_render::Up::Y,
+            UpArg::Z => mint_render::Up::Z,
+        }
+    }
+}
+
 /// `OUT.png` beside `output` (its extension replaced).
 pub(crate) fn preview_path(output: &Path) -> PathBuf {
     output.with_extension("png")
@@ -14,9 +33,9 @@ pub(crate) fn preview_path(output: &Path) -> PathBuf {
 
 /// Draws `meshes` (each one or more files) side by side into the preview
 /// picture of `output`, and returns its path.
-fn draw_preview(meshes: &[Vec<PathBuf>], output: &Path, bars: &Bars) -> Result<PathBuf> {
+fn draw_preview(meshes: &[Vec<PathBuf>], output: &Path, up: UpArg, bars: &Bars) -> Result<PathBuf> {
     let png = preview_path(output);
-    let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, ..Default::default() };
+    let o = mint_render::RenderOptions { width: 800, height: 600, view: mint_render::View::Iso, up: up.axis(), ..Default::default() };
     mint_render::render_surfaces(meshes, &png, &o, bars)?;
     Ok(png)
 }
@@ -33,8 +52,8 @@ fn surface_name(files: &[PathBuf]) -> String {
 }
 
 /// `--preview`: `OUT.png` beside `output`, the meshes side by side.
-pub(crate) fn write_preview(meshes: &[Vec<PathBuf>], output: &Path, quiet: bool, bars: &Bars) -> Result<()> {
-    let png = draw_preview(meshes, output, bars)?;
+pub(crate) fn write_preview(meshes: &[Vec<PathBuf>], output: &Path, up: UpArg, quiet: bool, bars: &Bars) -> Result<()> {
+    let png = draw_preview(meshes, output, up, bars)?;
     if !quiet {
         eprintln!("preview: {} ({})", png.display(), meshes.iter().map(|m| surface_name(m)).collect::<Vec<_>>().join(", "));
     }
@@ -43,8 +62,8 @@ pub(crate) fn write_preview(meshes: &[Vec<PathBuf>], output: &Path, quiet: bool,
 
 /// `--preview` of resample and decimate: the input left (all its files),
 /// the output right.
-pub(crate) fn write_before_after(inputs: &[PathBuf], output: &Path, quiet: bool, bars: &Bars) -> Result<()> {
-    let png = draw_preview(&[inputs.to_vec(), vec![output.to_path_buf()]], output, bars)?;
+pub(crate) fn write_before_after(inputs: &[PathBuf], output: &Path, up: UpArg, quiet: bool, bars: &Bars) -> Result<()> {
+    let png = draw_preview(&[inputs.to_vec(), vec![output.to_path_buf()]], output, up, bars)?;
     if !quiet {
         eprintln!("preview: {} (input left, output right)", png.display());
     }

@@ -52,22 +52,48 @@ pub enum RenderError {
     Cancelled,
 }
 
+/// Which world axis points up in the picture. glTF, most OBJ exporters,
+/// MeshLab and the Stanford scans are y-up (the model's front faces +z);
+/// CAD, terrain and medical stacks are often z-up (front faces −y).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Up {
+    X,
+    #[default]
+    Y,
+    Z,
+}
+
+impl Up {
+    /// The world vector of a vector given in the z-up frame the views are
+    /// stated in (x right, y away from the front camera, z up): a rotation.
+    fn map(self, v: [f64; 3]) -> [f64; 3] {
+        let [a, b, c] = v;
+        match self {
+            Up::Z => [a, b, c],
+            Up::Y => [a, c, -b],
+            Up::X => [c, a, b],
+        }
+    }
+}
+
 /// Where the camera looks from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum View {
-    /// From (+1, −1, +1): right, front and top at once.
+    /// Right, front and top at once (z-up: from (+1, −1, +1); y-up: from
+    /// (+1, +1, +1)).
     Iso,
-    /// From −y (x right, z up).
+    /// From the front (z-up: from −y, x right, z up; y-up: from +z, x
+    /// right, y up).
     Front,
-    /// From +y.
+    /// From behind.
     Back,
-    /// From −x.
+    /// From the left (−x when x is not up).
     Left,
-    /// From +x.
+    /// From the right.
     Right,
-    /// From +z (x right, y up).
+    /// From above.
     Top,
-    /// From −z.
+    /// From below.
     Bottom,
     /// The six above and iso, tiled.
     All,
@@ -82,7 +108,8 @@ impl View {
         }
     }
 
-    /// Unit direction the camera looks along, and the up direction.
+    /// Unit direction the camera looks along, and the up direction, in the
+    /// z-up frame ([`Up::map`] turns them into the world's).
     fn frame(self) -> ([f64; 3], [f64; 3]) {
         let s = 1.0 / 3f64.sqrt();
         match self {
@@ -114,7 +141,13 @@ impl Camera {
     /// Looks at the box `lo..hi` from `view`, fitting its projection into
     /// `width × height` pixels with a 5% margin.
     pub fn fit(view: View, lo: [f64; 3], hi: [f64; 3], width: u32, height: u32) -> Camera {
+        Camera::fit_up(view, Up::Z, lo, hi, width, height)
+    }
+
+    /// [`Camera::fit`] with `up` the world axis drawn upwards.
+    pub fn fit_up(view: View, up: Up, lo: [f64; 3], hi: [f64; 3], width: u32, height: u32) -> Camera {
         let (dir, up0) = view.frame();
+        let (dir, up0) = (up.map(dir), up.map(up0));
         let (dir, up0) = (DVec3::from(dir), DVec3::from(up0));
         let right = dir.cross(up0).normalize();
         let up = right.cross(dir);
@@ -480,11 +513,13 @@ pub struct RenderOptions {
     /// order; empty lists draw nothing): the boundary edges for
     /// `--show-boundary`, which the caller finds. Default: none.
     pub marks: Vec<Vec<[[f64; 3]; 2]>>,
+    /// The world axis drawn upwards. Default y (glTF's convention).
+    pub up: Up,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions { width: 1200, height: 900, view: View::Iso, threads: std::thread::available_parallelism().map_or(1, |n| n.get()), distance_to: None, wireframe: false, marks: Vec::new() }
+        RenderOptions { width: 1200, height: 900, view: View::Iso, threads: std::thread::available_parallelism().map_or(1, |n| n.get()), distance_to: None, wireframe: false, marks: Vec::new(), up: Up::Y }
     }
 }
 
@@ -571,7 +606,7 @@ pub fn render_surfaces(inputs: &[Vec<PathBuf>], output: &Path, o: &RenderOptions
     let mut stash: Vec<(u32, u32, Canvas)> = Vec::new();
     let mut summary = RenderSummary { output: output.display().to_string(), width: picture.width, height: picture.height, ..Default::default() };
     for (col, paths) in inputs.iter().enumerate() {
-        let cams: Vec<Camera> = views.iter().map(|&v| Camera::fit(v, lo, hi, o.width, o.height)).collect();
+        let cams: Vec<Camera> = views.iter().map(|&v| Camera::fit_up(v, o.up, lo, hi, o.width, o.height)).collect();
         summary.scale = cams[0].scale;
         let mut tiles: Vec<Canvas> = views.iter().map(|_| Canvas::new(o.width, o.height)).collect();
         // Triangles are numbered on through a column's files, so that ties

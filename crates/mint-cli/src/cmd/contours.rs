@@ -101,6 +101,10 @@ pub struct ContoursArgs {
     /// `mint render`); with --all-rois, OUTDIR/rois.png of all of them.
     #[arg(long)]
     pub preview: bool,
+    /// The axis drawn upwards in the preview. Contour stacks are slices
+    /// along z (DICOM's patient z is superior), so z by default.
+    #[arg(long, value_enum, default_value_t = crate::preview::UpArg::Z)]
+    pub up: crate::preview::UpArg,
     /// Write the status file (time, counts, parameters) as JSON here; with
     /// --all-rois, {"rois": [one status per ROI]}.
     #[arg(long, value_name = "FILE.json")]
@@ -208,7 +212,7 @@ pub fn cmd_contours(a: ContoursArgs) -> Result<()> {
     let s = run::reconstruct_file(&a.input, &output, method, write_options(a.ascii, a.double), &crate::progress::Bars::new(a.quiet.quiet || a.json.json))?;
     let line = contours_line(&s, &a.input.display().to_string(), &output);
     if a.preview {
-        crate::preview::write_preview(&[vec![output.clone()]], &output, a.quiet.quiet || a.json.json, &crate::progress::Bars::new(a.quiet.quiet || a.json.json))?;
+        crate::preview::write_preview(&[vec![output.clone()]], &output, a.up, a.quiet.quiet || a.json.json, &crate::progress::Bars::new(a.quiet.quiet || a.json.json))?;
     }
     report(&s, &a.stats, a.quiet.quiet, a.json.json, line)
 }
@@ -236,7 +240,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
         let s = rebuild_roi(&a, &set, roi, sopts, method, &output)?;
         let line = contours_line(&s, &format!("{} {}", a.input.display(), roi.label()), &output);
         if a.preview {
-            crate::preview::write_preview(&[vec![output.clone()]], &output, quiet, &crate::progress::Bars::new(quiet))?;
+            crate::preview::write_preview(&[vec![output.clone()]], &output, a.up, quiet, &crate::progress::Bars::new(quiet))?;
         }
         return report(&s, &a.stats, a.quiet.quiet, a.json.json, line);
     }
@@ -285,7 +289,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
     }
     if a.preview && !written.is_empty() {
         let paths: Vec<Vec<std::path::PathBuf>> = written.iter().map(|p| vec![p.clone()]).collect();
-        crate::preview::write_preview(&paths, &dir.join("rois.ply"), quiet, &crate::progress::Bars::new(quiet))?;
+        crate::preview::write_preview(&paths, &dir.join("rois.ply"), a.up, quiet, &crate::progress::Bars::new(quiet))?;
     }
     if !quiet {
         eprintln!("{} ROIs written to {}, peak heap {}", written.len(), dir.display(), human_bytes(alloc::peak_heap()));

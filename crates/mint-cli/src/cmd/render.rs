@@ -19,9 +19,15 @@ pub struct RenderArgs {
     /// Size of each view, WIDTHxHEIGHT pixels.
     #[arg(long, default_value = "1200x900", value_parser = parse_size)]
     pub size: (u32, u32),
-    /// Where the camera looks from.
+    /// Where the camera looks from: front, back, left, right, top and
+    /// bottom as the model sees them with --up pointing up.
     #[arg(long, value_enum, default_value_t = ViewArg::Iso)]
     pub view: ViewArg,
+    /// The world axis drawn upwards: y (glTF, most OBJ exporters, MeshLab,
+    /// the Stanford scans; the front faces +z) or z (CAD, terrain, medical
+    /// stacks; the front faces −y), or x.
+    #[arg(long, value_enum, default_value_t = crate::preview::UpArg::Y)]
+    pub up: crate::preview::UpArg,
     /// A reference mesh for `--color distance` (read in memory).
     #[arg(long = "ref", value_name = "REF")]
     pub reference: Option<PathBuf>,
@@ -124,7 +130,7 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
             boundary_edges.push(report.boundary_edges);
         }
     }
-    let o = mint_render::RenderOptions { width: a.size.0, height: a.size.1, view, threads, distance_to, wireframe: a.wireframe, marks };
+    let o = mint_render::RenderOptions { width: a.size.0, height: a.size.1, view, threads, distance_to, wireframe: a.wireframe, marks, up: a.up.axis() };
     let s = mint_render::render_surfaces(&columns, output, &o, &bars)?;
     if a.json.json {
         let mut v = serde_json::to_value(&s)?;

@@ -31,7 +31,7 @@ pub(crate) fn resample_and_report(a: &ResampleArgs) -> Result<mint_pipeline::Res
         summary.input = one.display().to_string();
     }
     if r.preview {
-        write_before_after(&inputs, &a.output, r.report.silent(), &bars)?;
+        write_before_after(&inputs, &a.output, r.up, r.report.silent(), &bars)?;
     }
     print_resample_summary(&summary, r.report.json(), r.report.quiet(), tuning.mem_bytes)?;
     Ok(summary)
