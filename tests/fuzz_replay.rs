@@ -64,12 +64,20 @@ fn fuzz_corpus_and_regressions_replay() {
 
 /// Mutations per target: the resampling target runs a whole pipeline per
 /// input, so it gets fewer.
+///
+/// By hand, a longer campaign: `MINT_FUZZ_SCALE=50` multiplies them, and
+/// `MINT_FUZZ_TARGETS=read_glb,read_gltf` runs only those targets.
 fn mutations(name: &str) -> usize {
-    match name {
+    let base = match name {
         "resample" => 800,
         "stage" => 600,
         _ => 4000,
+    };
+    let only = std::env::var("MINT_FUZZ_TARGETS").ok();
+    if only.is_some_and(|o| !o.split(',').any(|t| t == name)) {
+        return 0;
     }
+    base * std::env::var("MINT_FUZZ_SCALE").ok().and_then(|s| s.parse::<usize>().ok()).unwrap_or(1).max(1)
 }
 
 #[test]

@@ -68,7 +68,20 @@ struct Doc<'a> {
     path: &'a Path,
     json: Value,
     buffers: Vec<Buf>,
+    /// The file's bytes and its buffers': what bounds the output (see
+    /// [`MAX_EXPANSION`]).
+    bytes: u64,
 }
+
+/// Vertices plus triangles a glTF may expand to, per byte of the file and
+/// its buffers, beyond [`EXPANSION_FLOOR`]. Only instancing (a mesh drawn
+/// by many nodes) expands a file; a hostile hierarchy must not turn a few
+/// kilobytes into a spill of a hundred gigabytes.
+const MAX_EXPANSION: u64 = 64;
+const EXPANSION_FLOOR: u64 = 1 << 24;
+/// Elements an accessor without a bufferView (zeros, with sparse
+/// substitutions) may have: it costs nothing in the file.
+const MAX_ZERO_ELEMENTS: usize = 1 << 20;
 
 /// A buffer's bytes: a range of the mapped GLB, a mapped external file, or
 /// decoded `data:` bytes.
@@ -229,7 +242,8 @@ impl<'a> Doc<'a> {
             }
             buffers.push(buf);
         }
-        Ok(Doc { path, json, buffers })
+        let bytes = data.len() as u64 + buffers.iter().map(|b| b.bytes().len() as u64).sum::<u64>();
+        Ok(Doc { path, json, buffers, bytes })
     }
 
     /// The root nodes to draw and why.
@@ -435,6 +449,9 @@ impl<'d> Accessor<'d> {
                 Some((bytes, stride))
             }
         };
+        if data.is_none() && count > MAX_ZERO_ELEMENTS {
+            return Err(bad(path, &at, format!("{count} elements without a bufferView (zeros): mint reads at most {MAX_ZERO_ELEMENTS} such elements")));
+        }
         let mut sparse = Vec::new();
         if let Some(sp) = a.get("sparse") {
             let sat = format!("{at}.sparse");
@@ -537,6 +554,14 @@ fn walk(doc: &Doc, mut spill: Option<(&mut SpillFile, &mut SpillFile)>) -> Resul
             c.vertices += pos.count as u64;
             c.triangles += tris;
             c.primitives += 1;
+            let limit = EXPANSION_FLOOR + MAX_EXPANSION * doc.bytes;
+            if c.vertices + c.triangles > limit {
+                return Err(bad(
+                    path,
+                    &at,
+                    format!("its node instances expand to more than {limit} vertices and triangles, over {MAX_EXPANSION} per byte of the file: refused as a broken or hostile hierarchy (flatten the instances first)"),
+                ));
+            }
             let Some((vs, fs)) = spill.as_mut() else { continue };
             // Positions, sparse values substituted, in world coordinates.
             let mut sub: Vec<(usize, &[u8])> = pos.sparse.clone();

@@ -29,6 +29,8 @@ pub const TARGETS: &[Target] = &[
     ("read_raw", read_raw),
     ("read_wrl", read_wrl),
     ("read_3ds", read_3ds),
+    ("read_glb", read_glb),
+    ("read_gltf", read_gltf),
     ("read_pro", read_pro),
     ("read_conf", read_conf),
     ("read_aln", read_aln),
@@ -200,6 +202,103 @@ pub fn read_raw(data: &[u8]) {
 /// VRML 2.0.
 pub fn read_wrl(data: &[u8]) {
     mesh_reader("wrl", data)
+}
+/// Binary glTF (GLB): the container's chunks, the JSON, accessors, views,
+/// node transforms. When the JSON chunk parses, eight edits of its values
+/// (seeded by the input) are read too, the BIN chunk kept: byte mutations
+/// alone rarely leave JSON valid.
+pub fn read_glb(data: &[u8]) {
+    mesh_reader("glb", data);
+    if data.len() >= 20 && &data[..4] == b"glTF" {
+        let jl = u32::from_le_bytes(data[12..16].try_into().unwrap()) as usize;
+        let Some(json) = data.get(20..20 + jl) else { return };
+        let rest = &data[20 + jl..];
+        for edited in gltf_edits(json) {
+            let mut j = edited;
+            while j.len() % 4 != 0 {
+                j.push(b' ');
+            }
+            let mut out = b"glTF".to_vec();
+            out.extend(2u32.to_le_bytes());
+            out.extend(((20 + j.len() + rest.len()) as u32).to_le_bytes());
+            out.extend((j.len() as u32).to_le_bytes());
+            out.extend(0x4E4F_534Au32.to_le_bytes());
+            out.extend(j);
+            out.extend(rest);
+            mesh_reader("glb", &out);
+        }
+    }
+}
+/// glTF JSON (buffers as data URIs, or files that are missing), and eight
+/// edits of its values as for [`read_glb`].
+pub fn read_gltf(data: &[u8]) {
+    mesh_reader("gltf", data);
+    for edited in gltf_edits(data) {
+        mesh_reader("gltf", &edited);
+    }
+}
+
+/// Eight copies of the JSON `data`, each with one value replaced by a
+/// boundary value (counts, offsets, indices, strides, types, transforms),
+/// or an array element removed or duplicated; none when it does not parse.
+fn gltf_edits(data: &[u8]) -> Vec<Vec<u8>> {
+    let Ok(doc) = serde_json::from_slice::<serde_json::Value>(data) else { return Vec::new() };
+    // Every value's path, in document order.
+    fn paths(v: &serde_json::Value, at: &mut Vec<String>, out: &mut Vec<Vec<String>>) {
+        out.push(at.clone());
+        match v {
+            serde_json::Value::Object(m) => {
+                for (k, x) in m {
+                    at.push(k.clone());
+                    paths(x, at, out);
+                    at.pop();
+                }
+            }
+            serde_json::Value::Array(a) => {
+                for (i, x) in a.iter().enumerate() {
+                    at.push(i.to_string());
+                    paths(x, at, out);
+                    at.pop();
+                }
+            }
+            _ => {}
+        }
+    }
+    let mut all = Vec::new();
+    paths(&doc, &mut Vec::new(), &mut all);
+    let values = [
+        serde_json::json!(0), serde_json::json!(1), serde_json::json!(-1), serde_json::json!(3), serde_json::json!(4294967295u64),
+        serde_json::json!(1e300), serde_json::json!(-0.5), serde_json::json!("VEC2"), serde_json::json!(5121), serde_json::json!(null),
+        serde_json::json!([]), serde_json::json!({}), serde_json::json!([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 1e308, 0, 0, 1]),
+    ];
+    let mut rng = mutate::Rng(crc32fast::hash(data) as u64);
+    let mut out = Vec::new();
+    for _ in 0..8 {
+        let path = &all[rng.below(all.len())];
+        let mut d = doc.clone();
+        let mut v = &mut d;
+        for k in path {
+            v = match v {
+                serde_json::Value::Object(m) => m.get_mut(k).unwrap(),
+                serde_json::Value::Array(a) => &mut a[k.parse::<usize>().unwrap()],
+                _ => unreachable!(),
+            };
+        }
+        match (rng.below(4), &mut *v) {
+            (0, serde_json::Value::Array(a)) if !a.is_empty() => {
+                let i = rng.below(a.len());
+                a.remove(i);
+            }
+            (1, serde_json::Value::Array(a)) if !a.is_empty() => {
+                let i = rng.below(a.len());
+                let x = a[i].clone();
+                a.push(x);
+            }
+            _ => *v = values[rng.below(values.len())].clone(),
+        }
+        out.push(serde_json::to_vec(&d).unwrap());
+    }
+    out
 }
 /// 3D Studio.
 pub fn read_3ds(data: &[u8]) {

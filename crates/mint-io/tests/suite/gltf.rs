@@ -173,6 +173,14 @@ fn broken_gltf_files_give_one_line_naming_the_place() {
         ("quantized", Box::new(|d| d["accessors"][0]["componentType"] = 5123.into()), "KHR_mesh_quantization"),
         ("sparse", Box::new(|d| d["accessors"][4]["sparse"]["count"] = 9.into()), "accessors[4].sparse: count 9"),
         ("mode", Box::new(|d| d["meshes"][0]["primitives"][0]["mode"] = 9.into()), "mode 9"),
+        ("zeros", Box::new(|d| { d["accessors"][4]["count"] = 5_000_000.into(); d["nodes"][0]["mesh"] = 2.into(); }), "5000000 elements without a bufferView"),
+        // 1M zero positions (allowed) drawn by 20 nodes: 20M vertices from
+        // a file of two kilobytes.
+        ("instances", Box::new(|d| {
+            d["accessors"][4]["count"] = 1_000_000.into();
+            d["nodes"] = serde_json::Value::Array((0..20).map(|_| json!({"mesh": 2})).collect());
+            d["scenes"] = json!([{"nodes": (0..20).collect::<Vec<u32>>()}]);
+        }), "over 64 per byte of the file"),
         ("draco", Box::new(|d| d["extensionsRequired"] = json!(["KHR_materials_unlit", "KHR_draco_mesh_compression"])), "extensionsRequired[1]: the file requires extension \"KHR_draco_mesh_compression\""),
         ("meshopt", Box::new(|d| d["extensionsRequired"] = json!(["EXT_meshopt_compression"])), "\"EXT_meshopt_compression\", which mint does not implement"),
     ];
