@@ -159,16 +159,16 @@ fn weld_key(p: [f64; 3]) -> [u64; 3] {
     p.map(|c| if c == 0.0 { 0u64 } else { c.to_bits() })
 }
 
-/// Writes the files of one surface into `output` as one mesh (binary PLY,
-/// f64 coordinates, so nothing is rounded): every file's vertices in file
-/// order, then every file's triangles with its vertices' offset. Streams
-/// (positions through each file's map), so memory does not grow with the
-/// files. `cancelled` is polled between chunks. Returns the vertices and
-/// triangles written. Errors name the file that failed.
-pub fn concatenate(inputs: &[std::path::PathBuf], output: &Path, spill_dir: Option<std::path::PathBuf>, cancelled: &dyn Fn() -> bool) -> Result<(u64, u64), Error> {
-    let read = ReadOptions { chunk_triangles: 1 << 16, spill_dir: spill_dir.clone(), resolve_positions: false };
+/// Writes the files of one surface into `output` as one mesh in `format`
+/// (`write.double` keeps every coordinate as read): every file's vertices
+/// in file order, then every file's triangles with its vertices' offset.
+/// Streams (positions through each file's map), so memory does not grow
+/// with the files. `cancelled` is polled between chunks. Returns the
+/// vertices and triangles written. Errors name the file that failed.
+pub fn concatenate(inputs: &[std::path::PathBuf], output: &Path, format: Format, write: WriteOptions, cancelled: &dyn Fn() -> bool) -> Result<(u64, u64), Error> {
+    let read = ReadOptions { chunk_triangles: 1 << 16, spill_dir: write.spill_dir.clone(), resolve_positions: false };
     let mut counts = Vec::with_capacity(inputs.len());
-    let mut w = MeshWriter::create(output, Format::Ply, WriteOptions { ascii: false, double: true, spill_dir })?;
+    let mut w = MeshWriter::create(output, format, write)?;
     let mut total = 0u64;
     for p in inputs {
         let r = MeshReader::open(p, read.clone())?;

@@ -12,9 +12,12 @@ use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct ConvertArgs {
-    /// Input mesh.
-    pub input: PathBuf,
+    /// Input mesh; several files (tiles), a directory of them or @LIST are
+    /// joined into one mesh (each file's vertices kept, its faces offset).
+    #[arg(required = true, num_args = 1.., value_name = "IN")]
+    pub inputs: Vec<PathBuf>,
     /// Output mesh; the format follows the extension.
+    #[arg(value_name = "OUT")]
     pub output: PathBuf,
     /// Write ASCII instead of binary (PLY/STL).
     #[arg(long)]
@@ -30,24 +33,35 @@ pub struct ConvertArgs {
 }
 
 pub(crate) fn cmd_convert(a: ConvertArgs) -> Result<()> {
-    crate::paths::check_output(&a.output, &[&a.input])?;
+    let files = crate::jobs::surface_files(&a.inputs)?;
+    crate::paths::check_output(&a.output, &files.iter().map(|p| p.as_path()).collect::<Vec<_>>())?;
+    if files.len() > 1 {
+        let format = mint_io::Format::from_path(&a.output)?;
+        let write = WriteOptions { ascii: a.ascii, double: a.double, spill_dir: a.tmp.clone() };
+        let (v, f) = mint_io::concatenate(&files, &a.output, format, write, &crate::progress::interrupted)?;
+        if !a.quiet.quiet {
+            eprintln!("joined {} files -> {} ({format:?}): {v} vertices, {f} triangles", files.len(), a.output.display());
+        }
+        return Ok(());
+    }
+    let input = &files[0];
     let bars = Bars::new(a.quiet.quiet);
     use mint_pipeline::{Phase, Progress};
     bars.start(Phase::named("convert"), 0);
     let read = mint_io::ReadOptions { spill_dir: a.tmp.clone(), ..Default::default() };
     let write = WriteOptions { ascii: a.ascii, double: a.double, ..Default::default() };
     let mut last = 0u64;
-    let summary = mint_io::convert_cancellable(&a.input, &a.output, read, write, &mut |done, _total| {
+    let summary = mint_io::convert_cancellable(input, &a.output, read, write, &mut |done, _total| {
         bars.advance(done.saturating_sub(last));
         last = last.max(done);
         !crate::progress::interrupted()
     })
-    .with_context(|| format!("converting {} to {}", a.input.display(), a.output.display()))?;
+    .with_context(|| format!("converting {} to {}", input.display(), a.output.display()))?;
     bars.finish();
     if !a.quiet.quiet {
         eprintln!(
             "converted {} ({:?}) -> {} ({:?}): {} vertices, {} triangles, {}, coordinates {}",
-            a.input.display(),
+            input.display(),
             summary.input_format,
             a.output.display(),
             summary.output_format,
