@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Issue 28 benchmark: several files as one surface, and glTF reading.
 #   scripts/bench/tiles.sh [FACES] [TILES]     (default 20000000 faces, 64 tiles)
-# Makes TILES binary-PLY tiles (spheres of FACES/TILES faces, seeds 1..TILES,
-# each file with its own vertices), joins them into one file with
-# `mint convert`, and times, after `cat` of the same bytes:
+# Cuts a generated sphere of FACES faces into TILES spatial binary-PLY tiles
+# (tools/split_tiles.py, numpy in scripts/bench/.venv-tiles; each face in
+# one tile, each tile with its own vertices), and times, after `cat` of the
+# same bytes:
 #   - resample of the whole file against the tiles as a directory (same bytes);
 #   - the tiles as OBJ, --parts 1 against --parts 2 (one part per file group);
 #   - `mint validate` of the whole file as GLB against binary PLY, and the GLB
@@ -15,13 +16,16 @@ CELLS=${CELLS:-20000000}
 build
 D="$WORK/tiles-$FACES-$TILES"
 mkdir -p "$D/ply" "$D/obj"
-per=$((FACES / TILES))
-for k in $(seq 1 "$TILES"); do
-  n=$(printf '%03d' "$k")
-  [ -f "$D/ply/t$n.ply" ] || "$MINT" gen sphere "$D/ply/t$n.ply" --faces "$per" --seed "$k" > /dev/null
-  [ -f "$D/obj/t$n.obj" ] || "$MINT" convert "$D/ply/t$n.ply" "$D/obj/t$n.obj" --quiet
+VENV="$ROOT/scripts/bench/.venv-tiles"
+[ -x "$VENV/bin/python" ] || { python3 -m venv "$VENV" && "$VENV/bin/pip" install -q numpy; }
+[ -f "$D/whole.ply" ] || "$MINT" gen sphere "$D/whole.ply" --faces "$FACES" > /dev/null
+SIDE=$(python3 -c "import math; print(round(math.sqrt($TILES)))")
+[ -n "$(ls "$D/ply")" ] || "$VENV/bin/python" "$ROOT/tools/split_tiles.py" "$D/whole.ply" "$D/ply" "$SIDE"
+for f in "$D"/ply/*.ply; do
+  o="$D/obj/$(basename "$f" .ply).obj"
+  [ -f "$o" ] || "$MINT" convert "$f" "$o" --double --quiet
 done
-[ -f "$D/whole.ply" ] || "$MINT" convert "$D/ply" "$D/whole.ply" --quiet
+per="$(( FACES / TILES )) (about)"
 [ -f "$D/whole.glb" ] || "$MINT" convert "$D/whole.ply" "$D/whole.glb" --quiet
 machine
 echo "input: $TILES tiles of $per faces; whole.ply $(stat -c %s "$D/whole.ply") bytes; obj tiles $(du -sb "$D/obj" | cut -f1) bytes"
