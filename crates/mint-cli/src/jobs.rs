@@ -129,11 +129,8 @@ pub struct RunArgs {
     /// side by side, under the same camera (see `mint render`).
     #[arg(long)]
     pub preview: bool,
-    /// The axis drawn upwards in the preview (and `mint render --up`): y
-    /// for glTF, most OBJ exporters, MeshLab and the Stanford scans; z for
-    /// CAD, terrain and medical stacks.
-    #[arg(long, value_enum, default_value_t = crate::preview::UpArg::Y)]
-    pub up: crate::preview::UpArg,
+    #[command(flatten)]
+    pub preview_up: crate::preview::PreviewUp,
     #[command(flatten)]
     pub report: ReportArgs,
 }
@@ -250,15 +247,14 @@ pub(crate) fn surface_files(args: &[PathBuf]) -> Result<Vec<PathBuf>> {
     Ok(mint_io::expand_inputs(args)?)
 }
 
-/// The files `mint resample` reads: the inputs, or, for a single PLY range
-/// image, its triangulation (see [`resample_input`]).
-pub(crate) fn resample_inputs(args: &[PathBuf], work: Option<&std::path::Path>, tmp: &std::path::Path) -> Result<(Vec<PathBuf>, Option<tempfile::NamedTempFile>)> {
-    let files = surface_files(args)?;
-    if let [one] = files.as_slice() {
+/// The files `mint resample` reads, from the surface's `files`: those, or,
+/// for a single PLY range image, its triangulation (see [`resample_input`]).
+pub(crate) fn resample_inputs(files: &[PathBuf], work: Option<&std::path::Path>, tmp: &std::path::Path) -> Result<(Vec<PathBuf>, Option<tempfile::NamedTempFile>)> {
+    if let [one] = files {
         let (f, t) = resample_input(one, work, tmp)?;
         return Ok((vec![f], t));
     }
-    Ok((files, None))
+    Ok((files.to_vec(), None))
 }
 
 /// The mesh `mint resample` reads: the input itself, or, for a PLY range
@@ -390,8 +386,9 @@ impl JobCommand {
         let Some(work) = r.staged.work.clone() else { bail!("a staged run needs --work DIR (a directory every task can reach)") };
         let spec = match self {
             JobCommand::Resample(a) => {
-                let (inputs, _) = resample_inputs(&a.inputs, Some(&work), &work)?;
-                crate::paths::check_output(&a.output, &inputs.iter().map(|p| p.as_path()).collect::<Vec<_>>())?;
+                let files = surface_files(&a.inputs)?;
+                crate::paths::check_output(&a.output, &files.iter().map(|p| p.as_path()).collect::<Vec<_>>())?;
+                let (inputs, _) = resample_inputs(&files, Some(&work), &work)?;
                 r.spec(Job::Resample { inputs }, &a.output, Some(&a.holes))?
             }
             JobCommand::Bool(a) => {

@@ -16,6 +16,16 @@ pub enum UpArg {
     Z,
 }
 
+/// `--up` of a command that writes a preview (y by default).
+#[derive(clap::Args, Debug, Clone, Copy, Default)]
+pub struct PreviewUp {
+    /// The axis drawn upwards in the preview (and `mint render --up`): y
+    /// for glTF, most OBJ exporters, MeshLab and the Stanford scans; z for
+    /// CAD, terrain and medical stacks.
+    #[arg(long, value_enum, default_value_t = UpArg::Y)]
+    pub up: UpArg,
+}
+
 impl UpArg {
     pub(crate) fn axis(self) -> mint_render::Up {
         match self {

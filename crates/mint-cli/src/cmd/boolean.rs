@@ -17,7 +17,7 @@ pub(crate) fn cmd_bool(a: BoolArgs) -> Result<()> {
     let bars = Bars::new(a.run.report.silent());
     let s = mint_pipeline::run(&spec, &a.run.tuning(), &bars)?;
     if a.run.preview {
-        write_preview(&[fa, fb, vec![a.output.clone()]], &a.output, a.run.up, a.run.report.silent(), &bars)?;
+        write_preview(&[fa, fb, vec![a.output.clone()]], &a.output, a.run.preview_up.up, a.run.report.silent(), &bars)?;
     }
     report(&a.run.report, &s)
 }

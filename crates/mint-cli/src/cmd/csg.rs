@@ -28,7 +28,7 @@ pub(crate) fn cmd_csg(a: CsgArgs) -> Result<()> {
             })
             .collect();
         meshes.push(vec![a.output.clone()]);
-        write_preview(&meshes, &a.output, a.run.up, a.run.report.silent(), &bars)?;
+        write_preview(&meshes, &a.output, a.run.preview_up.up, a.run.report.silent(), &bars)?;
     }
     report(&a.run.report, &s)
 }

@@ -45,11 +45,8 @@ pub struct DecimateArgs {
     /// Also write OUT.png beside the output: input and output side by side.
     #[arg(long)]
     pub preview: bool,
-    /// The axis drawn upwards in the preview (and `mint render --up`): y
-    /// for glTF, most OBJ exporters, MeshLab and the Stanford scans; z for
-    /// CAD, terrain and medical stacks.
-    #[arg(long, value_enum, default_value_t = crate::preview::UpArg::Y)]
-    pub up: crate::preview::UpArg,
+    #[command(flatten)]
+    pub preview_up: crate::preview::PreviewUp,
     #[command(flatten)]
     pub quiet: QuietArg,
     #[command(flatten)]
@@ -75,7 +72,7 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
     let s = mint_decimate::decimate(&files, &a.output, &o, &bars)?;
     crate::summary::print_removed(&s.removed_dead);
     if a.preview {
-        write_before_after(&files, &a.output, a.up, a.quiet.quiet || a.json.json, &bars)?;
+        write_before_after(&files, &a.output, a.preview_up.up, a.quiet.quiet || a.json.json, &bars)?;
     }
     if a.json.json {
         let mut v = serde_json::to_value(&s)?;

@@ -23,7 +23,7 @@ pub(crate) fn resample_and_report(a: &ResampleArgs) -> Result<mint_pipeline::Res
     let tmp_root = r.tmp.clone().unwrap_or_else(|| a.output.parent().filter(|p| !p.as_os_str().is_empty()).map(PathBuf::from).unwrap_or_else(|| PathBuf::from(".")));
     let files = surface_files(&a.inputs)?;
     crate::paths::check_output(&a.output, &files.iter().map(|p| p.as_path()).collect::<Vec<_>>())?;
-    let (inputs, _range_mesh) = resample_inputs(&a.inputs, r.staged.work.as_deref(), &tmp_root)?;
+    let (inputs, _range_mesh) = resample_inputs(&files, r.staged.work.as_deref(), &tmp_root)?;
     let spec = r.spec(Job::Resample { inputs: inputs.clone() }, &a.output, Some(&a.holes))?;
     let bars = Bars::new(r.report.silent());
     let mut summary = mint_pipeline::run(&spec, &tuning, &bars)?;
@@ -31,7 +31,7 @@ pub(crate) fn resample_and_report(a: &ResampleArgs) -> Result<mint_pipeline::Res
         summary.input = one.display().to_string();
     }
     if r.preview {
-        write_before_after(&inputs, &a.output, r.up, r.report.silent(), &bars)?;
+        write_before_after(&inputs, &a.output, r.preview_up.up, r.report.silent(), &bars)?;
     }
     print_resample_summary(&summary, r.report.json(), r.report.quiet(), tuning.mem_bytes)?;
     Ok(summary)

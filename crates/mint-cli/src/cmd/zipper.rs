@@ -56,11 +56,8 @@ pub struct ZipperArgs {
     /// (see `mint render`).
     #[arg(long)]
     pub preview: bool,
-    /// The axis drawn upwards in the preview (and `mint render --up`): y
-    /// for glTF, most OBJ exporters, MeshLab and the Stanford scans; z for
-    /// CAD, terrain and medical stacks.
-    #[arg(long, value_enum, default_value_t = crate::preview::UpArg::Y)]
-    pub up: crate::preview::UpArg,
+    #[command(flatten)]
+    pub preview_up: crate::preview::PreviewUp,
     #[command(flatten)]
     pub json: JsonArg,
 }
@@ -88,7 +85,7 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
     let s = mint_range::merge_file(&a.set, &a.output, &opts, &bars)?;
     let (report, check, secs) = (&s.report, &s.check, s.seconds);
     if a.preview {
-        crate::preview::write_preview(&[vec![a.output.clone()]], &a.output, a.up, a.json.json, &bars)?;
+        crate::preview::write_preview(&[vec![a.output.clone()]], &a.output, a.preview_up.up, a.json.json, &bars)?;
     }
     if a.json.json {
         let key = report.method();
