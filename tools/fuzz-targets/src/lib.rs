@@ -31,6 +31,7 @@ pub const TARGETS: &[Target] = &[
     ("read_3ds", read_3ds),
     ("read_glb", read_glb),
     ("read_gltf", read_gltf),
+    ("read_list", read_list),
     ("read_pro", read_pro),
     ("read_conf", read_conf),
     ("read_aln", read_aln),
@@ -299,6 +300,40 @@ fn gltf_edits(data: &[u8]) -> Vec<Vec<u8>> {
         out.push(serde_json::to_vec(&d).unwrap());
     }
     out
+}
+/// An input list (`@list`, `mint_io::expand_inputs`) beside a folder
+/// `input.t` holding `a.ply`, `b.obj`, `notes.txt` and `sub/c.stl`: every file it
+/// gives exists, none twice; a refusal is one line naming the list (or,
+/// for a file named twice, that file).
+pub fn read_list(data: &[u8]) {
+    let dir = scratch();
+    let t = dir.join("input.t");
+    if !t.is_dir() {
+        std::fs::create_dir_all(t.join("sub")).expect("fixture folder");
+        for f in ["a.ply", "b.obj", "notes.txt", "sub/c.stl"] {
+            std::fs::write(t.join(f), b"x").expect("fixture file");
+        }
+    }
+    let list = input_file("txt", data);
+    match mint_io::expand_inputs(&[PathBuf::from(format!("@{}", list.display()))]) {
+        Err(e) => {
+            let s = e.to_string();
+            if s.contains("named twice") {
+                assert!(!s.contains('\n') && !s.contains('\r'), "error of more than one line: {s:?}");
+            } else {
+                one_line_naming(&e, &list);
+            }
+        }
+        Ok(files) => {
+            assert!(!files.is_empty());
+            for f in &files {
+                assert!(f.is_file(), "the list gave {}, which is not a file", f.display());
+            }
+            let mut c: Vec<PathBuf> = files.iter().map(|f| std::fs::canonicalize(f).unwrap()).collect();
+            c.sort();
+            assert!(c.windows(2).all(|w| w[0] != w[1]), "a file given twice: {files:?}");
+        }
+    }
 }
 /// 3D Studio.
 pub fn read_3ds(data: &[u8]) {
