@@ -296,8 +296,22 @@ fn an_output_directory_fails_before_any_work() {
 fn a_flat_input_gives_an_empty_output_with_a_warning() {
     let d = tempfile::tempdir().unwrap();
     let flat = d.path().join("flat.ply");
-    std::fs::write(&flat, "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n").unwrap();
+    let header = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n";
+    // A square open sheet is resampled as an open sheet, with a warning
+    // that says so (it was empty before open inputs were read as sheets).
+    let square = d.path().join("square.ply");
+    std::fs::write(&square, header.replace("element face 4", "element face 2") + "3 0 1 2\n3 0 2 3\n").unwrap();
     let out = d.path().join("o.ply");
+    let o = run(&["resample", p(&square), p(&out), "--cells", "1000", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(j["output_faces"].as_u64().unwrap() > 0, "{j}");
+    assert_eq!(j["sign_rule"], "sheet");
+    let w = j["warnings"].as_array().unwrap();
+    assert!(w.len() == 1 && w[0].as_str().unwrap().contains("the input is open"), "{w:?}");
+    // The same square with each face both ways: a closed surface of no
+    // thickness, every crossing cancels, nothing is left.
+    std::fs::write(&flat, format!("{header}3 0 1 2\n3 0 2 3\n3 0 2 1\n3 0 3 2\n")).unwrap();
     let o = run(&["resample", p(&flat), p(&out), "--cells", "1000", "--json"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let err = String::from_utf8_lossy(&o.stderr);

@@ -9,6 +9,7 @@ mod core_props;
 mod fuzz_replay;
 mod csg;
 mod layout;
+mod open;
 mod world;
 mod resample;
 mod robustness;

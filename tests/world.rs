@@ -180,7 +180,8 @@ fn libc_sigpipe() -> i32 {
 #[test]
 fn intercept_counts_add_up_even_when_the_result_is_empty() {
     let d = tempfile::tempdir().unwrap();
-    let tri = TriMesh { positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], faces: vec![[0, 1, 2]] };
+    // A two-sided triangle (the same face both ways): every crossing cancels.
+    let tri = TriMesh { positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], faces: vec![[0, 1, 2], [0, 2, 1]] };
     let input = write_f64(d.path(), "tri.ply", &tri);
     let s = resample(&input, &d.path().join("o.ply"), &Opts::new(GridSize::Cells(10_000)), &NoProgress).unwrap();
     assert_eq!((s.output_faces, s.intercepts_kept, s.intercepts_removed), (0, 0, s.intercepts_found), "{s:?}");
@@ -280,8 +281,8 @@ fn a_spike_does_not_sink_decimate() {
     assert!(err.contains("far.ply") && err.contains("needle") && err.contains("face ") && err.contains("2.147e9 long"), "{err}");
     assert!(secs < 10.0, "refusing took {secs} s");
     assert!(!out.exists());
-    // An open sheet thinner than a cell resamples to nothing: refused.
-    let tri = TriMesh { positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], faces: vec![[0, 1, 2]] };
+    // A two-sided sheet (each face both ways) resamples to nothing: refused.
+    let tri = TriMesh { positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], faces: vec![[0, 1, 2], [0, 2, 1]] };
     let sheet = write_f64(d.path(), "tri.ply", &tri);
     let out = d.path().join("t.ply");
     let (o, _) = decimate(&sheet, &out);

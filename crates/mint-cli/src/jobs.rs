@@ -96,12 +96,17 @@ pub struct RunArgs {
     /// Shift the grid by fractions of a cell, e.g. 0.5,0,0 [default: 0,0,0].
     #[arg(long, value_parser = parse_triple, hide = true, allow_hyphen_values = true)]
     pub grid_offset: Option<[f64; 3]>,
-    /// How crossing signs become inside/outside. auto: robust; picks union
+    /// How crossing signs become inside/outside. auto: robust; from a census
+    /// of all grid lines it picks sheet for an open input (more than a third
+    /// of the lines cross it an odd number of times: a terrain tile, a single
+    /// range scan, one-sided photogrammetry, loose triangles), else union
     /// (orientation kept, overlapping scans merge) or parity (orientation
-    /// ignored, for flipped faces) from a census of all grid lines, and
-    /// always gives a closed surface, closing holes. orient: the original
-    /// paper's rule; cells that disagree are left open and counted (for
-    /// bool and csg it applies to each mesh operand, and still closes).
+    /// ignored, for flipped faces), which always give a closed surface,
+    /// closing holes. sheet: the input resampled as an open surface with its
+    /// faces' orientation; it encloses nothing, so nothing is closed. orient:
+    /// the original paper's rule; cells that disagree are left open and
+    /// counted (for bool and csg it applies to each mesh operand, and still
+    /// closes; there auto never picks sheet: operands are solids).
     #[arg(long, value_parser = choice::<SignRule>(), default_value_t = defaults::SIGNS)]
     pub signs: SignRule,
     /// Write ASCII instead of binary (PLY/STL).

@@ -29,7 +29,13 @@ pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, j
             if s.input_files > 1 { format!("{} files, ", s.input_files) } else { String::new() },
             s.input_vertices,
             s.input_faces,
-            if s.orientation_inverted { " (inside-out: signs reversed)" } else { "" }
+            if s.orientation_inverted {
+                " (inside-out: signs reversed)"
+            } else if s.orientation_from == "faces" {
+                " (open: orientation from its faces)"
+            } else {
+                ""
+            }
         );
         eprintln!(
             "  grid         {}x{}x{} cells of {:.6} (slabs along {}: {}, {} threads)",
@@ -87,6 +93,12 @@ pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, j
 /// Warnings about a run that succeeded: an empty output, and why.
 pub(crate) fn summary_warnings(s: &mint_pipeline::ResampleSummary) -> Vec<String> {
     let mut w = s.input_warnings.clone();
+    if s.sign_rule == "sheet" && s.census_odd * 3 > s.census_lines {
+        w.push(format!(
+            "{}: the input is open ({} of {} grid lines cross it an odd number of times): resampled as an open sheet with its faces' orientation, enclosing no volume; --signs union closes it into a solid",
+            s.input, s.census_odd, s.census_lines
+        ));
+    }
     if let Some(why) = s.empty_reason() {
         w.push(format!("{}: the output is empty: {why}", s.output));
     }

@@ -102,12 +102,22 @@ where
     };
     let (mut result, mut repair) = reconstruct_slab_robust(grid, 0, planes.clone(), rule);
     let mut cells = result.hole_cells.clone();
-    let (open, holes) = open_cells(&mut cells, grid.local_dims(), k);
+    let (open, holes) = open_cells(&mut cells, grid.local_dims(), effective_max_hole(rule, k));
     if !open.is_empty() {
-        (result, repair) = reconstruct_slab_solids(grid, 0, vec![planes], &[rule], &Expr::Operand(0), Some(&open));
+        (result, repair) = reconstruct_slab_solids(grid, 0, vec![planes], &[rule], &Expr::Operand(0), Some(&open), &[]);
     }
     emit(&result, sink)?;
     Ok((result, repair, rule, holes))
+}
+
+/// The `--max-hole` that applies under `rule`: every hole cell of a sheet
+/// (its back and its rim) stays open, whatever the asked size.
+pub fn effective_max_hole(rule: SignRule, max_hole: u32) -> u32 {
+    if rule == SignRule::Sheet {
+        0
+    } else {
+        max_hole
+    }
 }
 
 /// Sends a result's vertices and faces to `sink`.

@@ -97,6 +97,9 @@ struct Line {
 fn filter_line(raw: &[Intercept], rule: SignRule) -> Line {
     let mut own = raw.to_vec();
     filter_plane(&mut own);
+    if rule == SignRule::Sheet {
+        return Line { records: own, rule: Some(SignRule::Sheet) };
+    }
     if rule == SignRule::Union && winding_valid(&own) {
         return Line { records: own, rule: Some(SignRule::Union) };
     }
@@ -204,11 +207,135 @@ fn vertex_record(plane: u32, family: u32, index: u32, cell: u32, value: Option<f
     }
 }
 
-/// Decides a plane's node states and its A/B edge vertices.
-fn prepare_plane(mut raw: Vec<Intercept>, plane: u32, na: u32, nb: u32, rule: SignRule, stats: &mut RepairStats) -> Prepared {
+/// Splits a plane's raw records into its A/B records and its S records
+/// (the layer above), both sorted.
+fn split_plane(mut raw: Vec<Intercept>) -> (Vec<Intercept>, Vec<Intercept>) {
     raw.sort_unstable_by_key(|r| r.sort_key());
     let s_start = raw.partition_point(|r| r.family() < FAMILY_S);
     let s_raw = raw.split_off(s_start);
+    (raw, s_raw)
+}
+
+/// Votes of one filtered line's intercepts for the nodes next to them
+/// (Sheet rule): in each cell with intercepts, the first one votes for the
+/// node before it and the last one for the node after it, +1 when that
+/// node is behind the surface (inside), -1 when in front.
+fn sheet_votes(records: &[Intercept], mut vote: impl FnMut(u32, i8)) {
+    let mut k = 0;
+    while k < records.len() {
+        let c = records[k].cell();
+        let mut e = k;
+        while e + 1 < records.len() && records[e + 1].cell() == c {
+            e += 1;
+        }
+        // Entering along the axis: the node before is in front, the one after behind.
+        vote(c, if records[k].entering() { -1 } else { 1 });
+        vote(c + 1, if records[e].entering() { 1 } else { -1 });
+        k = e + 1;
+    }
+}
+
+/// A plane's node states under [`SignRule::Sheet`], from its filtered A and
+/// B lines and the raw S records of the layers below and above it: a node
+/// is inside when the votes of the intercepts next to it on its (up to six)
+/// edges sum to more than zero.
+fn sheet_states(a_lines: &[Option<Line>], b_lines: &[Option<Line>], s_below: &[Intercept], s_above: &[Intercept], na: u32, nb: u32) -> NodeStates {
+    let w = na as u64 + 1;
+    let mut votes: Vec<(u64, i8)> = Vec::new();
+    for (j, l) in a_lines.iter().enumerate() {
+        if let Some(l) = l {
+            sheet_votes(&l.records, |i, v| votes.push((j as u64 * w + i as u64, v)));
+        }
+    }
+    for (i, l) in b_lines.iter().enumerate() {
+        if let Some(l) = l {
+            sheet_votes(&l.records, |j, v| votes.push((j as u64 * w + i as u64, v)));
+        }
+    }
+    // S columns: the node is the upper end of the layer below (the last
+    // intercept votes) and the lower end of the layer above (the first).
+    let mut below = s_below.to_vec();
+    filter_plane(&mut below);
+    let mut above = s_above.to_vec();
+    filter_plane(&mut above);
+    let node_of = |r: &Intercept| {
+        let idx = r.index();
+        let (i, j) = (idx / (nb + 1), idx % (nb + 1));
+        j as u64 * w + i as u64
+    };
+    for range in lines(&below) {
+        let r = below[range.end - 1];
+        votes.push((node_of(&r), if r.entering() { 1 } else { -1 }));
+    }
+    for range in lines(&above) {
+        let r = above[range.start];
+        votes.push((node_of(&r), if r.entering() { -1 } else { 1 }));
+    }
+    votes.sort_unstable_by_key(|v| v.0);
+    let mut states = NodeStates::new(na, nb);
+    let mut front = NodeStates::new(na, nb);
+    let mut grown: Vec<(u32, u32)> = Vec::new();
+    let mut k = 0;
+    while k < votes.len() {
+        let n = votes[k].0;
+        let mut sum = 0i32;
+        while k < votes.len() && votes[k].0 == n {
+            sum += votes[k].1 as i32;
+            k += 1;
+        }
+        let (i, j) = ((n % w) as u32, (n / w) as u32);
+        if i == 0 || j == 0 || i == na || j == nb {
+            continue;
+        }
+        if sum > 0 {
+            states.set(i, j);
+            grown.push((i, j));
+        } else if sum < 0 {
+            front.set(i, j);
+        }
+    }
+    // A cell the surface crosses has back corners that no edge of it
+    // crosses to (the far corners of a cut-off corner). Each face of such a
+    // cell has a voted back corner within two in-plane steps, so the inside
+    // grows twice along in-plane edges the surface does not cross, never
+    // into a node voted in front; else those cells would hold synthesized
+    // vertices and open holes in the sheet.
+    let crossed = |line: &Option<Line>, cell: u32| line.as_ref().is_some_and(|l| !cell_slice(&l.records, cell).is_empty());
+    for _ in 0..2 {
+        let mut next = Vec::new();
+        for &(i, j) in &grown {
+            let mut try_set = |i2: u32, j2: u32, line: &Option<Line>, cell: u32| {
+                let border = i2 == 0 || j2 == 0 || i2 == na || j2 == nb;
+                if !border && !states.get(i2, j2) && !front.get(i2, j2) && !crossed(line, cell) {
+                    states.set(i2, j2);
+                    next.push((i2, j2));
+                }
+            };
+            if i > 0 {
+                try_set(i - 1, j, &a_lines[j as usize], i - 1);
+            }
+            if i < na {
+                try_set(i + 1, j, &a_lines[j as usize], i);
+            }
+            if j > 0 {
+                try_set(i, j - 1, &b_lines[i as usize], j - 1);
+            }
+            if j < nb {
+                try_set(i, j + 1, &b_lines[i as usize], j);
+            }
+        }
+        grown = next;
+    }
+    states
+}
+
+/// Decides a plane's node states and its A/B edge vertices. `raw` is the
+/// plane's A/B records and `s_raw` its S records (sorted, [`split_plane`]);
+/// `s_below` the S records of the layer below (used by Sheet only).
+/// `border_plane`: the grid's first or last plane, whose nodes the Sheet
+/// rule leaves outside (as every other rule does, the grid being larger
+/// than the input), so that the states' surface never meets the border.
+fn prepare_plane(raw: Vec<Intercept>, s_raw: Vec<Intercept>, s_below: &[Intercept], plane: u32, border_plane: bool, na: u32, nb: u32, rule: SignRule, stats: &mut RepairStats) -> Prepared {
     // Filter every A and B line under the rule.
     let mut a_lines: Vec<Option<Line>> = (0..=nb).map(|_| None).collect();
     let mut b_lines: Vec<Option<Line>> = (0..=na).map(|_| None).collect();
@@ -227,7 +354,10 @@ fn prepare_plane(mut raw: Vec<Intercept>, plane: u32, na: u32, nb: u32, rule: Si
     // States: from the A line when it is consistent, else from the B line,
     // else from the nearest intercept's orientation.
     let mut states = NodeStates::new(na, nb);
-    for j in 0..=nb {
+    if rule == SignRule::Sheet && !border_plane {
+        states = sheet_states(&a_lines, &b_lines, s_below, &s_raw, na, nb);
+    }
+    for j in (0..=nb).filter(|_| rule != SignRule::Sheet) {
         match &a_lines[j as usize] {
             None => {}
             Some(l) if l.rule.is_some() => line_states(l, na + 1, |i| states.set(i, j)),
@@ -327,7 +457,8 @@ fn layer_s_vertices(s_raw: &[Intercept], lower: &NodeStates, upper: &NodeStates,
 /// *raw* (unsorted, unfiltered) intercepts of planes `k0 ..= k1`, under
 /// `rule` (Union or Parity; resolve Auto first with [`census_plane`]).
 pub fn reconstruct_slab_robust(grid: &Grid, k0: u32, planes: Vec<Vec<Intercept>>, rule: SignRule) -> (SlabResult, RepairStats) {
-    reconstruct_slab_solids(grid, k0, vec![planes], &[rule], &Expr::Operand(0), None)
+    assert!(k0 == 0 || rule != SignRule::Sheet, "the sheet rule needs the layer below: use reconstruct_slab_solids");
+    reconstruct_slab_solids(grid, k0, vec![planes], &[rule], &Expr::Operand(0), None, &[])
 }
 
 /// Robust reconstruction of a CSG expression over several solids on one
@@ -341,6 +472,11 @@ pub fn reconstruct_slab_robust(grid: &Grid, k0: u32, planes: Vec<Vec<Intercept>>
 ///
 /// Cells in `open` (holes too large to close, see [`crate::holes`]) emit no
 /// triangles, and vertices all of whose cells are open are left out.
+///
+/// `below[o]`, when given, holds operand `o`'s raw records of plane
+/// `k0 - 1`, of which only the S records (layer `k0 - 1`) are read: the
+/// Sheet rule decides a plane's states from the layers on both sides, so it
+/// needs them whenever `k0 > 0`, and the last plane's S records too.
 pub fn reconstruct_slab_solids(
     grid: &Grid,
     k0: u32,
@@ -348,11 +484,12 @@ pub fn reconstruct_slab_solids(
     rules: &[SignRule],
     expr: &Expr,
     open: Option<&OpenCells>,
+    below: &[Vec<Intercept>],
 ) -> (SlabResult, RepairStats) {
-    assert!(rules.iter().all(|r| matches!(r, SignRule::Union | SignRule::Parity)), "resolve the sign rules first");
+    assert!(rules.iter().all(|r| matches!(r, SignRule::Union | SignRule::Parity | SignRule::Sheet)), "resolve the sign rules first");
     assert_eq!(rules.len(), operands.len());
     assert!(expr.operands() <= operands.len());
-    let [na, nb, _] = grid.local_dims();
+    let [na, nb, ns] = grid.local_dims();
     let mut stats = RepairStats::default();
     let n = operands[0].len();
     let m = operands.len();
@@ -360,8 +497,21 @@ pub fn reconstruct_slab_solids(
     let prepared: Vec<Vec<Prepared>> = operands
         .into_iter()
         .zip(rules)
-        .map(|(planes, &rule)| {
-            planes.into_iter().enumerate().map(|(p, raw)| prepare_plane(raw, k0 + p as u32, na, nb, rule, &mut stats)).collect()
+        .enumerate()
+        .map(|(o, (planes, &rule))| {
+            let split: Vec<(Vec<Intercept>, Vec<Intercept>)> = planes.into_iter().map(split_plane).collect();
+            let first_below = match below.get(o) {
+                Some(raw) if rule == SignRule::Sheet => split_plane(raw.clone()).1,
+                _ => Vec::new(),
+            };
+            let mut out: Vec<Prepared> = Vec::with_capacity(split.len());
+            for (p, (ab, s_raw)) in split.into_iter().enumerate() {
+                let s_below = if p == 0 { first_below.as_slice() } else { out[p - 1].s_raw.as_slice() };
+                let k = k0 + p as u32;
+                let pr = prepare_plane(ab, s_raw, s_below, k, k == 0 || k == ns, na, nb, rule, &mut stats);
+                out.push(pr);
+            }
+            out
         })
         .collect();
     let single = m == 1 && *expr == Expr::Operand(0);

@@ -40,6 +40,9 @@ pub enum Format {
     ThreeDs,
     /// glTF 2.0: `.gltf` (JSON and buffers) or `.glb` (binary container).
     Gltf,
+    /// 3D Tiles: a `tileset.json` (read as one surface from its finest
+    /// level) or a single `.b3dm` tile. Read only.
+    Tiles,
 }
 
 impl Format {
@@ -80,6 +83,7 @@ impl Format {
             "wrl" | "vrml" => Some(Format::Vrml),
             "3ds" => Some(Format::ThreeDs),
             "gltf" | "glb" => Some(Format::Gltf),
+            "json" | "b3dm" => Some(Format::Tiles),
             _ => None,
         }
     }
@@ -92,6 +96,9 @@ impl Format {
         }
         if is_glb(head) {
             return Some(Format::Gltf);
+        }
+        if head.starts_with(b"b3dm") {
+            return Some(Format::Tiles);
         }
         if head.starts_with(b"#VRML") {
             return Some(Format::Vrml);
@@ -140,6 +147,7 @@ impl Format {
             Format::Vrml => "wrl",
             Format::ThreeDs => "3ds",
             Format::Gltf => "glb",
+            Format::Tiles => "json",
         }
     }
 }
@@ -156,6 +164,7 @@ impl fmt::Display for Format {
             Format::Vrml => "VRML 2.0",
             Format::ThreeDs => "3DS",
             Format::Gltf => "glTF",
+            Format::Tiles => "3D Tiles",
         })
     }
 }

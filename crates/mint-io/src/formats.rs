@@ -10,7 +10,7 @@ use crate::backend::{FormatWriter, MeshInfo, Opened, WriteOptions};
 use crate::error::Error;
 use crate::format::Format;
 use crate::mapped::Mapped;
-use crate::{gltf, mesh, obj, off, ply, raw, stl, three_ds, vrml};
+use crate::{gltf, mesh, obj, off, ply, raw, stl, three_ds, tiles, vrml};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -50,6 +50,13 @@ pub(crate) fn backend(format: Format) -> Backend {
         Format::Raw => Backend { info: raw::info, open: raw::open, create: |path, o| boxed(raw::RawWriter::create(path, o)), f32_only: false, origin: false },
         Format::Vrml => Backend { info: vrml::info, open: vrml::open, create: |path, o| boxed(vrml::VrmlWriter::create(path, o)), f32_only: false, origin: false },
         Format::Gltf => Backend { info: gltf::info, open: gltf::open, create: |path, o| boxed(gltf::GltfWriter::create(path, o)), f32_only: true, origin: true },
+        Format::Tiles => Backend {
+            info: tiles::info,
+            open: tiles::open,
+            create: |path, _| Err(Error::unsupported(path, "mint does not write 3D Tiles; write .glb (or .gltf, .ply) and tile it with a 3D Tiles tool")),
+            f32_only: true,
+            origin: true,
+        },
         Format::ThreeDs => {
             Backend { info: three_ds::info, open: three_ds::open, create: |path, o| boxed(three_ds::ThreeDsWriter::create(path, o)), f32_only: true, origin: false }
         }

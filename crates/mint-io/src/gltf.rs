@@ -43,10 +43,10 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 /// Nested nodes deeper than this are refused (a cycle, or a hostile file).
 const MAX_DEPTH: usize = 256;
 
-type Mat = [[f64; 4]; 4];
-const IDENTITY: Mat = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
+pub(crate) type Mat = [[f64; 4]; 4];
+pub(crate) const IDENTITY: Mat = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]];
 
-fn mul(a: &Mat, b: &Mat) -> Mat {
+pub(crate) fn mul(a: &Mat, b: &Mat) -> Mat {
     let mut m = [[0.0; 4]; 4];
     for (i, row) in m.iter_mut().enumerate() {
         for (j, x) in row.iter_mut().enumerate() {
@@ -184,8 +184,15 @@ fn uint(path: &Path, at: &str, v: &Value, key: &str, default: u64) -> Result<u64
 
 impl<'a> Doc<'a> {
     fn parse(path: &'a Path, map: &Arc<Mapped>, spill_dir: &Path) -> Result<Doc<'a>, Error> {
-        let data = map.bytes();
+        Doc::parse_range(path, map, (0, map.bytes().len()), spill_dir)
+    }
+
+    /// Parses the glTF at bytes `range` of `map` (a whole file, or the GLB
+    /// inside a 3D Tiles `b3dm`).
+    fn parse_range(path: &'a Path, map: &Arc<Mapped>, range: (usize, usize), spill_dir: &Path) -> Result<Doc<'a>, Error> {
+        let data = &map.bytes()[range.0..range.1];
         let (json_bytes, bin) = if is_glb(data) { glb_chunks(path, data)? } else { (data, None) };
+        let bin = bin.map(|(a, e)| (a + range.0, e + range.0));
         let json: Value = serde_json::from_slice(json_bytes).map_err(|e| Error::format(path, format!("not glTF JSON ({e})")))?;
         if !json.is_object() {
             return Err(Error::format(path, "not glTF: the JSON is not an object"));
@@ -361,7 +368,7 @@ impl<'a> Doc<'a> {
 }
 
 /// Decodes `%XX` escapes of a relative URI.
-fn percent_decode(s: &str) -> String {
+pub(crate) fn percent_decode(s: &str) -> String {
     let b = s.as_bytes();
     let mut out = Vec::with_capacity(b.len());
     let mut i = 0;
@@ -500,10 +507,10 @@ fn read_vec3(b: &[u8]) -> [f64; 3] {
 }
 
 /// What a pass over the document found.
-#[derive(Default)]
-struct Counts {
-    vertices: u64,
-    triangles: u64,
+#[derive(Default, Debug, Clone, Copy)]
+pub(crate) struct Counts {
+    pub(crate) vertices: u64,
+    pub(crate) triangles: u64,
     primitives: u64,
     /// Primitives of points or lines, skipped.
     skipped: u64,
@@ -511,11 +518,21 @@ struct Counts {
 
 /// Walks every drawn primitive; with spills, writes world positions and
 /// triangles (0-based over all primitives).
-fn walk(doc: &Doc, mut spill: Option<(&mut SpillFile, &mut SpillFile)>) -> Result<Counts, Error> {
+fn walk(doc: &Doc, spill: Option<(&mut SpillFile, &mut SpillFile)>) -> Result<Counts, Error> {
+    let mut c = Counts::default();
+    walk_into(doc, &IDENTITY, &mut c, spill)?;
+    Ok(c)
+}
+
+/// [`walk`] with `prefix` applied after the node transforms, appending to
+/// the counts (and spills) of earlier documents: vertex ids go on from
+/// `c.vertices`.
+fn walk_into(doc: &Doc, prefix: &Mat, c: &mut Counts, mut spill: Option<(&mut SpillFile, &mut SpillFile)>) -> Result<(), Error> {
     let path = doc.path;
     let meshes = arr(&doc.json, "meshes");
-    let mut c = Counts::default();
+    let start = *c;
     for (m, world) in doc.instances()? {
+        let world = mul(prefix, &world);
         for (p, prim) in arr(&meshes[m], "primitives").iter().enumerate() {
             let at = format!("meshes[{m}].primitives[{p}]");
             let mode = uint(path, &at, prim, "mode", 4)?;
@@ -555,7 +572,7 @@ fn walk(doc: &Doc, mut spill: Option<(&mut SpillFile, &mut SpillFile)>) -> Resul
             c.triangles += tris;
             c.primitives += 1;
             let limit = EXPANSION_FLOOR + MAX_EXPANSION * doc.bytes;
-            if c.vertices + c.triangles > limit {
+            if (c.vertices - start.vertices) + (c.triangles - start.triangles) > limit {
                 return Err(bad(
                     path,
                     &at,
@@ -608,7 +625,30 @@ fn walk(doc: &Doc, mut spill: Option<(&mut SpillFile, &mut SpillFile)>) -> Resul
             }
         }
     }
-    Ok(c)
+    Ok(())
+}
+
+/// Appends the glTF at bytes `range` of `map` (named `path` in errors),
+/// drawn with `prefix` (row-major, translation in the last column) after
+/// its node transforms, to the counts and, when given, the spills: for
+/// readers of containers of glTF (3D Tiles).
+pub(crate) fn append(
+    path: &Path,
+    map: &Arc<Mapped>,
+    range: (usize, usize),
+    prefix: &[[f64; 4]; 4],
+    spill_dir: &Path,
+    c: &mut Counts,
+    spill: Option<(&mut SpillFile, &mut SpillFile)>,
+) -> Result<(), Error> {
+    let doc = Doc::parse_range(path, map, range, spill_dir)?;
+    walk_into(&doc, prefix, c, spill)
+}
+
+/// Streams triangles spilled as three little-endian u32 ids each: the body
+/// of the glTF and 3D Tiles readers.
+pub(crate) fn spilled_body(path: &Path, faces: Arc<Mapped>, tris: u64, total: u64) -> Box<dyn FaceStream> {
+    Box::new(GltfBody { path: path.to_path_buf(), faces, tris, next: 0, total })
 }
 
 fn make_info(doc: &Doc, glb: bool, c: &Counts) -> MeshInfo {

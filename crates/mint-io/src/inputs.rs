@@ -77,7 +77,9 @@ fn expand_one(a: &Path, out: &mut Vec<PathBuf>, depth: usize) -> Result<(), Erro
         for e in rd {
             let e = e.map_err(|e| Error::io(a, "cannot list the directory", e))?;
             let p = e.path();
-            if p.is_file() && Format::from_extension(&p).is_some() {
+            // A tileset (.json) or its tiles (.b3dm) are named, not
+            // gathered: a directory of tiles would read them twice.
+            if p.is_file() && Format::from_extension(&p).is_some_and(|f| f != Format::Tiles) {
                 files.push(p);
             }
         }

@@ -35,6 +35,7 @@ pub mod error;
 pub mod format;
 mod formats;
 pub mod gltf;
+pub mod tiles;
 pub mod inputs;
 mod line_formats;
 mod mapped;

@@ -287,7 +287,8 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
     if let Job::Resample { .. } = plan.spec.job {
         let vol = ctx.faces_and_volume(0)?.1;
         s.input_signed_volume = vol * grid.cell.powi(3);
-        s.orientation_inverted = vol < 0.0;
+        s.orientation_inverted = ctx.inverted(0)?;
+        s.orientation_from = if rules[0] == SignRule::Sheet { "faces" } else { "volume" }.to_string();
         s.sign_rule = rules[0].to_string();
         (s.census_lines, s.census_winding_valid, s.census_odd) = (census[0].lines, census[0].winding_valid, census[0].odd);
     } else {

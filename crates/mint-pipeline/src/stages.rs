@@ -37,12 +37,13 @@ use crate::progress::check_cancel;
 use crate::slabs::{bytes_per_plane, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB};
 use crate::plan::{MeshFile, OperandPlan, Plan, Stage};
 use crate::error::in_file_list;
-use crate::spec::Tuning;
+use crate::spec::{Job, Tuning};
 use crate::progress::Progress;
 use crate::scene::{Operand, Scene};
 use crate::workdir::{read_records, read_result, FileSum, SumWriter, TaskBuild};
 use mint_core::grid::Grid;
 use mint_core::holes::{open_cells, HoleStats, OpenCells};
+use mint_core::in_core::effective_max_hole;
 use mint_core::intercept::filter_plane;
 use mint_core::primitives::Transform;
 use mint_core::reconstruct::reconstruct_slab;
@@ -413,10 +414,18 @@ impl<'a> Ctx<'a> {
         Ok((faces, sum / 6.0))
     }
 
-    /// True when mesh operand `j` is inside-out (negative volume): its signs
-    /// are reversed, so that it reads as the solid it encloses.
-    pub fn inverted(&self, j: usize) -> Result<bool, PipelineError> {
+    /// True when mesh operand `j` encloses a negative volume, as an
+    /// inside-out closed mesh does.
+    fn negative_volume(&self, j: usize) -> Result<bool, PipelineError> {
         Ok(matches!(self.scene.operands[j], Operand::Mesh { .. }) && self.faces_and_volume(j)?.1 < 0.0)
+    }
+
+    /// True when mesh operand `j` is inside-out (negative volume) and read
+    /// as a solid: its signs are reversed, so that it reads as the solid it
+    /// encloses. An open input (the Sheet rule) encloses nothing, so its
+    /// volume's sign says nothing: its faces' orientation is kept.
+    pub fn inverted(&self, j: usize) -> Result<bool, PipelineError> {
+        Ok(self.negative_volume(j)? && self.rules()?.0[j] != SignRule::Sheet)
     }
 
     /// Records per plane, over every mesh operand.
@@ -462,6 +471,7 @@ impl<'a> Ctx<'a> {
         }
         let asked = self.plan.spec.signs;
         let strict = self.plan.strict();
+        let resample = matches!(self.plan.spec.job, Job::Resample { .. });
         let rules = self
             .scene
             .operands
@@ -469,11 +479,16 @@ impl<'a> Ctx<'a> {
             .zip(&census)
             .map(|(op, c)| match op {
                 Operand::Primitive(_) => SignRule::Union,
-                Operand::Mesh { .. } => match asked {
-                    SignRule::Orient if strict => SignRule::Orient,
-                    SignRule::Auto | SignRule::Orient => LineCensus { lines: c.lines, winding_valid: c.winding_valid, odd: c.odd }.resolve(),
-                    r => r,
-                },
+                Operand::Mesh { .. } => {
+                    let census = LineCensus { lines: c.lines, winding_valid: c.winding_valid, odd: c.odd };
+                    match asked {
+                        SignRule::Orient if strict => SignRule::Orient,
+                        // Operands of a boolean are solids whatever their census.
+                        SignRule::Auto | SignRule::Orient if !resample => census.resolve_closed(),
+                        SignRule::Auto | SignRule::Orient => census.resolve(),
+                        r => r,
+                    }
+                }
             })
             .collect();
         Ok(self.rules.get_or_init(|| (rules, census)))
@@ -497,6 +512,7 @@ impl<'a> Ctx<'a> {
                         })?;
                     }
                 }
+                let k = effective_max_hole(self.rules()?.0[0], k);
                 let (set, stats) = open_cells(&mut cells, self.grid()?.local_dims(), k);
                 ((!set.is_empty()).then_some(set), stats)
             }
@@ -518,24 +534,34 @@ impl<'a> Ctx<'a> {
     }
 
     /// Every operand's raw intercepts for planes `k0 ..= k1` (the last one
-    /// without its layer's S records), inside-out meshes reversed.
-    fn operand_planes(&self, k0: u32, k1: u32) -> Result<Vec<Vec<Vec<Intercept>>>, PipelineError> {
+    /// without its layer's S records, except under the Sheet rule), inside-out
+    /// meshes reversed; and, per operand, its raw records of plane `k0 - 1`
+    /// when the Sheet rule needs them (else empty).
+    fn operand_planes(&self, k0: u32, k1: u32) -> Result<(Vec<Vec<Vec<Intercept>>>, Vec<Vec<Intercept>>), PipelineError> {
         let grid = self.grid()?;
+        let rules = &self.rules()?.0;
         let mut operands = Vec::with_capacity(self.scene.operands.len());
+        let mut below = Vec::with_capacity(self.scene.operands.len());
         for (j, op) in self.scene.operands.iter().enumerate() {
+            let sheet = rules[j] == SignRule::Sheet;
             operands.push(match op {
                 Operand::Mesh { .. } => {
-                    let mut planes = self.shards(j)?.read_planes(k0, k1, true)?;
-                    check_records(&planes, k0, grid, &self.dir)?;
+                    let first = if sheet && k0 > 0 { k0 - 1 } else { k0 };
+                    let mut planes = self.shards(j)?.read_planes(first, k1, !sheet)?;
+                    check_records(&planes, first, grid, &self.dir)?;
                     if self.inverted(j)? {
                         planes.iter_mut().flatten().for_each(|r| r.signed_value = -r.signed_value);
                     }
+                    below.push(if first < k0 { planes.remove(0) } else { Vec::new() });
                     planes
                 }
-                Operand::Primitive(p) => (k0..=k1).map(|k| p.plane_intercepts(grid, k, k < k1)).collect(),
+                Operand::Primitive(p) => {
+                    below.push(Vec::new());
+                    (k0..=k1).map(|k| p.plane_intercepts(grid, k, k < k1)).collect()
+                }
             });
         }
-        Ok(operands)
+        Ok((operands, below))
     }
 
     /// Sub-slabs of layers `a .. b` that fit the budget, and (with more
@@ -796,7 +822,9 @@ fn census_task(ctx: &Ctx, task: u32) -> Result<CensusResult, PipelineError> {
             continue;
         }
         let shards = ctx.shards(j)?;
-        let invert = ctx.inverted(j)?;
+        // Before the rules exist: the census's odd count does not depend on
+        // the sign, and its winding count matters only for closed inputs.
+        let invert = ctx.negative_volume(j)?;
         let mut c = LineCensus::default();
         for (k0, k1) in ctx.sub_slabs(a, b)? {
             let mut planes = shards.read_planes(k0, k1 - 1, false)?;
@@ -845,9 +873,9 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<Re
         .max()
         .unwrap_or(0);
     let compute = |k0: u32, k1: u32| -> Result<Done, PipelineError> {
-        let mut operands = ctx.operand_planes(k0, k1)?;
+        let (mut operands, below) = ctx.operand_planes(k0, k1)?;
         if !strict {
-            let (res, rep) = reconstruct_slab_solids(grid, k0, operands, rules, &ctx.scene.expr, open);
+            let (res, rep) = reconstruct_slab_solids(grid, k0, operands, rules, &ctx.scene.expr, open, &below);
             return Ok((res, FilterStats::default(), rep));
         }
         let mut planes = operands.swap_remove(0);

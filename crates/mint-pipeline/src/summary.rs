@@ -18,6 +18,10 @@ pub struct ResampleSummary {
     pub input_signed_volume: f64,
     /// True when the input was inside-out and its signs were reversed.
     pub orientation_inverted: bool,
+    /// What decided the output's orientation: "volume" (a closed input: the
+    /// sign of its volume; reversed when negative) or "faces" (an open
+    /// input, which encloses no volume: its faces' own orientation).
+    pub orientation_from: String,
     pub grid_cells: [u32; 3],
     pub cell_size: f64,
     pub grid_origin: [f64; 3],
@@ -44,7 +48,7 @@ pub struct ResampleSummary {
     pub seconds_total: f64,
     /// Largest planned slab, in estimated heap bytes.
     pub planned_slab_bytes: u64,
-    /// The sign rule used (`auto` resolved to `union` or `parity`).
+    /// The sign rule used (`auto` resolved to `union`, `parity` or `sheet`).
     pub sign_rule: String,
     /// A and B lines with intercepts, winding-valid ones, odd ones (auto's census).
     pub census_lines: u64,

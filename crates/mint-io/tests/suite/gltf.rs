@@ -9,7 +9,7 @@ use serde_json::json;
 
 use super::util::{read_all, write_file};
 
-fn f32s(xs: &[f32]) -> Vec<u8> {
+pub(super) fn f32s(xs: &[f32]) -> Vec<u8> {
     xs.iter().flat_map(|x| x.to_le_bytes()).collect()
 }
 
@@ -30,7 +30,7 @@ fn b64(data: &[u8]) -> String {
 }
 
 /// A GLB of `doc` with `bin` as its BIN chunk.
-fn glb(doc: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+pub(super) fn glb(doc: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
     let mut j = serde_json::to_vec(doc).unwrap();
     while j.len() % 4 != 0 {
         j.push(b' ');

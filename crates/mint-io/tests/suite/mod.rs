@@ -8,6 +8,7 @@
 mod bad_input;
 mod features;
 mod gltf;
+mod tiles;
 mod real_data;
 mod roundtrip;
 mod streaming;
