@@ -259,7 +259,7 @@ fn a_bad_work_directory_gets_one_line_and_no_output() {
     one_line_error(&err, "stage 'discretize' is not complete: task 1 of 3 not done");
     std::fs::rename(&saved, &part).unwrap();
     // Damaged shards (checksum): every census task reads part 1's shards.
-    let shards: Vec<PathBuf> = std::fs::read_dir(part.join("op-0-0")).unwrap().flatten().map(|e| e.path()).filter(|p| std::fs::metadata(p).unwrap().len() > 32).collect();
+    let shards: Vec<PathBuf> = std::fs::read_dir(part.join("op-0")).unwrap().flatten().map(|e| e.path()).filter(|p| std::fs::metadata(p).unwrap().len() > 32).collect();
     assert!(!shards.is_empty());
     let good: Vec<Vec<u8>> = shards.iter().map(|p| std::fs::read(p).unwrap()).collect();
     for (p, g) in shards.iter().zip(&good) {
@@ -401,9 +401,9 @@ fn a_shard_record_outside_the_grid_is_refused_not_a_panic() {
     let task = work.join("discretize/00000");
     let text = std::fs::read_to_string(task.join("result.json")).unwrap();
     let mut v: serde_json::Value = serde_json::from_str(text.split_once('\n').unwrap().1).unwrap();
-    let shards = v["operands"][0][0]["shards"]["shards"].as_array_mut().unwrap();
+    let shards = v["shards"][0]["shards"].as_array_mut().unwrap();
     let shard = shards.iter_mut().find(|s| s["len"].as_u64().unwrap() >= 16).unwrap();
-    let path = task.join(format!("op-0-0/shard-{:05}.bin", shard["index"].as_u64().unwrap()));
+    let path = task.join(format!("op-0/shard-{:05}.bin", shard["index"].as_u64().unwrap()));
     let mut bytes = std::fs::read(&path).unwrap();
     bytes[4..8].copy_from_slice(&1_000_000u32.to_le_bytes()); // family A, line 1,000,000
     std::fs::write(&path, &bytes).unwrap();

@@ -225,3 +225,117 @@ fn a_y_up_bust_renders_right_side_up_in_the_front_view() {
     let zrows = row_widths(&z);
     assert!((zrows.len() as f64) < 0.8 * *zrows.iter().max().unwrap() as f64, "--up z draws the bust from above");
 }
+
+/// A 3D Tiles tileset of GLB tiles is one surface: z-up tiles without
+/// transforms give the whole file's bytes; y-up tiles under a root
+/// transform at an ECEF-sized offset give the same surface, moved, and
+/// the summary counts the tiles.
+#[test]
+fn a_tileset_resamples_as_one_surface_and_says_how_many_tiles() {
+    let d = tempfile::tempdir().unwrap();
+    let whole = d.path().join("whole.ply");
+    ok(&["gen", "torus", s(&whole), "--faces", "20000"]);
+    let m = load(&whole);
+    let names: Vec<String> = (0..5).map(|k| format!("t{k}.glb")).collect();
+    let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+    let glbs = tiles(d.path(), &m, &refs);
+    let children: Vec<serde_json::Value> =
+        glbs.iter().map(|p| serde_json::json!({"geometricError": 0, "boundingVolume": {"sphere": [0, 0, 0, 2]}, "content": {"uri": p.file_name().unwrap().to_str().unwrap()}})).collect();
+    let set = |up: &str, transform: Option<[f64; 16]>| {
+        let mut root = serde_json::json!({"geometricError": 1, "refine": "REPLACE", "boundingVolume": {"sphere": [0, 0, 0, 2]}, "children": children});
+        if let Some(t) = transform {
+            root["transform"] = serde_json::json!(t);
+        }
+        serde_json::json!({"asset": {"version": "1.0", "gltfUpAxis": up}, "geometricError": 2, "root": root}).to_string()
+    };
+    let flat = d.path().join("tileset.json");
+    std::fs::write(&flat, set("Z", None)).unwrap();
+    let (a, b) = (d.path().join("a.ply"), d.path().join("b.ply"));
+    ok(&["resample", s(&whole), s(&a), "--cells", "40000", "--quiet"]);
+    let o = mint(&["resample", s(&flat), s(&b), "--cells", "40000"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("1 file holding 5 tiles"), "{err}");
+    assert!(std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap(), "a tileset of the tiles gives other bytes than the whole file");
+    // y-up tiles (the default) under a root translation: the torus turned
+    // z-up and moved, the same volume and genus.
+    let off = [4_000_000.0, 3_000_000.0, 3_500_000.0];
+    let moved = d.path().join("moved.json");
+    std::fs::write(&moved, set("Y", Some([1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, off[0], off[1], off[2], 1.0]))).unwrap();
+    let j: serde_json::Value = serde_json::from_str(&ok(&["resample", s(&moved), s(&b), "--cells", "40000", "--json"])).unwrap();
+    assert_eq!(j["input_tiles"], 5);
+    let (r0, r1) = (mint_mesh::check(&load(&a).positions, &load(&a).faces), mint_mesh::check(&load(&b).positions, &load(&b).faces));
+    assert!(r1.watertight && r1.genus_total == 1, "{r1:?}");
+    assert!((r1.signed_volume - r0.signed_volume).abs() < 0.02 * r0.signed_volume, "{} against {}", r1.signed_volume, r0.signed_volume);
+    // The torus's axis (z in the file) is y in glTF terms, so turned z-up it lies along -y.
+    let (lo, hi) = (r1.bbox_min.unwrap(), r1.bbox_max.unwrap());
+    let (l0, h0) = (r0.bbox_min.unwrap(), r0.bbox_max.unwrap());
+    for (k, (lk, hk)) in [(l0[0], h0[0]), (-h0[2], -l0[2]), (l0[1], h0[1])].into_iter().enumerate() {
+        assert!((lo[k] - off[k] - lk).abs() < 0.05 && (hi[k] - off[k] - hk).abs() < 0.05, "axis {k}: [{}, {}] against [{lk}, {hk}]", lo[k] - off[k], hi[k] - off[k]);
+    }
+}
+
+/// One part reads two tiles into one shard store; when the second, a binary
+/// PLY, turns out to hold a quad (and a two-corner face, which keeps the
+/// file's length that of triangles) after many triangles, what was written of
+/// it is taken back out of the store and the file streamed instead: the
+/// same bytes as with that tile as ASCII (always streamed).
+#[test]
+fn a_tile_whose_faces_turn_out_not_to_be_triangles_is_taken_back_and_streamed() {
+    let d = tempfile::tempdir().unwrap();
+    let whole = d.path().join("whole.ply");
+    // More than one chunk of faces (64Ki) before the quad.
+    ok(&["gen", "torus", s(&whole), "--faces", "300000"]);
+    let m = load(&whole);
+    let half = m.faces.len() / 2;
+    let write = |path: &Path, binary: bool, faces: &[[u32; 3]], quad: bool| {
+        let n = faces.len() + 2 * quad as usize;
+        let mut out = format!(
+            "ply\nformat {} 1.0\nelement vertex {}\nproperty double x\nproperty double y\nproperty double z\nelement face {n}\nproperty list uchar int vertex_indices\nend_header\n",
+            if binary { "binary_little_endian" } else { "ascii" },
+            m.positions.len()
+        )
+        .into_bytes();
+        for p in &m.positions {
+            if binary {
+                p.iter().for_each(|c| out.extend(c.to_le_bytes()));
+            } else {
+                out.extend(format!("{:?} {:?} {:?}\n", p[0], p[1], p[2]).bytes());
+            }
+        }
+        let mut polys: Vec<Vec<u32>> = faces.iter().map(|f| f.to_vec()).collect();
+        if quad {
+            // A quad over two triangles' corners near the end of the file,
+            // and a two-corner face after it: the file has the length of
+            // one of triangles only, so its faces are read as fixed-size
+            // records until the quad.
+            let (a, b) = (faces[0], faces[1]);
+            polys.insert(polys.len() - 3, vec![a[0], a[1], a[2], b[2]]);
+            polys.insert(polys.len() - 1, vec![b[0], b[1]]);
+        }
+        for f in polys {
+            if binary {
+                out.push(f.len() as u8);
+                f.iter().for_each(|v| out.extend((*v as i32).to_le_bytes()));
+            } else {
+                out.extend(format!("{} {}\n", f.len(), f.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" ")).bytes());
+            }
+        }
+        std::fs::write(path, out).unwrap();
+    };
+    let (a, b) = (d.path().join("a"), d.path().join("b"));
+    std::fs::create_dir(&a).unwrap();
+    std::fs::create_dir(&b).unwrap();
+    for dir in [&a, &b] {
+        write(&dir.join("t0.ply"), true, &m.faces[..half], false);
+    }
+    write(&a.join("t1.ply"), false, &m.faces[half..], true);
+    write(&b.join("t1.ply"), true, &m.faces[half..], true);
+    let (oa, ob) = (d.path().join("a.ply"), d.path().join("b.ply"));
+    let ja: serde_json::Value = serde_json::from_str(&ok(&["resample", s(&a), s(&oa), "--cells", "40000", "--parts", "1", "--json"])).unwrap();
+    let jb: serde_json::Value = serde_json::from_str(&ok(&["resample", s(&b), s(&ob), "--cells", "40000", "--parts", "1", "--json"])).unwrap();
+    assert!(std::fs::read(&oa).unwrap() == std::fs::read(&ob).unwrap(), "the quad's binary tile gives other bytes than its ASCII copy");
+    // Records left behind would merge with their copies into the same
+    // vertices; the counts tell.
+    assert_eq!((&jb["intercepts_found"], &jb["shard_bytes"], &jb["input_faces"]), (&ja["intercepts_found"], &ja["shard_bytes"], &ja["input_faces"]));
+}

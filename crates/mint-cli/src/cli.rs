@@ -18,7 +18,8 @@ Its main job is out-of-core Marching Intersections resampling: the input's faces
 only their signed intersections with the lines of a regular grid are kept (on disk, in shards), \
 detail smaller than a cell is dropped, and a watertight 2-manifold mesh is rebuilt slab by slab.\n\n\
 Formats: PLY (ascii, binary little/big endian, triangle strips, range grids), OBJ, STL (ascii/binary), OFF, \
-mesh (Medit), raw triangles, VRML 2.0 and 3DS, chosen by file extension (or sniffed).\n\n\
+mesh (Medit), raw triangles, VRML 2.0, 3DS, glTF 2.0 (.gltf, .glb) and, to read, 3D Tiles (tileset.json, .b3dm), \
+chosen by file extension (or sniffed). Several files, a directory or an @list are one surface.\n\n\
 Start with:  mint demo            (generate a mesh, resample it, check the result)\n\
 Then:        mint resample IN.ply OUT.ply --cells 1000000"
 )]

@@ -26,7 +26,11 @@ pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, j
         eprintln!("resampled {} -> {}", s.input, s.output);
         eprintln!(
             "  input        {}{} vertices, {} faces{}",
-            if s.input_files > 1 { format!("{} files, ", s.input_files) } else { String::new() },
+            match (s.input_files, s.input_tiles) {
+                (f, t) if t > 0 => format!("{f} file{} holding {t} tiles, ", if f == 1 { "" } else { "s" }),
+                (f, _) if f > 1 => format!("{f} files, "),
+                _ => String::new(),
+            },
             s.input_vertices,
             s.input_faces,
             if s.orientation_inverted {

@@ -68,7 +68,9 @@
 //!   `(2 - χ_c) / 2` for each, in component order; `genus_total` is the sum.
 //! - `signed_volume`: `Σ det(p0, p1, p2) / 6` over proper faces, relative to
 //!   the origin (for a closed, outward-oriented surface this is the enclosed
-//!   volume, positive). `surface_area`: `Σ |(p1-p0)×(p2-p0)| / 2`. Both are
+//!   volume, positive; each term is computed as `p0 · ((p1-p0)×(p2-p0))`,
+//!   which keeps a mesh millions of units from the origin accurate).
+//!   `surface_area`: `Σ |(p1-p0)×(p2-p0)| / 2`. Both are
 //!   summed in fixed chunks of faces combined in order, so they are
 //!   bit-identical under any thread count.
 //! - `watertight`: no boundary, non-manifold or inconsistently oriented
@@ -354,8 +356,10 @@ impl FaceGeom {
         let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
         let n = [u[1] * v[2] - v[1] * u[2], u[2] * v[0] - v[2] * u[0], u[0] * v[1] - v[0] * u[1]];
         self.area2 += ((n[0] * n[0]) + (n[1] * n[1]) + (n[2] * n[2])).sqrt();
-        let m = [b[1] * c[2] - c[1] * b[2], b[2] * c[0] - c[2] * b[0], b[0] * c[1] - c[0] * b[1]];
-        self.volume6 += (a[0] * m[0]) + (a[1] * m[1]) + (a[2] * m[2]);
+        // det(a, b, c) = a · ((b - a) × (c - a)): the same value, but from
+        // the edges, so that a mesh far from the origin (UTM, ECEF) does not
+        // lose its volume to cancellation between products of coordinates.
+        self.volume6 += (a[0] * n[0]) + (a[1] * n[1]) + (a[2] * n[2]);
         if !surely_not_collinear(u, v) && collinear_cold(a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]) {
             self.degenerate += 1;
         }

@@ -261,14 +261,17 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
         if let OperandPlan::Mesh { files } = op {
             s.input_files += files.len() as u64;
             s.input_vertices += files.iter().map(|f| f.vertices).sum::<u64>();
+            s.input_tiles += files.iter().map(|f| f.tiles).sum::<u64>();
             s.input_faces += ctx.faces_and_volume(j)?.0;
             mesh_ops.push(j);
         }
     }
     let mut derefs: Vec<String> = Vec::new();
+    for m in parts.iter().flat_map(|p| p.shards.iter().flatten()) {
+        s.intercepts_found += m.records();
+        s.shard_bytes += m.bytes();
+    }
     for m in parts.iter().flat_map(|p| p.operands.iter().flatten()) {
-        s.intercepts_found += m.shards.records();
-        s.shard_bytes += m.shards.bytes();
         if let Some(d) = &m.deref {
             let line = format!("{}: {}", if d.sort { "sort" } else { "mmap" }, d.reason);
             if !derefs.contains(&line) {

@@ -35,7 +35,7 @@ pub use crate::spec::absolute;
 /// The plan format's version; a plan of another version is refused.
 /// 2: plain JSON with the checksum inside, the run spec embedded as it is.
 /// 3: a surface may be several files (`inputs`, `files`).
-pub const PLAN_VERSION: u32 = 3;
+pub const PLAN_VERSION: u32 = 4;
 const PLAN_FORMAT: &str = "mint stage plan";
 /// The most parts or slabs a run may be split into.
 pub const MAX_TASKS: u32 = 1 << 16;
@@ -85,6 +85,9 @@ pub struct MeshFile {
     pub bytes: u64,
     pub vertices: u64,
     pub split_faces: Option<u64>,
+    /// Tiles read from a 3D Tiles tileset (0 for other files).
+    #[serde(default)]
+    pub tiles: u64,
 }
 
 /// What the plan knows of one operand of the scene.
@@ -206,7 +209,8 @@ impl Plan {
                             files.push(path.clone());
                         }
                         let bytes = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
-                        mesh_files.push(MeshFile { path, bytes, vertices: r.vertex_count() as u64, split_faces: r.splittable_records() });
+                        let tiles = r.info().elements.iter().find(|e| r.info().format == mint_io::Format::Tiles && e.name == "tiles").map_or(0, |e| e.count);
+                        mesh_files.push(MeshFile { path, bytes, vertices: r.vertex_count() as u64, split_faces: r.splittable_records(), tiles });
                     }
                     OperandPlan::Mesh { files: mesh_files }
                 }
@@ -388,7 +392,7 @@ mod tests {
     fn plan() -> Plan {
         let spec = RunSpec::resample("/data/in.ply", "/data/out.ply", GridSize::Cells(1000));
         let (parts, slabs) = (3, 2);
-        let operands = vec![OperandPlan::Mesh { files: vec![MeshFile { path: "/data/in.ply".into(), bytes: 100, vertices: 4, split_faces: Some(4) }] }];
+        let operands = vec![OperandPlan::Mesh { files: vec![MeshFile { path: "/data/in.ply".into(), bytes: 100, vertices: 4, split_faces: Some(4), tiles: 0 }] }];
         Plan {
             format: PLAN_FORMAT.into(),
             version: PLAN_VERSION,

@@ -64,7 +64,8 @@ pub struct BoundsResult {
 }
 
 /// A discretize task's result for one piece (a file, or a range of its
-/// faces) of a mesh operand; its shards are in `op-J-K` (operand J, file K).
+/// faces) of a mesh operand. Its intercepts are in the task's shard store
+/// of that operand, `op-J`, shared by every piece the task read.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct MeshPart {
     /// The file of the operand (its index in the plan's `files`).
@@ -72,7 +73,6 @@ pub struct MeshPart {
     pub faces: u64,
     /// Six times the signed volume of each chunk of faces, in grid units.
     pub chunk_volumes6: Vec<f64>,
-    pub shards: ShardManifest,
     /// How the faces were dereferenced, and what the sort did.
     #[serde(default)]
     pub deref: Option<DerefChoice>,
@@ -87,6 +87,9 @@ pub struct MeshPart {
 pub struct DiscretizeResult {
     /// Per operand, the pieces this task read, in file order.
     pub operands: Vec<Vec<MeshPart>>,
+    /// Per operand, the shard store (`op-J`) of all its pieces: one store
+    /// per task, however many files the task read (`None`: no piece).
+    pub shards: Vec<Option<ShardManifest>>,
 }
 
 /// A line census (see `mint_core::signs::LineCensus`).
@@ -361,10 +364,14 @@ impl<'a> Ctx<'a> {
                 if got.iter().any(|f| !expected.contains(f)) || got.windows(2).any(|w| w[0] >= w[1]) {
                     return Err(PipelineError::stage(&path, format!("damaged task result: operand {j} lists files {got:?}, the plan gives this task {expected:?}; remove its task directory and run the task again")));
                 }
-                for m in ms {
-                    if let Err(what) = m.shards.validate(planes) {
-                        return Err(PipelineError::stage(&path, format!("damaged task result: {what}; remove its task directory and run the task again")));
+                match r.shards.get(j) {
+                    Some(Some(m)) if !ms.is_empty() => {
+                        if let Err(what) = m.validate(planes) {
+                            return Err(PipelineError::stage(&path, format!("damaged task result: {what}; remove its task directory and run the task again")));
+                        }
                     }
+                    Some(None) if ms.is_empty() => {}
+                    _ => return Err(PipelineError::stage(&path, format!("damaged task result: operand {j}'s shard store does not match its pieces; remove its task directory and run the task again"))),
                 }
             }
         }
@@ -382,8 +389,8 @@ impl<'a> Ctx<'a> {
     pub fn shards(&self, j: usize) -> Result<ShardSet, PipelineError> {
         let mut set = ShardSet::new();
         for (t, r) in self.parts()?.iter().enumerate() {
-            for m in &r.operands[j] {
-                set.push(crate::workdir::task_dir(&self.dir, Stage::Discretize, t as u32).join(format!("op-{j}-{}", m.file)), m.shards.clone());
+            if let Some(Some(m)) = r.shards.get(j) {
+                set.push(crate::workdir::task_dir(&self.dir, Stage::Discretize, t as u32).join(format!("op-{j}")), m.clone());
             }
         }
         Ok(set)
@@ -433,8 +440,8 @@ impl<'a> Ctx<'a> {
         let [_, _, ns] = self.grid()?.local_dims();
         let mut c = vec![0u64; ns as usize + 1];
         for r in self.parts()? {
-            for m in r.operands.iter().flatten() {
-                for (a, b) in c.iter_mut().zip(&m.shards.counts) {
+            for m in r.shards.iter().flatten() {
+                for (a, b) in c.iter_mut().zip(&m.counts) {
                     *a += b;
                 }
             }
@@ -721,28 +728,39 @@ fn bounds_task(ctx: &Ctx, task: u32) -> Result<BoundsResult, PipelineError> {
 
 fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult, PipelineError> {
     let mut operands = Vec::new();
+    let mut shards = Vec::new();
     for (j, op) in ctx.scene.operands.iter().enumerate() {
         let (Operand::Mesh { .. }, OperandPlan::Mesh { files }) = (op, &ctx.plan.operands[j]) else {
             operands.push(Vec::new());
+            shards.push(None);
             continue;
         };
+        let mine = pieces(files, ctx.plan.parts, task, true);
+        if mine.is_empty() {
+            operands.push(Vec::new());
+            shards.push(None);
+            continue;
+        }
+        // One store for every piece: many small files (tiles) cost one set
+        // of shard files per task, not one per file.
+        let [_, _, ns] = ctx.grid()?.local_dims();
+        let mut writer = ShardWriter::create(&make_dir(&out.join(format!("op-{j}")))?, ns + 1);
         let mut parts = Vec::new();
-        for (k, range) in pieces(files, ctx.plan.parts, task, true) {
-            let dir = out.join(format!("op-{j}-{k}"));
-            let part = discretize_piece(ctx, j, &files[k], k as u32, range, &dir).map_err(|e| in_file_list(e, k, files.len()))?;
+        for (k, range) in mine {
+            let part = discretize_piece(ctx, j, &files[k], k as u32, range, &mut writer).map_err(|e| in_file_list(e, k, files.len()))?;
             parts.push(part);
             check_cancel(ctx.progress)?;
         }
         operands.push(parts);
+        shards.push(Some(writer.finish()?));
     }
-    Ok(DiscretizeResult { operands })
+    Ok(DiscretizeResult { operands, shards })
 }
 
 /// Discretizes faces `range` of `file` (file `k` of mesh operand `j`) into
-/// shards in `dir`.
-fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u64), dir: &Path) -> Result<MeshPart, PipelineError> {
+/// the task's shard store of that operand.
+fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u64), writer: &mut ShardWriter) -> Result<MeshPart, PipelineError> {
     let grid = ctx.grid()?;
-    let [_, _, ns] = grid.local_dims();
     let (path, split_faces) = (&file.path, file.split_faces);
     // The whole file, read by this one task.
     let whole = range.0 == 0 && split_faces.is_none_or(|n| range.1 >= n);
@@ -767,45 +785,42 @@ fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u
     let mut sort_stats = None;
     let mut warnings = Vec::new();
     if let Some(records) = &direct {
-        let mut writer = ShardWriter::create(&make_dir(dir)?, ns + 1);
+        let checkpoint = writer.checkpoint();
         let run = if choice.sort {
             let faces = Faces::Records { records, first: range.0, end: range.1 };
-            discretize_sorted(faces, &positions, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, &ctx.budget).map(|(n, v, st)| {
+            discretize_sorted(faces, &positions, grid, writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, &ctx.budget).map(|(n, v, st)| {
                 sort_stats = Some(st);
                 (n, v)
             })
         } else {
-            discretize_direct(records, range, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j))
+            discretize_direct(records, range, grid, writer, ctx.threads, ctx.progress, ctx.transform(j))
         };
         match run {
-            Ok(r) => result = Some((r, writer)),
-            Err(PipelineError::Io(e)) if whole && e.kind() == mint_io::ErrorKind::Unsupported => {
-                drop(writer);
-                std::fs::remove_dir_all(dir).map_err(|source| PipelineError::Temp { path: dir.to_path_buf(), op: "removing a shard directory", source })?;
-            }
+            Ok(r) => result = Some(r),
+            // Faces that turn out not to be triangles: what was written of
+            // this file is taken back, and the file streamed instead.
+            Err(PipelineError::Io(e)) if whole && e.kind() == mint_io::ErrorKind::Unsupported => writer.rollback(checkpoint)?,
             Err(e) => return Err(e),
         }
     }
-    let ((faces, chunk_volumes6), writer) = match result {
+    let (faces, chunk_volumes6) = match result {
         Some(r) => r,
         None => {
             let mut reader = if !whole && split_faces.is_some() { MeshReader::open_range(path, ctx.read_options(), range.0, range.1)? } else { reader };
             let expected = if range.1 == u64::MAX { reader.info().face_count.unwrap_or(0) } else { range.1 - range.0 };
-            let mut writer = ShardWriter::create(&make_dir(dir)?, ns + 1);
             let r = if choice.sort {
                 let positions = reader.positions();
-                let (n, v, st) = discretize_sorted(Faces::Reader(&mut reader), &positions, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, &ctx.budget)?;
+                let (n, v, st) = discretize_sorted(Faces::Reader(&mut reader), &positions, grid, writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, &ctx.budget)?;
                 sort_stats = Some(st);
                 (n, v)
             } else {
-                discretize_all(&mut reader, grid, &mut writer, ctx.threads, ctx.progress, ctx.transform(j), expected)?
+                discretize_all(&mut reader, grid, writer, ctx.threads, ctx.progress, ctx.transform(j), expected)?
             };
             warnings = reader.warnings();
-            (r, writer)
+            r
         }
     };
-    let shards = writer.finish()?;
-    Ok(MeshPart { file: k, faces, chunk_volumes6, shards, deref: Some(choice), sort: sort_stats, warnings })
+    Ok(MeshPart { file: k, faces, chunk_volumes6, deref: Some(choice), sort: sort_stats, warnings })
 }
 
 fn make_dir(dir: &Path) -> Result<PathBuf, PipelineError> {

@@ -12,6 +12,8 @@ pub struct ResampleSummary {
     pub output: String,
     /// Files read, over every mesh operand (tiles count one each).
     pub input_files: u64,
+    /// Tiles read from 3D Tiles tilesets (their finest level), 0 without.
+    pub input_tiles: u64,
     pub input_vertices: u64,
     pub input_faces: u64,
     /// Signed volume enclosed by the input (negative: inside-out).

@@ -134,6 +134,12 @@ struct OpenShard {
     len: u64,
 }
 
+/// What a [`ShardWriter`] held at one point ([`ShardWriter::checkpoint`]).
+pub struct Checkpoint {
+    shards: Vec<Option<(u64, crc32fast::Hasher)>>,
+    counts: Vec<u64>,
+}
+
 /// Appends records to the shards of one store in an existing directory.
 pub struct ShardWriter {
     dir: PathBuf,
@@ -178,6 +184,40 @@ impl ShardWriter {
             s.len += RECORD as u64;
             self.counts[r.plane as usize] += 1;
         }
+        Ok(())
+    }
+
+    /// A point to come back to with [`ShardWriter::rollback`]: what every
+    /// shard and plane holds now.
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            shards: self.open.iter().map(|s| s.as_ref().map(|s| (s.len, s.crc.clone()))).collect(),
+            counts: self.counts.clone(),
+        }
+    }
+
+    /// Forgets every record appended since `cp` (a reader that found out
+    /// late that it must start again another way): shards are cut back to
+    /// their length then, and those opened since are removed.
+    pub fn rollback(&mut self, cp: Checkpoint) -> Result<(), StoreError> {
+        for (index, (s, was)) in self.open.iter_mut().zip(cp.shards).enumerate() {
+            let path = self.dir.join(shard_name(index as u32));
+            match (s.take(), was) {
+                (None, _) => {}
+                (Some(open), None) => {
+                    drop(open.file.into_inner().map_err(|e| io_err(&path, "writing a shard")(e.into_error()))?);
+                    std::fs::remove_file(&path).map_err(io_err(&path, "removing a shard"))?;
+                }
+                (Some(open), Some((len, crc))) => {
+                    let f = open.file.into_inner().map_err(|e| io_err(&path, "writing a shard")(e.into_error()))?;
+                    f.set_len(len).map_err(io_err(&path, "cutting a shard back"))?;
+                    let mut f = f;
+                    std::io::Seek::seek(&mut f, std::io::SeekFrom::Start(len)).map_err(io_err(&path, "cutting a shard back"))?;
+                    *s = Some(OpenShard { file: BufWriter::with_capacity(WRITE_BUFFER, f), crc, len });
+                }
+            }
+        }
+        self.counts = cp.counts;
         Ok(())
     }
 
@@ -345,6 +385,34 @@ mod tests {
         assert!(planes[3].iter().all(|r| r.plane == 13));
         let all = set.read_planes(0, 999, false).unwrap();
         assert_eq!(all.iter().map(|p| p.len()).sum::<usize>(), 3000);
+    }
+
+    #[test]
+    fn a_rollback_leaves_the_store_as_at_its_checkpoint() {
+        let root = tempfile::tempdir().unwrap();
+        let (a, b) = (root.path().join("a"), root.path().join("b"));
+        std::fs::create_dir(&a).unwrap();
+        std::fs::create_dir(&b).unwrap();
+        let recs = records(1000);
+        let (first, later) = recs.split_at(700);
+        // `a`: the first records, then records that are taken back (some in
+        // shards already open, some in shards opened since), then the rest.
+        let mut w = ShardWriter::create(&a, 1000);
+        w.append(&first[..300]).unwrap();
+        let cp = w.checkpoint();
+        w.append(&first[300..]).unwrap();
+        w.append(later).unwrap();
+        w.rollback(cp).unwrap();
+        w.append(&first[300..]).unwrap();
+        let ma = w.finish().unwrap();
+        let mut w = ShardWriter::create(&b, 1000);
+        w.append(first).unwrap();
+        let mb = w.finish().unwrap();
+        assert_eq!(ma, mb, "the same manifest (lengths, checksums, counts) as without the records taken back");
+        assert_eq!(std::fs::read_dir(&a).unwrap().count(), mb.shards.len(), "shards opened after the checkpoint are removed");
+        let mut set = ShardSet::new();
+        set.push(a, ma);
+        assert_eq!(set.read_planes(0, 999, false).unwrap().iter().map(|p| p.len()).sum::<usize>(), 700);
     }
 
     #[test]

@@ -32,6 +32,7 @@ pub const TARGETS: &[Target] = &[
     ("read_glb", read_glb),
     ("read_gltf", read_gltf),
     ("read_list", read_list),
+    ("read_tileset", read_tileset),
     ("read_pro", read_pro),
     ("read_conf", read_conf),
     ("read_aln", read_aln),
@@ -94,7 +95,12 @@ fn one_line_naming(e: &dyn std::fmt::Display, path: &Path) {
 /// Mesh readers through `mint_io::MeshReader`: open, stream every chunk
 /// (positions resolved), then `read_info`.
 fn mesh_reader(ext: &str, data: &[u8]) {
-    let path = input_file(ext, data);
+    mesh_reader_at(&input_file(ext, data));
+}
+
+/// [`mesh_reader`] on a file already written.
+fn mesh_reader_at(path: &Path) {
+    let path = path.to_path_buf();
     // Small chunks: the chunk boundaries are exercised too.
     let opts = mint_io::ReadOptions { chunk_triangles: 7, spill_dir: Some(scratch()), resolve_positions: true };
     match mint_io::MeshReader::open(&path, opts) {
@@ -230,6 +236,81 @@ pub fn read_glb(data: &[u8]) {
         }
     }
 }
+/// 3D Tiles: a tileset JSON (with eight edits of its values, as for
+/// [`read_glb`]) or, when the input starts with `b3dm`, a lone b3dm tile.
+/// Beside the input lie tiles a seed may name: `t.glb` (a tetrahedron),
+/// `t.b3dm` (the same with an RTC_CENTER), `sub.json` (an external tileset
+/// of `t.glb`) and `cut.glb` (a GLB cut short); the input itself is
+/// `input.json`, so a seed naming it makes a cycle.
+pub fn read_tileset(data: &[u8]) {
+    // Its own directory: the tiles stay there between inputs.
+    let dir = scratch().join("tileset");
+    std::fs::create_dir_all(&dir).expect("a directory for the fuzz tiles");
+    let tetra = tetra_glb();
+    for (name, bytes) in [
+        ("t.glb", tetra.clone()),
+        ("t.b3dm", b3dm_of(&tetra)),
+        ("sub.json", br#"{"asset":{"version":"1.1"},"root":{"geometricError":0,"contents":[{"uri":"t.glb"}]}}"#.to_vec()),
+        ("cut.glb", tetra[..tetra.len() / 2].to_vec()),
+    ] {
+        if !dir.join(name).exists() {
+            std::fs::write(dir.join(name), bytes).expect("write a fuzz tile");
+        }
+    }
+    let read = |ext: &str, bytes: &[u8]| {
+        let p = dir.join(format!("input.{ext}"));
+        std::fs::write(&p, bytes).expect("write the fuzz input");
+        mesh_reader_at(&p);
+    };
+    if data.starts_with(b"b3dm") {
+        read("b3dm", data);
+        return;
+    }
+    read("json", data);
+    for edited in gltf_edits(data) {
+        read("json", &edited);
+    }
+}
+
+/// A GLB of one tetrahedron (f32 positions, u16 indices).
+fn tetra_glb() -> Vec<u8> {
+    let mut bin = Vec::new();
+    for p in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
+        for c in p {
+            bin.extend(c.to_le_bytes());
+        }
+    }
+    for i in [0u16, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3] {
+        bin.extend(i.to_le_bytes());
+    }
+    let mut json = br#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],"buffers":[{"byteLength":72}],"bufferViews":[{"buffer":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":24}],"accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3"},{"bufferView":1,"componentType":5123,"count":12,"type":"SCALAR"}]}"#.to_vec();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend(((28 + json.len() + bin.len()) as u32).to_le_bytes());
+    out.extend((json.len() as u32).to_le_bytes());
+    out.extend(0x4E4F_534Au32.to_le_bytes());
+    out.extend(json);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(0x004E_4942u32.to_le_bytes());
+    out.extend(bin);
+    out
+}
+
+/// A b3dm holding `glb`, with an RTC_CENTER.
+pub fn b3dm_of(glb: &[u8]) -> Vec<u8> {
+    let table = br#"{"BATCH_LENGTH":0,"RTC_CENTER":[100.5,-200.25,6378137.0]}  "#;
+    let mut out = b"b3dm".to_vec();
+    for v in [1u32, (28 + table.len() + glb.len()) as u32, table.len() as u32, 0, 0, 0] {
+        out.extend(v.to_le_bytes());
+    }
+    out.extend(table);
+    out.extend(glb);
+    out
+}
+
 /// glTF JSON (buffers as data URIs, or files that are missing), and eight
 /// edits of its values as for [`read_glb`].
 pub fn read_gltf(data: &[u8]) {
@@ -857,7 +938,7 @@ pub fn resample(data: &[u8]) {
     // Nothing of the run is left in the scratch directory but our files.
     for e in std::fs::read_dir(scratch()).unwrap() {
         let name = e.unwrap().file_name().into_string().unwrap();
-        assert!(name.starts_with("input.") || name.starts_with("again.") || name.starts_with("stage-") || name == "out.ply", "the run left {name} behind");
+        assert!(name.starts_with("input.") || name.starts_with("again.") || name.starts_with("stage-") || name == "out.ply" || name == "tileset", "the run left {name} behind");
     }
 }
 
