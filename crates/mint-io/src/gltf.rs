@@ -35,7 +35,7 @@ use crate::error::Error;
 use crate::format::{is_glb, Format};
 use crate::coords::origin_for;
 use crate::mapped::{Mapped, SpillFile};
-use crate::positions::{not_finite, Emit, Positions, Reject};
+use crate::positions::{not_finite, Emit, Layout, Positions, Reject, Scalar};
 
 const GLB_MAGIC: &[u8; 4] = b"glTF";
 const CHUNK_JSON: u32 = 0x4E4F_534A;
@@ -677,8 +677,114 @@ pub(crate) fn info(path: &Path, data: &[u8]) -> Result<MeshInfo, Error> {
     Ok(make_info(&doc, is_glb(data), &c))
 }
 
+/// The byte offset of `b` within `map`, when `b` lies in it.
+fn offset_in(map: &Mapped, b: &[u8]) -> Option<usize> {
+    let (m, p) = (map.bytes().as_ptr() as usize, b.as_ptr() as usize);
+    (p >= m && p + b.len() <= m + map.bytes().len()).then(|| p - m)
+}
+
+/// Opens the common case in place, as the PLY reader does: one drawn
+/// instance, with no transform, of one TRIANGLES primitive whose FLOAT
+/// positions and indices (if any) lie in the GLB's own BIN chunk, without
+/// sparse substitution. Positions are then read from the mapping and
+/// indices streamed from it; nothing is spilled. `None`: anything else.
+fn open_in_place(doc: &Doc, map: &Arc<Mapped>) -> Result<Option<Opened>, Error> {
+    let path = doc.path;
+    let inst = doc.instances()?;
+    let [(m, world)] = inst.as_slice() else { return Ok(None) };
+    if *world != IDENTITY {
+        return Ok(None);
+    }
+    let prims = arr(&arr(&doc.json, "meshes")[*m], "primitives");
+    let [prim] = prims else { return Ok(None) };
+    let at = format!("meshes[{m}].primitives[0]");
+    if uint(path, &at, prim, "mode", 4)? != 4 {
+        return Ok(None);
+    }
+    let attrs = prim.get("attributes").unwrap_or(&Value::Null);
+    let Some(pos_i) = index(path, &at, attrs, "POSITION", usize::MAX)? else { return Ok(None) };
+    let pos = Accessor::new(doc, pos_i, "VEC3")?;
+    let Some((pos_bytes, pos_stride)) = pos.data else { return Ok(None) };
+    let Some(pos_off) = offset_in(map, pos_bytes) else { return Ok(None) };
+    if pos.comp != 5126 || !pos.sparse.is_empty() {
+        return Ok(None);
+    }
+    let indices = match index(path, &at, prim, "indices", usize::MAX)? {
+        None => None,
+        Some(i) => {
+            let a = Accessor::new(doc, i, "SCALAR")?;
+            let Some((bytes, stride)) = a.data else { return Ok(None) };
+            let Some(off) = offset_in(map, bytes) else { return Ok(None) };
+            if !matches!(a.comp, 5121 | 5123 | 5125) || !a.sparse.is_empty() {
+                return Ok(None);
+            }
+            Some((off, stride, a.comp, a.count, a.at))
+        }
+    };
+    let n = indices.as_ref().map_or(pos.count, |i| i.3);
+    let c = Counts { vertices: pos.count as u64, triangles: (n / 3) as u64, primitives: 1, skipped: 0 };
+    let positions = Positions::new(
+        map.clone(),
+        pos.count as u32,
+        Layout { base: pos_off, stride: pos_stride, group: 1, inner: 0, off: [0, 4, 8], ty: [Scalar::F32; 3], be: false },
+    );
+    let body = InPlaceBody {
+        path: path.to_path_buf(),
+        map: map.clone(),
+        indices: indices.map(|(off, stride, comp, _, at)| (off, stride, comp, at)),
+        vertices: pos.count as u64,
+        tris: c.triangles,
+        next: 0,
+    };
+    Ok(Some(Opened { info: make_info(doc, is_glb(map.bytes()), &c), positions, body: Box::new(body), range_grid: None, spilled_vertices: 0 }))
+}
+
+/// Triangles streamed from an index accessor in the mapped GLB (or, without
+/// one, vertex `3t, 3t+1, 3t+2`).
+struct InPlaceBody {
+    path: PathBuf,
+    map: Arc<Mapped>,
+    /// Byte offset, stride, component type and JSON path of the indices.
+    indices: Option<(usize, usize, u32, String)>,
+    vertices: u64,
+    tris: u64,
+    next: u64,
+}
+
+impl FaceStream for InPlaceBody {
+    fn fill(&mut self, out: &mut Emit, _stats: &mut ReadStats) -> Result<bool, Error> {
+        let b = self.map.bytes();
+        while self.next < self.tris && out.room() {
+            let t = self.next as usize;
+            let mut tri = [3 * t as u64, 3 * t as u64 + 1, 3 * t as u64 + 2];
+            if let Some((off, stride, comp, at)) = &self.indices {
+                for (k, v) in tri.iter_mut().enumerate() {
+                    let e = 3 * t + k;
+                    *v = read_uint(&b[off + e * stride..], *comp);
+                    if *v >= self.vertices {
+                        return Err(bad(&self.path, at, format!("index {v} (element {e}) is out of range ({} positions)", self.vertices)));
+                    }
+                }
+            }
+            let tri = tri.map(|v| v as u32);
+            if let Err(Reject::NotFinite(x)) = out.tri_checked(tri) {
+                return Err(not_finite(&self.path, x, out.pos).at_element("triangle").at_record(self.next));
+            }
+            self.next += 1;
+        }
+        Ok(self.next < self.tris)
+    }
+
+    fn bytes_done(&self) -> u64 {
+        crate::backend::share_done(self.map.bytes().len() as u64, self.next, self.tris)
+    }
+}
+
 pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Opened, Error> {
     let doc = Doc::parse(path, &map, spill_dir)?;
+    if let Some(opened) = open_in_place(&doc, &map)? {
+        return Ok(opened);
+    }
     let (mut vs, mut fs) = (SpillFile::new(spill_dir, path)?, SpillFile::new(spill_dir, path)?);
     let c = walk(&doc, Some((&mut vs, &mut fs)))?;
     let info = make_info(&doc, is_glb(map.bytes()), &c);

@@ -152,6 +152,42 @@ fn gltf_nodes_strides_index_types_strips_fans_and_sparse() {
     assert_eq!(read_all(&p4, ReadOptions::default()).unwrap().0, m);
 }
 
+/// One untransformed instance of one TRIANGLES primitive in the GLB's own
+/// buffer is read in place (no spill): the same positions and triangles as
+/// the spilled reading of the same mesh under an identity matrix written
+/// out (which takes the general path), strides and u16/u8/no indices alike,
+/// and a bad index is still one line naming the accessor.
+#[test]
+fn a_plain_glb_is_read_in_place_with_the_same_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let bin = tetra_bin();
+    for (name, prim) in [
+        ("u16", json!({"attributes": {"POSITION": 0}, "indices": 1})),
+        ("u8", json!({"attributes": {"POSITION": 0}, "indices": 2})),
+        ("none", json!({"attributes": {"POSITION": 0}})),
+    ] {
+        let mut plain = tetra_doc(json!([{"mesh": 0}]), json!([{"nodes": [0]}]));
+        plain["meshes"][0]["primitives"] = json!([prim]);
+        // The same as .gltf with its buffer in a data URI: not in the
+        // mapping, so read the general way (spilled).
+        let mut general = plain.clone();
+        general["buffers"][0]["uri"] = format!("data:application/octet-stream;base64,{}", b64(&bin)).into();
+        let (a, sa) = read_all(&write_file(dir.path(), &format!("{name}-plain.glb"), &glb(&plain, &bin)), ReadOptions::default()).unwrap();
+        let (b, sb) = read_all(&write_file(dir.path(), &format!("{name}-general.gltf"), general.to_string().as_bytes()), ReadOptions::default()).unwrap();
+        assert_eq!(a, b, "{name}");
+        assert_eq!(sa.triangles, sb.triangles, "{name}");
+        assert_eq!((sa.spilled_vertices, sb.spilled_vertices), (0, b.positions.len() as u64), "{name}: in place, and spilled");
+        assert!(!a.faces.is_empty(), "{name}");
+    }
+    // An index past the positions, in place: one line naming the accessor.
+    let mut bad = bin.clone();
+    bad[64 + 2 * 5..64 + 2 * 5 + 2].copy_from_slice(&9u16.to_le_bytes());
+    let doc = tetra_doc(json!([{"mesh": 0}]), json!([{"nodes": [0]}]));
+    let p = write_file(dir.path(), "badindex.glb", &glb(&doc, &bad));
+    let e = read_all(&p, ReadOptions::default()).map(|_| ()).unwrap_err().to_string();
+    assert!(e.contains("badindex.glb") && e.contains("accessors[1]") && e.contains("index 9") && !e.contains('\n'), "{e}");
+}
+
 /// Each broken file: one line naming the file and where in the JSON.
 #[test]
 fn broken_gltf_files_give_one_line_naming_the_place() {
