@@ -161,6 +161,22 @@ fn broken_tile_sets_give_one_line_naming_the_file_and_its_place() {
     std::fs::write(&bad, "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").unwrap();
     line(&["resample", s(&a), s(&bad), s(&out), "--cells", "1000"], &["input 2 of 2", "b.obj"]);
     line(&["check", s(&a), s(&bad)], &["b.obj"]);
+    // Text tiles are read side by side; of two bad ones, the first in file
+    // order is the one named, as reading them one by one would name it.
+    let tiles = d.path().join("text");
+    std::fs::create_dir(&tiles).unwrap();
+    for k in 1..=5 {
+        let p = tiles.join(format!("c{k}.obj"));
+        ok(&["convert", s(&a), s(&p), "--quiet"]);
+        if k == 2 || k == 4 {
+            let mut t = std::fs::read_to_string(&p).unwrap();
+            t.push_str("f 1 2 99999\n");
+            std::fs::write(&p, t).unwrap();
+        }
+    }
+    for _ in 0..3 {
+        line(&["resample", s(&tiles), s(&out), "--cells", "1000", "--parts", "5", "--threads", "2"], &["input 2 of 5", "c2.obj"]);
+    }
     assert!(!out.exists());
 }
 

@@ -159,6 +159,61 @@ fn run_one(ctx: &Ctx, stage: Stage, task: u32) -> Result<(), PipelineError> {
     build.commit(&result)
 }
 
+/// Forwards progress and cancellation of tasks run side by side; the phase
+/// is started once for all of them (its total unknown).
+struct Shared<'a>(&'a dyn Progress);
+
+impl Progress for Shared<'_> {
+    fn advance(&self, n: u64) {
+        self.0.advance(n)
+    }
+    fn cancelled(&self) -> bool {
+        self.0.cancelled()
+    }
+}
+
+/// Runs `tasks` of `stage` on `workers` threads, each task with its share of
+/// the threads and of the memory budget, taking tasks in order. Every
+/// running task finishes; the error reported is that of the first task in
+/// task order that failed, as running them one by one would report.
+fn run_concurrently(ctx: &Ctx, tuning: &Tuning, stage: Stage, tasks: &[u32], workers: usize) -> Result<(), PipelineError> {
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    let mut t = tuning.clone();
+    t.threads = (ctx.threads / workers).max(1);
+    t.mem_bytes = (tuning.mem_bytes / workers as u64).max(1);
+    let shared = Shared(ctx.progress);
+    let phase = match stage {
+        Stage::Bounds => crate::progress::BOUNDS,
+        _ => crate::progress::DISCRETIZE,
+    };
+    ctx.progress.start(phase, 0);
+    let next = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    let errors = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|sc| {
+        for _ in 0..workers {
+            sc.spawn(|| {
+                let wctx = Ctx::new(&ctx.dir, ctx.plan.clone(), ctx.scene.clone(), &t, &shared);
+                while !stop.load(Ordering::Relaxed) {
+                    let k = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(&task) = tasks.get(k) else { break };
+                    if let Err(e) = run_one(&wctx, stage, task) {
+                        stop.store(true, Ordering::Relaxed);
+                        errors.lock().unwrap_or_else(|p| p.into_inner()).push((task, e));
+                    }
+                }
+            });
+        }
+    });
+    ctx.progress.finish();
+    let mut errors = errors.into_inner().unwrap_or_else(|p| p.into_inner());
+    errors.sort_by_key(|e| e.0);
+    match errors.into_iter().next() {
+        Some((_, e)) => Err(e),
+        None => Ok(()),
+    }
+}
+
 /// Runs a whole job in this process; see the module docs.
 fn run_job(spec: &RunSpec, scene: Option<Scene>, tuning: &Tuning, progress: &dyn Progress) -> Result<ResampleSummary, PipelineError> {
     let t_start = Instant::now();
@@ -210,14 +265,21 @@ fn run_job(spec: &RunSpec, scene: Option<Scene>, tuning: &Tuning, progress: &dyn
     let mut seconds = std::collections::HashMap::new();
     for stage in &stages {
         let t = Instant::now();
-        for task in 0..stage.tasks {
-            if is_done(&dir, stage.name, task) {
-                resumed += 1;
-                continue;
+        let pending: Vec<u32> = (0..stage.tasks).filter(|&task| !is_done(&dir, stage.name, task)).collect();
+        resumed += (stage.tasks as usize - pending.len()) as u64;
+        // Parts of text files (OBJ, ASCII PLY…) run side by side, since one
+        // such file is parsed on one thread; parts of binary files run one
+        // after the other, each on every thread (records read in place).
+        let text = ctx.plan.operands.iter().any(|o| matches!(o, OperandPlan::Mesh { files } if files.iter().any(|f| f.split_faces.is_none())));
+        let workers = if text && matches!(stage.name, Stage::Bounds | Stage::Discretize) { ctx.threads.min(pending.len()) } else { 1 };
+        if workers > 1 {
+            run_concurrently(&ctx, tuning, stage.name, &pending, workers)?;
+        } else {
+            for &task in &pending {
+                run_one(&ctx, stage.name, task)?;
             }
-            run_one(&ctx, stage.name, task)?;
-            ran += 1;
         }
+        ran += pending.len() as u64;
         seconds.insert(stage.name, t.elapsed().as_secs_f64());
     }
     let mut s = summarize(&ctx)?;

@@ -179,6 +179,35 @@ fn first_difference(a: &Value, b: &Value, path: &str) -> Option<(String, Value, 
     }
 }
 
+/// Opens every file of a surface (headers; a text file is scanned for its
+/// counts) on up to `threads` threads: many tiles are many files. The
+/// results come back in the files' order.
+fn open_all(paths: &[PathBuf], threads: usize) -> Vec<Result<MeshFile, mint_io::Error>> {
+    let open = |path: &PathBuf| -> Result<MeshFile, mint_io::Error> {
+        let r = MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false })?;
+        let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+        let tiles = r.info().elements.iter().find(|e| r.info().format == mint_io::Format::Tiles && e.name == "tiles").map_or(0, |e| e.count);
+        Ok(MeshFile { path: path.clone(), bytes, vertices: r.vertex_count() as u64, split_faces: r.splittable_records(), tiles })
+    };
+    let threads = threads.clamp(1, paths.len().max(1));
+    if threads == 1 {
+        return paths.iter().map(open).collect();
+    }
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let out: std::sync::Mutex<Vec<Option<Result<MeshFile, mint_io::Error>>>> = std::sync::Mutex::new((0..paths.len()).map(|_| None).collect());
+    std::thread::scope(|s| {
+        for _ in 0..threads {
+            s.spawn(|| loop {
+                let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                let Some(p) = paths.get(k) else { break };
+                let r = open(p);
+                out.lock().unwrap_or_else(|e| e.into_inner())[k] = Some(r);
+            });
+        }
+    });
+    out.into_inner().unwrap_or_else(|e| e.into_inner()).into_iter().map(|r| r.expect("every file opened")).collect()
+}
+
 impl Plan {
     /// Plans `spec` (whose scene is `scene`) with `tuning`'s parts and slabs.
     pub fn new(spec: &RunSpec, scene: &Scene, tuning: &Tuning) -> Result<Plan, PipelineError> {
@@ -201,16 +230,13 @@ impl Plan {
                 Operand::Primitive(_) => OperandPlan::Primitive,
                 Operand::Mesh { paths, .. } => {
                     let mut mesh_files = Vec::with_capacity(paths.len());
-                    for (k, path) in paths.iter().enumerate() {
-                        let r = MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false })
-                            .map_err(|e| crate::error::in_file_list(e.into(), k, paths.len()))?;
-                        let path = absolute(path);
-                        if !files.contains(&path) {
-                            files.push(path.clone());
+                    for (k, opened) in open_all(paths, tuning.thread_count()).into_iter().enumerate() {
+                        let mut f = opened.map_err(|e| crate::error::in_file_list(e.into(), k, paths.len()))?;
+                        f.path = absolute(&f.path);
+                        if !files.contains(&f.path) {
+                            files.push(f.path.clone());
                         }
-                        let bytes = std::fs::metadata(&path).map(|m| m.len()).unwrap_or(0);
-                        let tiles = r.info().elements.iter().find(|e| r.info().format == mint_io::Format::Tiles && e.name == "tiles").map_or(0, |e| e.count);
-                        mesh_files.push(MeshFile { path, bytes, vertices: r.vertex_count() as u64, split_faces: r.splittable_records(), tiles });
+                        mesh_files.push(f);
                     }
                     OperandPlan::Mesh { files: mesh_files }
                 }
