@@ -355,3 +355,21 @@ fn a_tile_whose_faces_turn_out_not_to_be_triangles_is_taken_back_and_streamed() 
     // vertices; the counts tell.
     assert_eq!((&jb["intercepts_found"], &jb["shard_bytes"], &jb["input_faces"]), (&ja["intercepts_found"], &ja["shard_bytes"], &ja["input_faces"]));
 }
+
+/// A plain GLB is read in place like binary PLY: its triangles split over
+/// parts, each visited on every thread, with the bytes of the PLY.
+#[test]
+fn a_glb_splits_over_parts_like_binary_ply() {
+    let d = tempfile::tempdir().unwrap();
+    let (ply, glb) = (d.path().join("t.ply"), d.path().join("t.glb"));
+    ok(&["gen", "torus", s(&ply), "--faces", "300000"]);
+    ok(&["convert", s(&ply), s(&glb), "--quiet"]);
+    let want = d.path().join("want.ply");
+    ok(&["resample", s(&ply), s(&want), "--cells", "200000", "--quiet"]);
+    for parts in ["1", "3"] {
+        let out = d.path().join(format!("glb-{parts}.ply"));
+        let j: serde_json::Value = serde_json::from_str(&ok(&["resample", s(&glb), s(&out), "--cells", "200000", "--parts", parts, "--json"])).unwrap();
+        assert!(std::fs::read(&out).unwrap() == std::fs::read(&want).unwrap(), "{parts} parts: other bytes than the PLY's");
+        assert!(j["deref"].as_str().unwrap().contains("mmap"), "{j}");
+    }
+}

@@ -735,6 +735,7 @@ fn open_in_place(doc: &Doc, map: &Arc<Mapped>) -> Result<Option<Opened>, Error> 
         vertices: pos.count as u64,
         tris: c.triangles,
         next: 0,
+        total: c.triangles,
     };
     Ok(Some(Opened { info: make_info(doc, is_glb(map.bytes()), &c), positions, body: Box::new(body), range_grid: None, spilled_vertices: 0 }))
 }
@@ -749,11 +750,29 @@ struct InPlaceBody {
     vertices: u64,
     tris: u64,
     next: u64,
+    /// Triangles in the file (`tris` is where a restricted range ends).
+    total: u64,
 }
 
 impl FaceStream for InPlaceBody {
     fn fill(&mut self, out: &mut Emit, _stats: &mut ReadStats) -> Result<bool, Error> {
         let b = self.map.bytes();
+        // Tightly packed u32 indices, the usual case: three at a time.
+        if let Some((off, 4, 5125, at)) = &self.indices {
+            while self.next < self.tris && out.room() {
+                let o = off + 12 * self.next as usize;
+                let r = &b[o..o + 12];
+                let tri = [0, 4, 8].map(|k| u32::from_le_bytes([r[k], r[k + 1], r[k + 2], r[k + 3]]));
+                if let Some(k) = (0..3).find(|&k| tri[k] as u64 >= self.vertices) {
+                    return Err(bad(&self.path, at, format!("index {} (element {}) is out of range ({} positions)", tri[k], 3 * self.next + k as u64, self.vertices)));
+                }
+                if let Err(Reject::NotFinite(x)) = out.tri_checked(tri) {
+                    return Err(not_finite(&self.path, x, out.pos).at_element("triangle").at_record(self.next));
+                }
+                self.next += 1;
+            }
+            return Ok(self.next < self.tris);
+        }
         while self.next < self.tris && out.room() {
             let t = self.next as usize;
             let mut tri = [3 * t as u64, 3 * t as u64 + 1, 3 * t as u64 + 2];
@@ -777,6 +796,32 @@ impl FaceStream for InPlaceBody {
 
     fn bytes_done(&self) -> u64 {
         crate::backend::share_done(self.map.bytes().len() as u64, self.next, self.tris)
+    }
+
+    // Fixed-size triangles in place: parts read ranges of them, and the
+    // engine visits them on every thread, as binary PLY's.
+    fn splittable_records(&self) -> Option<u64> {
+        Some(self.total)
+    }
+
+    fn restrict(&mut self, first: u64, end: u64) -> Result<(), Error> {
+        (self.next, self.tris) = (first, end);
+        Ok(())
+    }
+
+    fn fixed_faces(&self) -> Result<Option<crate::visit::FixedFaces>, Error> {
+        let (start, stride, ity, element) = match &self.indices {
+            None => (0, 0, None, "POSITION".to_string()),
+            Some((off, stride, comp, at)) => {
+                let ity = match comp {
+                    5121 => Scalar::U8,
+                    5123 => Scalar::U16,
+                    _ => Scalar::U32,
+                };
+                (*off, *stride, Some(ity), at.clone())
+            }
+        };
+        Ok(Some(crate::visit::FixedFaces::Indexed { map: self.map.clone(), element, start, stride, ity, count: self.total }))
     }
 }
 

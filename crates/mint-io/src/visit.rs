@@ -63,6 +63,11 @@ pub(crate) enum FixedFaces {
     Ply { map: Arc<Mapped>, element: String, start: usize, stride: usize, pre: usize, cty: Scalar, ity: Scalar, be: bool, count: u64 },
     /// Binary STL: facet `k` is vertices `3k, 3k + 1, 3k + 2`.
     Soup { count: u64 },
+    /// A glTF index accessor read in place: triangle `k` is elements
+    /// `3k .. 3k + 3`, element `e` an unsigned `ity` (u8, u16 or u32, little
+    /// endian) at `start + e * stride`; with no accessor (`ity` None),
+    /// vertices `3k, 3k + 1, 3k + 2`. `element` names it in errors.
+    Indexed { map: Arc<Mapped>, element: String, start: usize, stride: usize, ity: Option<Scalar>, count: u64 },
 }
 
 /// True when the hot loops may run their AVX2 compilations (decided once;
@@ -114,7 +119,7 @@ impl TriangleRecords {
     /// Number of face records (each a triangle).
     pub fn len(&self) -> u64 {
         match &self.faces {
-            FixedFaces::Ply { count, .. } | FixedFaces::Soup { count } => *count,
+            FixedFaces::Ply { count, .. } | FixedFaces::Soup { count } | FixedFaces::Indexed { count, .. } => *count,
         }
     }
 
@@ -158,6 +163,12 @@ impl TriangleRecords {
                 }
                 Ok(())
             }
+            FixedFaces::Indexed { element, .. } => self.indexed(first, end, |k, t| {
+                let p = [self.positions.get(t[0]), self.positions.get(t[1]), self.positions.get(t[2])];
+                check_finite(&p, &t).map_err(|r| self.reject(r, k, element, None))?;
+                visitor.triangle(&p);
+                Ok(())
+            }),
             FixedFaces::Ply { map, element, start, stride, pre, cty, ity, be, .. } => {
                 let data = map.bytes();
                 let fast = !*be && *stride == 13 && *pre == 0 && *cty == Scalar::U8 && matches!(ity, Scalar::U32 | Scalar::I32);
@@ -214,6 +225,12 @@ impl TriangleRecords {
         }
         match &self.faces {
             FixedFaces::Ply { map, start, stride, .. } => map.advise_willneed(start + first as usize * stride, (end - first) as usize * stride),
+            FixedFaces::Indexed { map, start, stride, ity: Some(_), .. } => map.advise_willneed(start + 3 * first as usize * stride, 3 * (end - first) as usize * stride),
+            FixedFaces::Indexed { ity: None, .. } => {
+                let (base, _) = self.positions.byte_range();
+                let stride = self.positions.stride();
+                self.positions.mapped().advise_willneed(base + 3 * first as usize * stride, 3 * (end - first) as usize * stride);
+            }
             FixedFaces::Soup { .. } => {
                 // A facet record holds its three corners: the positions'.
                 let (base, _) = self.positions.byte_range();
@@ -221,6 +238,42 @@ impl TriangleRecords {
                 self.positions.mapped().advise_willneed(base + first as usize * stride, (end - first) as usize * stride);
             }
         }
+    }
+
+    /// The triangles `first .. end` (clamped by the callers) of an
+    /// [`FixedFaces::Indexed`] layout, indices checked against the vertex
+    /// count, to `f` until it fails.
+    fn indexed(&self, first: u64, end: u64, mut f: impl FnMut(u64, [u32; 3]) -> Result<(), Error>) -> Result<(), Error> {
+        let FixedFaces::Indexed { map, element, start, stride, ity, .. } = &self.faces else { unreachable!() };
+        let nv = self.positions.count() as u64;
+        let Some(ity) = ity else {
+            for k in first..end {
+                let v = (3 * k) as u32;
+                f(k, [v, v + 1, v + 2])?;
+            }
+            return Ok(());
+        };
+        let data = map.bytes();
+        let size = ity.size();
+        for k in first..end {
+            let mut t = [0u32; 3];
+            for (c, slot) in t.iter_mut().enumerate() {
+                let e = 3 * k as usize + c;
+                let at = start + e * stride;
+                let b = &data[at..at + size];
+                let v = match size {
+                    1 => b[0] as u64,
+                    2 => u16::from_le_bytes([b[0], b[1]]) as u64,
+                    _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as u64,
+                };
+                if v >= nv {
+                    return Err(Error::new(ErrorKind::Index, &self.path, format!("{element}: index {v} (element {e}) is out of range ({nv} positions)")).at_record(k));
+                }
+                *slot = v as u32;
+            }
+            f(k, t)?;
+        }
+        Ok(())
     }
 
     /// Calls `f(k, [a, b, c])` with the vertex indices of every record `k`
@@ -241,6 +294,10 @@ impl TriangleRecords {
                 }
                 Ok(())
             }
+            FixedFaces::Indexed { .. } => self.indexed(first, end, |k, t| {
+                f(k, t);
+                Ok(())
+            }),
             FixedFaces::Ply { map, element, start, stride, pre, cty, ity, be, .. } => {
                 let data = map.bytes();
                 let nv = self.positions.count() as i64;
