@@ -85,13 +85,14 @@ fn scan(data: &[u8]) -> (u64, u64, Vec<String>) {
     let mut lines = Lines::new(data, 0);
     while let Some((_, line)) = lines.next_joined() {
         let line = &line[..];
-        match classify(line) {
-            (Kind::Vertex, _) => nv += 1,
-            (Kind::Face, _) => nf += 1,
-            (Kind::Comment, c) if leading => comments.push(String::from_utf8_lossy(c).trim().to_string()),
+        let (kind, rest) = classify(line);
+        match kind {
+            Kind::Vertex => nv += 1,
+            Kind::Face => nf += 1,
+            Kind::Comment if leading => comments.push(String::from_utf8_lossy(rest).trim().to_string()),
             _ => {}
         }
-        if !matches!(classify(line).0, Kind::Comment) && !line.iter().all(|b| b.is_ascii_whitespace()) {
+        if leading && kind != Kind::Comment && !line.iter().all(|b| b.is_ascii_whitespace()) {
             leading = false;
         }
     }

@@ -71,7 +71,7 @@ impl<'a> Lines<'a> {
             return None;
         }
         let start = self.pos;
-        let end = match d[start..].iter().position(|&b| b == b'\n') {
+        let end = match memchr::memchr(b'\n', &d[start..]) {
             Some(n) => start + n,
             None => d.len(),
         };

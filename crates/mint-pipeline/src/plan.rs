@@ -179,13 +179,21 @@ fn first_difference(a: &Value, b: &Value, path: &str) -> Option<(String, Value, 
     }
 }
 
-/// Opens every file of a surface (headers; a text file is scanned for its
-/// counts) on up to `threads` threads: many tiles are many files. The
+/// Opens every file of a surface (headers; a text file is only scanned for
+/// its counts) on up to `threads` threads: many tiles are many files. The
 /// results come back in the files' order.
 fn open_all(paths: &[PathBuf], threads: usize) -> Vec<Result<MeshFile, mint_io::Error>> {
     let open = |path: &PathBuf| -> Result<MeshFile, mint_io::Error> {
-        let r = MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false })?;
         let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+        // Text formats cannot be split, and opening one parses (and
+        // spills) every vertex: their counts are enough here, and the
+        // vertices are read by the bounds stage, in parallel parts.
+        use mint_io::Format::*;
+        if matches!(mint_io::Format::from_path(path)?, Obj | Off | Mesh | Raw) {
+            let info = mint_io::read_info(path)?;
+            return Ok(MeshFile { path: path.clone(), bytes, vertices: info.vertex_count, split_faces: None, tiles: 0 });
+        }
+        let r = MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false })?;
         let tiles = r.info().elements.iter().find(|e| r.info().format == mint_io::Format::Tiles && e.name == "tiles").map_or(0, |e| e.count);
         Ok(MeshFile { path: path.clone(), bytes, vertices: r.vertex_count() as u64, split_faces: r.splittable_records(), tiles })
     };
