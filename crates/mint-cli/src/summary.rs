@@ -99,7 +99,7 @@ pub(crate) fn summary_warnings(s: &mint_pipeline::ResampleSummary) -> Vec<String
     let mut w = s.input_warnings.clone();
     if s.sign_rule == "sheet" && s.census_odd * 3 > s.census_lines {
         w.push(format!(
-            "{}: the input is open ({} of {} grid lines cross it an odd number of times): resampled as an open sheet with its faces' orientation, enclosing no volume; --signs union closes it into a solid",
+            "{}: the input is open ({} of {} grid lines cross it an odd number of times): resampled as an open sheet with its faces' orientation, enclosing no volume, its boundary within about two cells of the input's (the rim's last cells are dropped whole); --signs union closes it into a solid",
             s.input, s.census_odd, s.census_lines
         ));
     }

@@ -4,7 +4,7 @@
 //! writer ([`write_chunks`]), with six times the signed volume of each
 //! chunk, in chunk order. The per-triangle work is in `kernels`.
 
-use crate::error::PipelineError;
+use crate::error::{in_file_list, PipelineError};
 use crate::kernels::{signed_volume6, visit_chunk, ChunkJob, LocalMap};
 use crate::progress::{check_cancel, Progress};
 use mint_core::grid::Grid;
@@ -134,23 +134,63 @@ pub(crate) fn discretize_all(
 /// same (`first` is a multiple of the chunk size, or 0).
 pub(crate) fn discretize_direct(
     records: &TriangleRecords,
-    (first, end): (u64, u64),
+    range: (u64, u64),
     grid: &Grid,
     store: &mut ShardWriter,
     threads: usize,
     progress: &dyn Progress,
     xf: Option<&Transform>,
 ) -> Result<(u64, Vec<f64>), PipelineError> {
+    let mut out = discretize_direct_many(&[DirectPiece { records, range, file: 0 }], 1, grid, store, threads, progress, xf)?;
+    Ok(out.remove(0))
+}
+
+/// One file's records for [`discretize_direct_many`]: faces `range` of
+/// it, and its place among `files` (for errors).
+pub(crate) struct DirectPiece<'r> {
+    pub records: &'r TriangleRecords,
+    pub range: (u64, u64),
+    pub file: usize,
+}
+
+/// [`discretize_direct`] over several files (tiles) at once: their chunks
+/// form one queue for the workers, so a part that reads many small files
+/// keeps every thread busy to the end instead of idling at the tail of
+/// each file. Each file's chunks are its own (they start at its `range`),
+/// so its volumes are those [`discretize_direct`] gives; returns them per
+/// piece. An error names its file among `files` ([`in_file_list`]), except
+/// a record that is not a triangle ([`mint_io::ErrorKind::Unsupported`]),
+/// returned as is for the caller to stream that file instead.
+pub(crate) fn discretize_direct_many(
+    pieces: &[DirectPiece],
+    files: usize,
+    grid: &Grid,
+    store: &mut ShardWriter,
+    threads: usize,
+    progress: &dyn Progress,
+    xf: Option<&Transform>,
+) -> Result<Vec<(u64, Vec<f64>)>, PipelineError> {
     let [_, nb, _] = grid.local_dims();
     let local = LocalMap::new(grid);
     let chunk = CHUNK_TRIANGLES as u64;
-    let chunks = end.saturating_sub(first).div_ceil(chunk);
-    progress.start(crate::progress::DISCRETIZE, end.saturating_sub(first));
+    let faces: Vec<u64> = pieces.iter().map(|p| p.range.1.saturating_sub(p.range.0)).collect();
+    // Where each piece's chunks start in the one queue.
+    let mut starts = Vec::with_capacity(pieces.len() + 1);
+    starts.push(0u64);
+    for f in &faces {
+        starts.push(starts.last().unwrap() + f.div_ceil(chunk));
+    }
+    let chunks = *starts.last().unwrap();
+    progress.start(crate::progress::DISCRETIZE, faces.iter().sum());
     let local = &local;
-    let volumes = discretize_on_pool(threads, chunks, chunks as usize, store, progress, |_| (), |_, tx, c| {
+    let starts = &starts;
+    let volumes = discretize_on_pool(threads, chunks, chunks as usize, store, progress, |_| (), |_, tx, g| {
         if progress.cancelled() {
             return Err(PipelineError::Cancelled);
         }
+        let p = starts.partition_point(|&s| s <= g) - 1;
+        let DirectPiece { records, range: (first, end), file } = pieces[p];
+        let c = g - starts[p];
         let (a, b) = (first + c * chunk, (first + (c + 1) * chunk).min(end));
         // Keep the disk busy READ_AHEAD chunks ahead of the workers
         // (each worker asks for the chunk that far past its own).
@@ -167,14 +207,15 @@ pub(crate) fn discretize_direct(
         match visited {
             Ok(true) => {}
             Ok(false) => return Err(PipelineError::Cancelled),
-            Err(e) => return Err(e.into()),
+            Err(e) if e.kind() == mint_io::ErrorKind::Unsupported => return Err(e.into()),
+            Err(e) => return Err(in_file_list(e.into(), file, files)),
         }
         progress.advance(b - a);
         // A closed channel: the writer stopped on an error and raised `stop`.
-        let _ = tx.send((c as usize, recs, volume));
+        let _ = tx.send((g as usize, recs, volume));
         Ok(())
     })?;
-    Ok((end.saturating_sub(first), volumes))
+    Ok((0..pieces.len()).map(|p| (faces[p], volumes[starts[p] as usize..starts[p + 1] as usize].to_vec())).collect())
 }
 
 /// A chunk of records on its way to the shard writer: its number, its

@@ -32,7 +32,7 @@ use crate::error::PipelineError;
 use crate::deref::{choose, discretize_sorted, Deref, DerefChoice, Faces, SortStats};
 use mint_store::Budget;
 use crate::bounds::bounds;
-use crate::discretize::{discretize_all, discretize_direct, CHUNK_TRIANGLES};
+use crate::discretize::{discretize_all, discretize_direct, discretize_direct_many, DirectPiece, CHUNK_TRIANGLES};
 use crate::progress::check_cancel;
 use crate::slabs::{bytes_per_plane, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB};
 use crate::plan::{MeshFile, OperandPlan, Plan, Stage};
@@ -745,16 +745,65 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
         // of shard files per task, not one per file.
         let [_, _, ns] = ctx.grid()?.local_dims();
         let mut writer = ShardWriter::create(&make_dir(&out.join(format!("op-{j}")))?, ns + 1);
-        let mut parts = Vec::new();
-        for (k, range) in mine {
-            let part = discretize_piece(ctx, j, &files[k], k as u32, range, &mut writer).map_err(|e| in_file_list(e, k, files.len()))?;
-            parts.push(part);
-            check_cancel(ctx.progress)?;
-        }
+        let parts = match discretize_pieces_at_once(ctx, j, files, &mine, &mut writer)? {
+            Some(parts) => parts,
+            None => {
+                let mut parts = Vec::new();
+                for (k, range) in mine {
+                    let part = discretize_piece(ctx, j, &files[k], k as u32, range, &mut writer).map_err(|e| in_file_list(e, k, files.len()))?;
+                    parts.push(part);
+                    check_cancel(ctx.progress)?;
+                }
+                parts
+            }
+        };
         operands.push(parts);
         shards.push(Some(writer.finish()?));
     }
     Ok(DiscretizeResult { operands, shards })
+}
+
+/// Discretizes several pieces (tiles) of mesh operand `j` in one queue of
+/// chunks ([`discretize_direct_many`]) when every one of them is read
+/// directly from its map: the common case of many binary tiles. `None`
+/// (nothing written) when one is not, or when one turns out to hold
+/// polygons: the caller then reads them one by one.
+fn discretize_pieces_at_once(ctx: &Ctx, j: usize, files: &[MeshFile], mine: &[(usize, (u64, u64))], writer: &mut ShardWriter) -> Result<Option<Vec<MeshPart>>, PipelineError> {
+    if mine.len() < 2 {
+        return Ok(None);
+    }
+    let mut opened = Vec::with_capacity(mine.len());
+    for &(k, range) in mine {
+        let reader = MeshReader::open(&files[k].path, ctx.read_options()).map_err(|e| in_file_list(e.into(), k, files.len()))?;
+        let Some(mut records) = (if files[k].split_faces.is_some() { reader.triangle_records().map_err(|e| in_file_list(e.into(), k, files.len()))? } else { None }) else {
+            return Ok(None);
+        };
+        let positions = reader.positions();
+        let on = records.prefetch_pays(&positions, range);
+        records.set_prefetch(on);
+        records.set_positions_known_finite(true);
+        let choice = choose(ctx.deref, Some(&records), &positions, range);
+        if choice.sort {
+            return Ok(None);
+        }
+        opened.push((k, range, records, choice));
+    }
+    let direct: Vec<DirectPiece> = opened.iter().map(|(k, range, records, _)| DirectPiece { records, range: *range, file: *k }).collect();
+    let checkpoint = writer.checkpoint();
+    match discretize_direct_many(&direct, files.len(), ctx.grid()?, writer, ctx.threads, ctx.progress, ctx.transform(j)) {
+        Ok(done) => Ok(Some(
+            opened
+                .into_iter()
+                .zip(done)
+                .map(|((k, _, _, choice), (faces, chunk_volumes6))| MeshPart { file: k as u32, faces, chunk_volumes6, deref: Some(choice), sort: None, warnings: Vec::new() })
+                .collect(),
+        )),
+        Err(PipelineError::Io(e)) if e.kind() == mint_io::ErrorKind::Unsupported => {
+            writer.rollback(checkpoint)?;
+            Ok(None)
+        }
+        Err(e) => Err(e),
+    }
 }
 
 /// Discretizes faces `range` of `file` (file `k` of mesh operand `j`) into
