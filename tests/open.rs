@@ -206,3 +206,24 @@ fn closed_inputs_are_still_solids_and_signs_sheet_can_be_asked_for() {
     let s = resample(&input, &out, &o, &NoProgress).unwrap();
     assert_eq!(s.sign_rule, "union");
 }
+
+/// `mint decimate` of an open input: an open sheet, decimated, its
+/// boundary kept, and the resampling's warning (naming `mint resample
+/// --signs union`, since decimate has no `--signs`).
+#[test]
+fn decimate_keeps_an_open_sheet_open_and_says_so() {
+    let d = tempfile::tempdir().unwrap();
+    let input = write_trimesh(d.path(), "t.ply", &terrain(40, false));
+    let out = d.path().join("d.ply");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_mint")).arg("decimate").arg(&input).arg(&out).args(["--faces", "1500", "--json"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(err.matches("the input is open").count(), 1, "{err}");
+    assert!(err.contains("`mint resample --signs union` closes it"), "{err}");
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["warnings"].as_array().unwrap().len(), 1, "{j}");
+    let m = load(&out);
+    let r = assert_open_manifold(&m, "decimated terrain");
+    assert_eq!((r.components, r.boundary_loops), (1, 1), "{r:?}");
+    assert!((m.faces.len() as f64 - 1500.0).abs() <= 30.0, "{} faces", m.faces.len());
+}

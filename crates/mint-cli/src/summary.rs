@@ -96,10 +96,16 @@ pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, j
 
 /// Warnings about a run that succeeded: an empty output, and why.
 pub(crate) fn summary_warnings(s: &mint_pipeline::ResampleSummary) -> Vec<String> {
+    summary_warnings_with(s, "--signs union")
+}
+
+/// [`summary_warnings`], naming `close` as the way to close an open input
+/// into a solid (`decimate` has no `--signs`: it names `mint resample`).
+pub(crate) fn summary_warnings_with(s: &mint_pipeline::ResampleSummary, close: &str) -> Vec<String> {
     let mut w = s.input_warnings.clone();
     if s.sign_rule == "sheet" && s.census_odd * 3 > s.census_lines {
         w.push(format!(
-            "{}: the input is open ({} of {} grid lines cross it an odd number of times): resampled as an open sheet with its faces' orientation, enclosing no volume, its boundary within about two cells of the input's (the rim's last cells are dropped whole); --signs union closes it into a solid",
+            "{}: the input is open ({} of {} grid lines cross it an odd number of times): resampled as an open sheet with its faces' orientation, enclosing no volume, its boundary within about two cells of the input's (the rim's last cells are dropped whole); {close} closes it into a solid",
             s.input, s.census_odd, s.census_lines
         ));
     }

@@ -82,9 +82,10 @@ pub struct HoleStats {
     pub left_open: u64,
 }
 
-/// Groups `hole_cells` (any order, duplicates allowed) by shared faces and
-/// returns the cells of groups wider than `max_hole` cells, grown so that
-/// the remaining surface stays vertex-manifold.
+/// Groups `hole_cells` (any order, duplicates allowed; sorted and
+/// deduplicated in place, and with `max_hole` 0 moved into the result) by
+/// shared faces and returns the cells of groups wider than `max_hole`
+/// cells, grown so that the remaining surface stays vertex-manifold.
 pub fn open_cells(hole_cells: &mut Vec<u64>, dims: [u32; 3], max_hole: u32) -> (OpenCells, HoleStats) {
     hole_cells.sort_unstable();
     hole_cells.dedup();
@@ -114,6 +115,16 @@ pub fn open_cells(hole_cells: &mut Vec<u64>, dims: [u32; 3], max_hole: u32) -> (
             }
         }
     }
+    let mut stats = HoleStats::default();
+    let mut open = Vec::new();
+    if max_hole == 0 {
+        // Every group is open (a sheet's back and rim): no boxes needed, a
+        // third of the memory for the large sets a sheet has.
+        stats.left_open = (0..n).filter(|&a| find(&mut parent, a) == a).count() as u64;
+        drop(parent);
+        open = std::mem::take(hole_cells);
+        return grow_open(open, dims, stats);
+    }
     // Bounding box per group.
     let mut lo = vec![[u32::MAX; 3]; n];
     let mut hi = vec![[0u32; 3]; n];
@@ -125,8 +136,6 @@ pub fn open_cells(hole_cells: &mut Vec<u64>, dims: [u32; 3], max_hole: u32) -> (
             hi[r][d] = hi[r][d].max(c[d]);
         }
     }
-    let mut stats = HoleStats::default();
-    let mut open = Vec::new();
     for a in 0..n {
         let r = find(&mut parent, a);
         let wide = (0..3).any(|d| hi[r][d] - lo[r][d] + 1 > max_hole);
@@ -141,6 +150,12 @@ pub fn open_cells(hole_cells: &mut Vec<u64>, dims: [u32; 3], max_hole: u32) -> (
             open.push(hole_cells[a]);
         }
     }
+    grow_open(open, dims, stats)
+}
+
+/// Grows the open cells until they are contiguous around every grid edge.
+fn grow_open(mut open: Vec<u64>, dims: [u32; 3], stats: HoleStats) -> (OpenCells, HoleStats) {
+    let d2 = [dims[0], dims[1]];
     // Keep open cells contiguous around every grid edge.
     loop {
         open.sort_unstable();

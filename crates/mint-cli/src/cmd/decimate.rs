@@ -74,8 +74,14 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
     if a.preview {
         write_before_after(&files, &a.output, a.preview_up.up, a.quiet.quiet || a.json.json, &bars)?;
     }
+    // The resampling's warnings (an open input read as a sheet, …).
+    let warnings = crate::summary::summary_warnings_with(&s.resample, "`mint resample --signs union`");
+    for w in &warnings {
+        eprintln!("mint: warning: {w}");
+    }
     if a.json.json {
         let mut v = serde_json::to_value(&s)?;
+        v["warnings"] = warnings.into();
         v["mem_budget_bytes"] = mem.into();
         v["peak_heap_bytes"] = alloc::peak_heap().into();
         println!("{}", serde_json::to_string_pretty(&v)?);
@@ -89,7 +95,13 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
                 100.0 * s.needle_area / s.input_area
             );
         }
-        eprintln!("  resampled    {} faces (asked {}), cells of {:.6}, {}", s.intermediate_faces, s.intermediate_faces_asked, s.cell_size, if s.intermediate_watertight { "watertight" } else { "NOT watertight" });
+        eprintln!("  resampled    {} faces (asked {}), cells of {:.6}, {}", s.intermediate_faces, s.intermediate_faces_asked, s.cell_size, if s.intermediate_watertight {
+            "watertight"
+        } else if s.resample.sign_rule == "sheet" {
+            "an open sheet (the input is open)"
+        } else {
+            "NOT watertight"
+        });
         eprintln!("  simplified   {} faces (target {}), {} vertices, error {:.2e} of the extent; coordinates {}", s.output_faces, s.target_faces, s.output_vertices, s.simplify_error, s.output_precision);
         eprintln!(
             "  output       {}{}",
