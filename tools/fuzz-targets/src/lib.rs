@@ -115,10 +115,16 @@ fn mesh_reader_at(path: &Path) {
             }
             let mut chunk = mint_io::TriangleChunk::new();
             let mut total = 0u64;
+            let mut streamed: Vec<[u32; 3]> = Vec::new();
+            let mut stream_ok = true;
+            // Fixed-size records (binary PLY, binary STL, a plain GLB) are
+            // also read directly by the engine: both ways must agree.
+            let records = r.triangle_records();
             loop {
                 match r.next_chunk(&mut chunk) {
                     Err(e) => {
                         one_line_naming(&e, &path);
+                        stream_ok = false;
                         break;
                     }
                     Ok(false) => {
@@ -136,7 +142,29 @@ fn mesh_reader_at(path: &Path) {
                                 assert_eq!(v.map(f64::to_bits), p[k].map(f64::to_bits), "resolved position differs from vertex({})", t[k]);
                             }
                         }
+                        streamed.extend_from_slice(&chunk.indices);
                         total += chunk.len() as u64;
+                    }
+                }
+            }
+            match records {
+                Err(e) => one_line_naming(&e, &path),
+                Ok(None) => {}
+                Ok(Some(rec)) => {
+                    let mut direct: Vec<[u32; 3]> = Vec::new();
+                    match rec.visit_indices(0, rec.len(), |_, t| direct.push(t)) {
+                        Err(e) => {
+                            one_line_naming(&e, &path);
+                            assert!(!stream_ok || r.info().format == mint_io::Format::Ply, "the records fail where the stream read every triangle: {e}");
+                        }
+                        Ok(()) => {
+                            for t in &direct {
+                                assert!(t.iter().all(|&v| v < n), "a record names a vertex beyond {n}: {t:?}");
+                            }
+                            if stream_ok {
+                                assert_eq!(direct, streamed, "the records and the stream give other triangles");
+                            }
+                        }
                     }
                 }
             }
