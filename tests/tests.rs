@@ -2,6 +2,7 @@
 //! Heavy cases are `#[ignore]`d and run by hand; see each module.
 
 mod common;
+mod colour;
 pub mod cli;
 mod contours_dicom;
 mod check_bounded;

@@ -188,6 +188,8 @@ pub(crate) struct Opened {
     pub(crate) body: Box<dyn FaceStream>,
     pub(crate) range_grid: Option<RangeGrid>,
     pub(crate) spilled_vertices: u64,
+    /// Per-vertex colour, when the file has it.
+    pub(crate) colours: Option<crate::colours::VertexColours>,
 }
 
 /// Options of [`MeshWriter::create`].

@@ -34,6 +34,7 @@ mod coords;
 pub mod error;
 pub mod format;
 mod formats;
+pub mod colours;
 pub mod gltf;
 pub mod tiles;
 pub mod inputs;
@@ -55,6 +56,7 @@ mod vrml;
 pub mod writer;
 
 pub use atomic::AtomicFile;
+pub use colours::VertexColours;
 pub use convert::{concatenate, convert, convert_cancellable, ConvertSummary};
 pub use error::{Error, ErrorKind, Position};
 pub use format::Format;

@@ -63,7 +63,7 @@ fn err_at(e: Error, data: &[u8], element: &str, record: u64, at: usize) -> Error
 }
 
 /// Parses the three coordinates of a `v` line.
-fn parse_vertex(path: &Path, data: &[u8], rest: &[u8], record: u64, at: usize) -> Result<[f64; 3], Error> {
+fn parse_vertex(path: &Path, data: &[u8], rest: &[u8], record: u64, at: usize) -> Result<([f64; 3], Option<[u8; 4]>), Error> {
     let mut p = [0.0; 3];
     let mut w = words(rest);
     for (k, c) in p.iter_mut().enumerate() {
@@ -74,7 +74,20 @@ fn parse_vertex(path: &Path, data: &[u8], rest: &[u8], record: u64, at: usize) -
             err_at(Error::format(path, format!("expected a number, found {}", show_token(tok))), data, "v", record, at)
         })?;
     }
-    Ok(p)
+    // `v x y z r g b [a]`, the common extension (channels in [0, 1]);
+    // `v x y z [w]` has none.
+    let more: Vec<&[u8]> = w.take_while(|t| !t.starts_with(b"#")).take(5).collect();
+    if more.len() < 3 {
+        return Ok((p, None));
+    }
+    let mut c = [255u8; 4];
+    for (k, tok) in more.iter().take(4).enumerate() {
+        let v = parse_f64(tok).ok_or_else(|| {
+            err_at(Error::format(path, format!("expected a colour channel, found {}", show_token(tok))), data, "v", record, at)
+        })?;
+        c[k] = crate::colours::unit_to_u8(v);
+    }
+    Ok((p, Some(c)))
 }
 
 /// Counts `v` and `f` lines and collects the leading comment block.
@@ -125,6 +138,8 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     let data = map.bytes();
     map.advise_sequential(0, data.len());
     let mut spill = SpillFile::new(spill_dir, path)?;
+    // Colour spill, once the first `v` line says the file has colour.
+    let mut cspill: Option<SpillFile> = None;
     let (mut nv, mut nf) = (0u64, 0u64);
     let mut comments = Vec::new();
     let mut leading = true;
@@ -134,7 +149,20 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         let (kind, rest) = classify(line);
         match kind {
             Kind::Vertex => {
-                let p = parse_vertex(path, data, rest, nv, at)?;
+                let (p, c) = parse_vertex(path, data, rest, nv, at)?;
+                match (c, cspill.as_mut()) {
+                    (Some(c), Some(cs)) => cs.write_bytes(&c)?,
+                    (Some(c), None) if nv == 0 => {
+                        let mut cs = SpillFile::new(spill_dir, path)?;
+                        cs.write_bytes(&c)?;
+                        cspill = Some(cs);
+                    }
+                    (None, None) => {}
+                    _ => {
+                        let what = if cspill.is_some() { "the first vertex has a colour (x y z r g b), this one none" } else { "the first vertex has no colour, this one has (x y z r g b)" };
+                        return Err(err_at(Error::format(path, format!("'v' lines mix 3 and 6 numbers: {what}")), data, "v", nv, at));
+                    }
+                }
                 spill.write_point(p)?;
                 nv += 1;
             }
@@ -150,8 +178,12 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         return Err(Error::unsupported(path, format!("{nv} vertices; mint reads at most {} (32-bit indices)", u32::MAX)).at_element("v"));
     }
     let positions = Positions::spilled(Arc::new(spill.into_mapped()?), nv as u32);
+    let colours = match cspill {
+        Some(cs) => Some(crate::colours::VertexColours::spilled(Arc::new(cs.into_mapped()?), nv as u32)),
+        None => None,
+    };
     let body = ObjBody { sec: Section::new(path, map, 0), v_seen: 0, f_rec: 0, rec_at: 0 };
-    Ok(Opened { info: make_info(nv, nf, comments), positions, body: Box::new(body), range_grid: None, spilled_vertices: nv })
+    Ok(Opened { info: make_info(nv, nf, comments), positions, body: Box::new(body), range_grid: None, spilled_vertices: nv, colours })
 }
 
 /// Second pass: streams the faces (see the module docs).

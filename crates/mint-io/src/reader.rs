@@ -279,6 +279,7 @@ pub struct MeshReader {
     positions: Positions,
     body: Box<dyn FaceStream>,
     range_grid: Option<RangeGrid>,
+    colours: Option<crate::colours::VertexColours>,
     stats: ReadStats,
     opts: ReadOptions,
     bytes_total: u64,
@@ -312,6 +313,7 @@ impl MeshReader {
             positions: opened.positions,
             body: opened.body,
             range_grid: opened.range_grid,
+            colours: opened.colours,
             stats: ReadStats { spilled_vertices: opened.spilled_vertices, ..ReadStats::default() },
             opts,
             bytes_total,
@@ -377,6 +379,12 @@ impl MeshReader {
     /// [`MeshReader::next_chunk`] as for any short file.
     pub fn face_capacity_hint(&self) -> usize {
         capacity_hint(self.info.face_count.unwrap_or(0), self.bytes_total, MIN_FACE_RECORD_BYTES)
+    }
+
+    /// Per-vertex colour, when the file has it (PLY `red green blue
+    /// [alpha]`, OBJ `v x y z r g b`); RGBA bytes by vertex index.
+    pub fn colours(&self) -> Option<crate::colours::VertexColours> {
+        self.colours.clone()
     }
 
     /// Number of vertices (for STL: 3 per facet).

@@ -12,7 +12,9 @@
 //!   tiled by triangles leaves no gaps between them), nearest first.
 //! - Shading: flat Lambert from each face's normal and a fixed light above
 //!   and to the left of the viewer; faces seen from behind (inside-out parts,
-//!   the inside seen through holes) in a distinct orange.
+//!   the inside seen through holes) in a distinct orange. A file with
+//!   per-vertex colour is drawn in its colours, interpolated across each
+//!   front face and lit more gently ([`Canvas::triangle_coloured`]).
 //! - [`render_files`]: several meshes side by side under one camera
 //!   (`--preview`: input and output), each view a tile; `View::All` tiles
 //!   the six axis views and the iso view. Encoded as PNG (the `png` crate).
@@ -268,6 +270,31 @@ impl Canvas {
         }
     }
 
+    /// Draws one triangle seen by `cam`, its front in the corners' colours
+    /// (interpolated across it, lit more gently than the flat blue so that
+    /// the colours stay recognisable), its back in the back colour.
+    #[inline]
+    pub fn triangle_coloured(&mut self, cam: &Camera, p: &[[f64; 3]; 3], rgba: [[u8; 4]; 3]) {
+        let (a, b, c) = (DVec3::from(p[0]), DVec3::from(p[1]), DVec3::from(p[2]));
+        let n = (b - a).cross(c - a);
+        let nn = n.length();
+        if !(nn > 0.0) {
+            return;
+        }
+        let n = n / nn;
+        let front = n.dot(cam.dir) < 0.0;
+        if !front {
+            return self.triangle(cam, p);
+        }
+        let light = (-cam.dir + 0.5 * cam.up - 0.4 * cam.right).normalize();
+        let k = 0.55 + 0.45 * n.dot(light).max(0.0);
+        let col = rgba.map(|c| [c[0] as f64 * k, c[1] as f64 * k, c[2] as f64 * k]);
+        self.fill_by(cam, p, k as f32, |w| {
+            let v = |ch: usize| (w[0] * col[0][ch] + w[1] * col[1][ch] + w[2] * col[2][ch]).round().clamp(0.0, 255.0) as u8;
+            [v(0), v(1), v(2)]
+        });
+    }
+
     /// Draws one triangle seen by `cam`, flat-shaded.
     #[inline]
     pub fn triangle(&mut self, cam: &Camera, p: &[[f64; 3]; 3]) {
@@ -294,6 +321,13 @@ impl Canvas {
     /// the nearest depth; the first triangle at a depth keeps the pixel.
     #[inline]
     pub fn fill(&mut self, cam: &Camera, p: &[[f64; 3]; 3], color: [u8; 3], shade: f32) {
+        self.fill_by(cam, p, shade, |_| color)
+    }
+
+    /// [`Canvas::fill`] with each pixel's colour from its barycentric
+    /// weights on the projected triangle.
+    #[inline(always)]
+    fn fill_by(&mut self, cam: &Camera, p: &[[f64; 3]; 3], shade: f32, color: impl Fn([f64; 3]) -> [u8; 3]) {
         let q = [cam.project(p[0]), cam.project(p[1]), cam.project(p[2])];
         let (w, h) = (self.width as f64, self.height as f64);
         let minx = q[0][0].min(q[1][0]).min(q[2][0]);
@@ -330,7 +364,7 @@ impl Canvas {
                         self.covered += 1;
                     }
                     self.depth[i] = z;
-                    self.rgb[i] = color;
+                    self.rgb[i] = color([w0, w1, w2]);
                     self.shade[i] = shade;
                     self.index[i] = self.order;
                 }
@@ -515,11 +549,14 @@ pub struct RenderOptions {
     pub marks: Vec<Vec<[[f64; 3]; 2]>>,
     /// The world axis drawn upwards. Default y (glTF's convention).
     pub up: Up,
+    /// Draw per-vertex colours where a file has them (`--color vertex`,
+    /// and by default). Default true; ignored when colouring by distance.
+    pub vertex_colours: bool,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions { width: 1200, height: 900, view: View::Iso, threads: std::thread::available_parallelism().map_or(1, |n| n.get()), distance_to: None, wireframe: false, marks: Vec::new(), up: Up::Y }
+        RenderOptions { width: 1200, height: 900, view: View::Iso, threads: std::thread::available_parallelism().map_or(1, |n| n.get()), distance_to: None, wireframe: false, marks: Vec::new(), up: Up::Y, vertex_colours: true }
     }
 }
 
@@ -538,6 +575,8 @@ pub struct RenderSummary {
     /// covered pixels (the colour bar spans 0 to the largest).
     pub distance_max: Option<f64>,
     pub distance_mean: Option<f64>,
+    /// Files drawn in their per-vertex colours.
+    pub coloured_files: u64,
     pub seconds: f64,
 }
 
@@ -614,6 +653,8 @@ pub fn render_surfaces(inputs: &[Vec<PathBuf>], output: &Path, o: &RenderOptions
         let mut first = 0u64;
         for path in paths {
         let mut r = MeshReader::open(path, read.clone())?;
+        let colours = if o.vertex_colours && reference.is_none() { r.colours() } else { None };
+        summary.coloured_files += colours.is_some() as u64;
         progress.start(RENDER_PHASE, r.info().face_count.unwrap_or(0));
         // Workers draw whole chunks into tiles of their own; the tiles are
         // merged pixel by pixel keeping the nearest depth, and among equal
@@ -625,14 +666,18 @@ pub fn render_surfaces(inputs: &[Vec<PathBuf>], output: &Path, o: &RenderOptions
         let worker_tiles: Vec<Vec<Canvas>> = std::thread::scope(|scope| -> Result<Vec<Vec<Canvas>>, RenderError> {
             let handles: Vec<_> = (0..threads)
                 .map(|_| {
-                    let (rx, free_tx, cams, views) = (rx.clone(), free_tx.clone(), &cams, &views);
+                    let (rx, free_tx, cams, views, colours) = (rx.clone(), free_tx.clone(), &cams, &views, &colours);
                     scope.spawn(move || {
                         let mut tiles: Vec<Canvas> = views.iter().map(|_| Canvas::new(o.width, o.height)).collect();
                         for (base, chunk) in rx {
                             for (k, p) in chunk.positions.iter().enumerate() {
+                                let rgba = colours.as_ref().map(|c| chunk.indices[k].map(|i| c.get(i)));
                                 for (tile, cam) in tiles.iter_mut().zip(cams) {
                                     tile.order = base + k as u64;
-                                    tile.triangle(cam, p);
+                                    match rgba {
+                                        Some(rgba) => tile.triangle_coloured(cam, p, rgba),
+                                        None => tile.triangle(cam, p),
+                                    }
                                     if o.wireframe {
                                         for e in 0..3 {
                                             tile.segment(cam, p[e], p[(e + 1) % 3], WIRE);

@@ -107,6 +107,12 @@ fn mesh_reader_at(path: &Path) {
         Err(e) => one_line_naming(&e, &path),
         Ok(mut r) => {
             let n = r.vertex_count();
+            if let Some(c) = r.colours() {
+                assert_eq!(c.count(), n, "colours for {} of {n} vertices", c.count());
+                for i in 0..n {
+                    let _ = c.get(i);
+                }
+            }
             if let Some(g) = r.range_grid() {
                 assert_eq!(g.cells.len() as u64, g.cols as u64 * g.rows as u64, "range grid of {}x{} with {} cells", g.cols, g.rows, g.cells.len());
                 for c in g.cells.iter().flatten() {

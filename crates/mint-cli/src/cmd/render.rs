@@ -31,10 +31,12 @@ pub struct RenderArgs {
     /// A reference mesh for `--color distance` (read in memory).
     #[arg(long = "ref", value_name = "REF")]
     pub reference: Option<PathBuf>,
-    /// shading: flat shading (back faces orange). distance: the distance
+    /// vertex (the default): a file's per-vertex colours where it has them
+    /// (PLY red green blue, OBJ v x y z r g b), else shading. shading: flat
+    /// shading (back faces orange), colours ignored. distance: the distance
     /// of each visible point to --ref, blue (0) to red (the largest), with
     /// a colour bar: where a resampling or decimation lost detail.
-    #[arg(long, value_enum, default_value_t = ColorArg::Shading)]
+    #[arg(long, value_enum, default_value_t = ColorArg::Vertex)]
     pub color: ColorArg,
     /// Draw every triangle's edges in dark grey (edges hidden by the surface
     /// stay hidden). On a mesh with more triangles than pixels this turns
@@ -61,7 +63,11 @@ pub struct RenderArgs {
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ColorArg {
+    /// Per-vertex colours where a file has them, else shading.
+    Vertex,
+    /// Shading only, whatever colours the files have.
     Shading,
+    /// Distance to --ref, with a colour bar.
     Distance,
 }
 
@@ -104,8 +110,8 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     let distance_to = match (a.color, &a.reference) {
         (ColorArg::Distance, Some(r)) => Some(r.clone()),
         (ColorArg::Distance, None) => bail!("--color distance needs --ref REF, the mesh to measure against"),
-        (ColorArg::Shading, Some(_)) => bail!("--ref is used with --color distance"),
-        (ColorArg::Shading, None) => None,
+        (ColorArg::Shading | ColorArg::Vertex, Some(_)) => bail!("--ref is used with --color distance"),
+        (ColorArg::Shading | ColorArg::Vertex, None) => None,
     };
     if let Some(r) = &distance_to {
         crate::paths::check_not_input(output, &[r.as_path()])?;
@@ -130,7 +136,17 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
             boundary_edges.push(report.boundary_edges);
         }
     }
-    let o = mint_render::RenderOptions { width: a.size.0, height: a.size.1, view, threads, distance_to, wireframe: a.wireframe, marks, up: a.up.axis() };
+    let o = mint_render::RenderOptions {
+        width: a.size.0,
+        height: a.size.1,
+        view,
+        threads,
+        distance_to,
+        wireframe: a.wireframe,
+        marks,
+        up: a.up.axis(),
+        vertex_colours: a.color == ColorArg::Vertex,
+    };
     let s = mint_render::render_surfaces(&columns, output, &o, &bars)?;
     if a.json.json {
         let mut v = serde_json::to_value(&s)?;
@@ -140,6 +156,9 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else if !a.quiet.quiet {
         eprintln!("rendered {} triangles -> {} ({}x{}, {} pixels covered) in {:.2}s", s.triangles, s.output, s.width, s.height, s.covered_pixels, s.seconds);
+        if s.coloured_files > 0 {
+            eprintln!("  drawn in their per-vertex colours: {} of the files (--color shading to ignore them)", s.coloured_files);
+        }
         if a.show_boundary {
             let list: Vec<String> = boundary_edges.iter().map(u64::to_string).collect();
             eprintln!("  boundary edges (red): {}", list.join(", "));

@@ -32,6 +32,7 @@ use std::sync::Arc;
 use super::header::{parse, Element, Encoding, PlyHeader, PropType, Property};
 use crate::error::{show_token, Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
+use crate::colours::VertexColours;
 use crate::positions::{check_finite, not_finite, Emit, Layout, PosKind, Positions, Reject, Scalar};
 use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, RangeGrid, ReadStats};
 use crate::text::{line_of, parse_f64, parse_int, Tokens};
@@ -40,7 +41,9 @@ use crate::Format;
 /// What an element is to the reader.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Role {
-    Vertex { xyz: [usize; 3] },
+    /// Positions, and colour properties (red, green, blue, alpha; alpha
+    /// when the last is `Some`).
+    Vertex { xyz: [usize; 3], rgb: Option<[usize; 3]>, alpha: Option<usize> },
     Faces { list: usize, strip: bool },
     RangeGrid { list: usize },
     Other,
@@ -97,6 +100,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     body.extra = vec![Default::default(); body.header.elements.len()];
     body.next_offset = body.header.body;
     let mut positions = Positions::empty();
+    let mut colours = None;
     let mut spilled = 0;
     let mut grid = None;
     // Walk up to the last element needed before streaming.
@@ -105,9 +109,10 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         for e in 0..=last {
             let start = body.next_offset;
             let end = match body.roles[e] {
-                Role::Vertex { xyz } => {
-                    let (p, end, s) = body.read_vertices(e, xyz, start, spill_dir)?;
+                Role::Vertex { xyz, rgb, alpha } => {
+                    let (p, c, end, s) = body.read_vertices(e, xyz, rgb.map(|c| (c, alpha)), start, spill_dir)?;
                     positions = p;
+                    colours = c;
                     spilled = s;
                     end
                 }
@@ -140,7 +145,16 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     if body.pending.is_empty() && !body.roles[body.next_elem..].iter().any(|r| matches!(r, Role::Faces { .. })) {
         body.walk_to_end()?;
     }
-    Ok(Opened { info, positions, body: Box::new(body), range_grid: grid, spilled_vertices: spilled })
+    Ok(Opened { info, positions, body: Box::new(body), range_grid: grid, spilled_vertices: spilled, colours })
+}
+
+/// Checks that property `i` of `el` may hold a colour channel.
+fn colour_type(el: &crate::ply::header::Element, i: usize, name: &str) -> Result<(), String> {
+    match el.props[i].ty {
+        PropType::Scalar(t) if crate::colours::colour_scalar(t) => Ok(()),
+        PropType::Scalar(_) => Err(format!("colour property '{name}' of an odd type (mint reads uchar, ushort, float and double colours)")),
+        PropType::List { .. } => Err(format!("colour property '{name}' is a list, expected a number")),
+    }
 }
 
 /// Classifies the elements and checks that the ones mint reads have the
@@ -168,7 +182,30 @@ fn roles(h: &PlyHeader, path: &Path) -> Result<Vec<Role>, Error> {
                         None => return Err(err(ErrorKind::Format, format!("the vertex element has no property '{name}'"))),
                     }
                 }
-                Role::Vertex { xyz }
+                // Colour: red green blue [alpha] (MeshLab, Open3D), or
+                // diffuse_red … (older scanners' exports).
+                let mut rgb = None;
+                let mut alpha = None;
+                for prefix in ["", "diffuse_"] {
+                    let idx = ["red", "green", "blue"].map(|c| el.prop(&format!("{prefix}{c}")));
+                    if idx.iter().all(Option::is_none) {
+                        continue;
+                    }
+                    let mut found = [0; 3];
+                    for (k, i) in idx.iter().enumerate() {
+                        let name = format!("{prefix}{}", ["red", "green", "blue"][k]);
+                        let i = i.ok_or_else(|| err(ErrorKind::Format, format!("a colour without property '{name}' (red, green and blue go together)")))?;
+                        colour_type(el, i, &name).map_err(|m| err(ErrorKind::Unsupported, m))?;
+                        found[k] = i;
+                    }
+                    if let Some(a) = el.prop(&format!("{prefix}alpha")) {
+                        colour_type(el, a, &format!("{prefix}alpha")).map_err(|m| err(ErrorKind::Unsupported, m))?;
+                        alpha = Some(a);
+                    }
+                    rgb = Some(found);
+                    break;
+                }
+                Role::Vertex { xyz, rgb, alpha }
             }
             "vertex" => return Err(err(ErrorKind::Unsupported, "more than one 'vertex' element".into())),
             "face" | "tristrips" | "range_grid" => {
@@ -566,14 +603,20 @@ impl PlyBody {
     /// Makes the vertex element `e` index-addressable: in place for binary
     /// fixed-size records, else spilled. Returns (positions, end offset,
     /// spilled vertex count).
-    fn read_vertices(&self, e: usize, xyz: [usize; 3], start: usize, spill_dir: &Path) -> Result<(Positions, usize, u64), Error> {
+    #[allow(clippy::type_complexity)]
+    fn read_vertices(&self, e: usize, xyz: [usize; 3], rgba: Option<([usize; 3], Option<usize>)>, start: usize, spill_dir: &Path) -> Result<(Positions, Option<VertexColours>, usize, u64), Error> {
         let data = self.map.bytes();
         let el = &self.header.elements[e];
         let ctx = self.ctx(data, e);
         let count = el.count as u32;
         if count == 0 {
-            return Ok((Positions::empty(), start, 0));
+            return Ok((Positions::empty(), None, start, 0));
         }
+        let offset_of = |i: usize| -> usize { el.props[..i].iter().map(|p| if let PropType::Scalar(s) = p.ty { s.size() } else { 0 }).sum() };
+        let scalar_of = |i: usize| -> Scalar {
+            let PropType::Scalar(t) = el.props[i].ty else { unreachable!("checked by roles") };
+            t
+        };
         if self.header.encoding != Encoding::Ascii {
             if let Some(size) = el.fixed_size() {
                 let end = fixed_end(&ctx, start, size, el.count)?;
@@ -587,23 +630,45 @@ impl PlyBody {
                     let PropType::Scalar(t) = el.props[xyz[k]].ty else { unreachable!() };
                     ty[k] = t;
                 }
-                let layout = Layout { base: start, stride: size, group: 1, inner: 0, off, ty, be: self.header.encoding == Encoding::BinaryBe };
-                return Ok((Positions::new(self.map.clone(), count, layout), end, 0));
+                let be = self.header.encoding == Encoding::BinaryBe;
+                let layout = Layout { base: start, stride: size, group: 1, inner: 0, off, ty, be };
+                let colours = rgba.map(|(rgb, alpha)| {
+                    let a = alpha.unwrap_or(rgb[0]);
+                    let chans = [rgb[0], rgb[1], rgb[2], a];
+                    VertexColours::new(self.map.clone(), count, start, size, chans.map(offset_of), chans.map(scalar_of), alpha.is_some(), be)
+                });
+                return Ok((Positions::new(self.map.clone(), count, layout), colours, end, 0));
             }
         }
-        // Spill: parse every record once into f64 triples.
+        // Spill: parse every record once into f64 triples (and RGBA bytes).
         let mut extra = Extra::default();
         let mut spill = SpillFile::new(spill_dir, &self.path)?;
+        let mut cspill = match rgba {
+            Some(_) => Some(SpillFile::new(spill_dir, &self.path)?),
+            None => None,
+        };
+        // Role of each property: 1..=3 a coordinate, 4..=7 a colour channel.
         let role: Vec<u8> = (0..el.props.len())
-            .map(|i| xyz.iter().position(|&k| k == i).map_or(0, |k| k as u8 + 1))
+            .map(|i| match xyz.iter().position(|&k| k == i) {
+                Some(k) => k as u8 + 1,
+                None => rgba.and_then(|(rgb, a)| [Some(rgb[0]), Some(rgb[1]), Some(rgb[2]), a].iter().position(|&k| k == Some(i))).map_or(0, |k| k as u8 + 4),
+            })
             .collect();
         let end = with_src!(self.header.encoding, data, start, |s| {
             for r in 0..el.count {
                 let at = s.mark();
                 let mut p = [0.0f64; 3];
+                let mut c = [255u8; 4];
                 for (prop, &role) in el.props.iter().zip(&role) {
                     let res = match prop.ty {
-                        PropType::Scalar(t) if role > 0 => s.float(t).map(|v| p[role as usize - 1] = v),
+                        PropType::Scalar(t) if (1..=3).contains(&role) => s.float(t).map(|v| p[role as usize - 1] = v),
+                        PropType::Scalar(t) if role >= 4 => s.float(t).map(|v| {
+                            c[role as usize - 4] = match t {
+                                Scalar::U8 => v as u8,
+                                Scalar::U16 => ((v as u64) >> 8) as u8,
+                                _ => crate::colours::unit_to_u8(v),
+                            }
+                        }),
                         PropType::Scalar(t) => s.skip_n(t, 1),
                         PropType::List { count, item } => s.list_len(count).and_then(|n| s.skip_n(item, n)),
                     };
@@ -611,12 +676,19 @@ impl PlyBody {
                 }
                 extra.note(s.end_record());
                 spill.write_point(p)?;
+                if let Some(cs) = cspill.as_mut() {
+                    cs.write_bytes(&c)?;
+                }
             }
             s.pos()
         });
         self.note_extra(e, extra);
         let map = Arc::new(spill.into_mapped()?);
-        Ok((Positions::spilled(map, count), end, el.count))
+        let colours = match cspill {
+            Some(cs) => Some(VertexColours::spilled(Arc::new(cs.into_mapped()?), count)),
+            None => None,
+        };
+        Ok((Positions::spilled(map, count), colours, end, el.count))
     }
 
     /// Parses a `range_grid` element; `nv` is the vertex count.

@@ -6,6 +6,7 @@
 //! path against the streaming reader (`visit`). Shared helpers live in
 //! `util`.
 mod bad_input;
+mod colour;
 mod features;
 mod gltf;
 mod tiles;

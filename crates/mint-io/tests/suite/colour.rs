@@ -1,0 +1,111 @@
+//! Per-vertex colour read (issue 27, its first step): PLY `red green blue
+//! [alpha]` as uchar, ushort, float or double, binary (in place) and ASCII
+//! (spilled), `diffuse_*` names; OBJ `v x y z r g b`; the real coloured
+//! scans of ../shared/data/colour_scans with their stated colours; and one
+//! line for each bad colour.
+
+use std::collections::HashSet;
+
+use mint_io::{MeshReader, ReadOptions};
+
+use super::util::{data_dir, write_file};
+
+fn colours_of(path: &std::path::Path) -> Option<Vec<[u8; 4]>> {
+    let r = MeshReader::open(path, ReadOptions::default()).unwrap();
+    r.colours().map(|c| (0..c.count()).map(|i| c.get(i)).collect())
+}
+
+fn ply_header(format: &str, props: &str, n: usize) -> String {
+    format!("ply\nformat {format} 1.0\nelement vertex {n}\nproperty float x\nproperty float y\nproperty float z\n{props}element face 1\nproperty list uchar int vertex_indices\nend_header\n")
+}
+
+#[test]
+fn ply_colours_in_every_type_binary_and_ascii() {
+    let d = tempfile::tempdir().unwrap();
+    // Binary little-endian, uchar RGB, no alpha: read in place.
+    let mut b = ply_header("binary_little_endian", "property uchar red\nproperty uchar green\nproperty uchar blue\n", 3).into_bytes();
+    for (k, c) in [[255u8, 0, 0], [0, 128, 0], [1, 2, 3]].iter().enumerate() {
+        for x in [k as f32, 0.0, 0.0] {
+            b.extend(x.to_le_bytes());
+        }
+        b.extend(c);
+    }
+    b.push(3);
+    for i in [0i32, 1, 2] {
+        b.extend(i.to_le_bytes());
+    }
+    let p = write_file(d.path(), "u8.ply", &b);
+    assert_eq!(colours_of(&p).unwrap(), vec![[255, 0, 0, 255], [0, 128, 0, 255], [1, 2, 3, 255]]);
+    // Binary big-endian, ushort RGBA: the high byte.
+    let mut b = ply_header("binary_big_endian", "property ushort red\nproperty ushort green\nproperty ushort blue\nproperty ushort alpha\n", 3).into_bytes();
+    for k in 0..3u16 {
+        for x in [k as f32, 1.0, 0.0] {
+            b.extend(x.to_be_bytes());
+        }
+        for c in [0xFFFFu16, 0x8000, 0x00FF, 0x1234 * (k + 1)] {
+            b.extend(c.to_be_bytes());
+        }
+    }
+    b.push(3);
+    for i in [0i32, 1, 2] {
+        b.extend(i.to_be_bytes());
+    }
+    let p = write_file(d.path(), "u16.ply", &b);
+    assert_eq!(colours_of(&p).unwrap(), vec![[255, 128, 0, 0x12], [255, 128, 0, 0x24], [255, 128, 0, 0x36]]);
+    // ASCII, float colours named diffuse_*, clamped and rounded (spilled).
+    let t = ply_header("ascii", "property float diffuse_red\nproperty float diffuse_green\nproperty float diffuse_blue\n", 3)
+        + "0 0 0 1 0.5 0\n1 0 0 2 -1 0.25\n0 1 0 0 0 1\n3 0 1 2\n";
+    let p = write_file(d.path(), "f32.ply", t.as_bytes());
+    assert_eq!(colours_of(&p).unwrap(), vec![[255, 128, 0, 255], [255, 0, 64, 255], [0, 0, 255, 255]]);
+    // No colour: none.
+    let t = ply_header("ascii", "", 3) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    assert!(colours_of(&write_file(d.path(), "none.ply", t.as_bytes())).is_none());
+}
+
+#[test]
+fn obj_vertex_colours_and_mixed_lines() {
+    let d = tempfile::tempdir().unwrap();
+    let p = write_file(d.path(), "c.obj", b"# coloured\nv 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0.5 0.5 1 # a comment\nf 1 2 3\n");
+    assert_eq!(colours_of(&p).unwrap(), vec![[255, 0, 0, 255], [0, 255, 0, 255], [128, 128, 255, 255]]);
+    // `v x y z w` is not a colour.
+    let p = write_file(d.path(), "w.obj", b"v 0 0 0 1\nv 1 0 0 1\nv 0 1 0 1\nf 1 2 3\n");
+    assert!(colours_of(&p).is_none());
+    for (name, text) in [("mix1.obj", "v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0 0 0 1\nf 1 2 3\n"), ("mix2.obj", "v 0 0 0\nv 1 0 0 1 1 1\nv 0 1 0\nf 1 2 3\n")] {
+        let p = write_file(d.path(), name, text.as_bytes());
+        let e = MeshReader::open(&p, ReadOptions::default()).unwrap_err().to_string();
+        assert!(e.contains(name) && e.contains("mix 3 and 6 numbers") && e.contains("line 2") && !e.contains('\n'), "{e}");
+    }
+}
+
+#[test]
+fn bad_ply_colours_give_one_line() {
+    let d = tempfile::tempdir().unwrap();
+    for (name, props, needle) in [
+        ("int.ply", "property int red\nproperty int green\nproperty int blue\n", "'red' of an odd type"),
+        ("partial.ply", "property uchar red\nproperty uchar green\n", "without property 'blue'"),
+        ("list.ply", "property uchar red\nproperty uchar green\nproperty list uchar uchar blue\n", "'blue' is a list"),
+        ("alpha.ply", "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty char alpha\n", "'alpha' of an odd type"),
+    ] {
+        let t = ply_header("ascii", props, 0);
+        let p = write_file(d.path(), name, t.as_bytes());
+        let e = MeshReader::open(&p, ReadOptions::default()).unwrap_err().to_string();
+        assert!(e.contains(name) && e.contains(needle) && !e.contains('\n'), "{name}: {e}");
+    }
+}
+
+/// The coloured scans, with the colours their PROVENANCE.md states.
+#[test]
+fn the_coloured_scans_read_with_their_stated_colours() {
+    let Some(dir) = data_dir() else { return };
+    let c = colours_of(&dir.join("colour_scans/rgbd_object_iory/obj.ply")).expect("per-vertex RGBA");
+    assert_eq!(c.len(), 14975);
+    let rgb: HashSet<[u8; 3]> = c.iter().map(|c| [c[0], c[1], c[2]]).collect();
+    assert_eq!(rgb.len(), 13130, "distinct RGB");
+    assert_eq!(c.iter().map(|c| c[3]).collect::<HashSet<_>>().len(), 1, "alpha constant");
+    let c = colours_of(&dir.join("colour_scans/laurana_meshlab/Laurana50k.ply")).expect("per-vertex colour");
+    assert!(c.iter().all(|c| c[0] == c[1] && c[1] == c[2]), "grey");
+    let levels: HashSet<u8> = c.iter().map(|c| c[0]).collect();
+    assert_eq!((levels.len(), levels.iter().min().copied(), levels.iter().max().copied()), (154, Some(0), Some(153)));
+    // Textured or face-coloured captures carry no per-vertex colour.
+    assert!(colours_of(&dir.join("colour_scans/copyroom_planeopt/copyroom_c2000_opt.ply")).is_none());
+}
