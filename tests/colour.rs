@@ -39,22 +39,14 @@ fn two_colour_sphere(dir: &Path) -> PathBuf {
 
 /// (reddish, bluish) pixel counts in the upper and lower halves.
 fn halves(png_path: &Path) -> [(u32, u32); 2] {
-    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png_path).unwrap()));
-    let mut r = dec.read_info().unwrap();
-    let mut buf = vec![0; r.output_buffer_size()];
-    let info = r.next_frame(&mut buf).unwrap();
-    let (w, h) = (info.width as usize, info.height as usize);
-    let ch = info.line_size / w;
+    let (w, h, px) = crate::common::png_rgb(png_path);
     let mut out = [(0, 0); 2];
-    for y in 0..h {
-        for x in 0..w {
-            let p = &buf[y * info.line_size + x * ch..][..3];
-            let half = &mut out[(y >= h / 2) as usize];
-            if p[0] as i32 > p[2] as i32 + 60 {
-                half.0 += 1;
-            } else if p[2] as i32 > p[0] as i32 + 60 {
-                half.1 += 1;
-            }
+    for (i, p) in px.iter().enumerate() {
+        let half = &mut out[(i / w >= h / 2) as usize];
+        if p[0] as i32 > p[2] as i32 + 60 {
+            half.0 += 1;
+        } else if p[2] as i32 > p[0] as i32 + 60 {
+            half.1 += 1;
         }
     }
     out

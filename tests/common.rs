@@ -96,3 +96,18 @@ pub fn boolean(op: mint_core::expr::BoolOp, a: &Path, b: &Path, output: &Path, o
 pub fn csg(scene: &mint_pipeline::Scene, scene_name: &str, output: &Path, o: &Opts, p: &dyn mint_pipeline::Progress) -> Result<mint_pipeline::ResampleSummary, mint_pipeline::PipelineError> {
     mint_pipeline::run_scene(&o.spec(mint_pipeline::Job::Csg { scene: scene_name.into() }, output), scene, &o.tuning, p)
 }
+
+/// A PNG's pixels as RGB rows: (width, height, pixels row by row).
+pub fn png_rgb(path: &Path) -> (usize, usize, Vec<[u8; 3]>) {
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut r = dec.read_info().unwrap();
+    let mut buf = vec![0; r.output_buffer_size()];
+    let info = r.next_frame(&mut buf).unwrap();
+    let (w, h) = (info.width as usize, info.height as usize);
+    let ch = info.line_size / w;
+    let px = (0..h).flat_map(|y| (0..w).map(move |x| (y, x))).map(|(y, x)| {
+        let p = &buf[y * info.line_size + x * ch..][..3];
+        [p[0], p[1], p[2]]
+    });
+    (w, h, px.collect())
+}

@@ -205,20 +205,8 @@ fn glbs_written_by_other_tools_read_whole() {
 /// Widths (covered pixels per row) of the rows of a picture that hold
 /// the surface, top first.
 fn row_widths(png_path: &Path) -> Vec<u32> {
-    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png_path).unwrap()));
-    let mut r = dec.read_info().unwrap();
-    let mut buf = vec![0; r.output_buffer_size()];
-    let info = r.next_frame(&mut buf).unwrap();
-    let (w, h) = (info.width as usize, info.height as usize);
-    let ch = info.line_size / w;
-    let mut rows = Vec::new();
-    for y in 0..h {
-        let n = (0..w).filter(|&x| buf[y * info.line_size + x * ch..][..3] != [250, 250, 250]).count() as u32;
-        if n > 0 {
-            rows.push(n);
-        }
-    }
-    rows
+    let (w, h, px) = crate::common::png_rgb(png_path);
+    (0..h).map(|y| px[y * w..(y + 1) * w].iter().filter(|p| **p != [250, 250, 250]).count() as u32).filter(|&n| n > 0).collect()
 }
 
 /// A bust exported by MeshLab (y-up) is drawn right side up in the front

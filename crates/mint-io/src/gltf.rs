@@ -414,10 +414,14 @@ impl<'d> Accessor<'d> {
         let at = format!("accessors[{i}]");
         let a = accs.get(i).ok_or_else(|| bad(path, "accessors", format!("accessor {i} does not exist ({} accessors)", accs.len())))?;
         let ty = a.get("type").and_then(Value::as_str).unwrap_or("");
-        if ty != want_type {
+        if !want_type.split('|').any(|t| t == ty) {
             return Err(bad(path, &at, format!("type {ty:?}, {want_type:?} expected")));
         }
-        let comps = if ty == "VEC3" { 3 } else { 1 };
+        let comps = match ty {
+            "VEC3" => 3,
+            "VEC4" => 4,
+            _ => 1,
+        };
         let comp = uint(path, &at, a, "componentType", 0)? as u32;
         let size = comp_size(path, &at, comp)?;
         let count = uint(path, &at, a, "count", 0)?;
@@ -518,16 +522,35 @@ pub(crate) struct Counts {
 
 /// Walks every drawn primitive; with spills, writes world positions and
 /// triangles (0-based over all primitives).
-fn walk(doc: &Doc, spill: Option<(&mut SpillFile, &mut SpillFile)>) -> Result<Counts, Error> {
+fn walk(doc: &Doc, spill: Option<(&mut SpillFile, &mut SpillFile)>, colours: Option<&mut SpillFile>) -> Result<Counts, Error> {
     let mut c = Counts::default();
-    walk_into(doc, &IDENTITY, &mut c, spill)?;
+    walk_into(doc, &IDENTITY, &mut c, spill, colours)?;
     Ok(c)
+}
+
+/// True when some primitive of the document has a `COLOR_0` attribute.
+fn has_colour(doc: &Doc) -> bool {
+    arr(&doc.json, "meshes").iter().any(|m| arr(m, "primitives").iter().any(|p| p.get("attributes").and_then(|a| a.get("COLOR_0")).is_some()))
+}
+
+/// A `COLOR_0` element as RGBA bytes: FLOAT, or normalized UNSIGNED_BYTE
+/// or UNSIGNED_SHORT, VEC3 (alpha 255) or VEC4.
+fn read_colour(b: &[u8], comp: u32, comps: usize) -> [u8; 4] {
+    let mut c = [255u8; 4];
+    for (k, ch) in c.iter_mut().enumerate().take(comps) {
+        *ch = match comp {
+            5121 => b[k],
+            5123 => b[2 * k + 1],
+            _ => crate::colours::unit_to_u8(f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]]) as f64),
+        };
+    }
+    c
 }
 
 /// [`walk`] with `prefix` applied after the node transforms, appending to
 /// the counts (and spills) of earlier documents: vertex ids go on from
 /// `c.vertices`.
-fn walk_into(doc: &Doc, prefix: &Mat, c: &mut Counts, mut spill: Option<(&mut SpillFile, &mut SpillFile)>) -> Result<(), Error> {
+fn walk_into(doc: &Doc, prefix: &Mat, c: &mut Counts, mut spill: Option<(&mut SpillFile, &mut SpillFile)>, mut colours: Option<&mut SpillFile>) -> Result<(), Error> {
     let path = doc.path;
     let meshes = arr(&doc.json, "meshes");
     let start = *c;
@@ -580,6 +603,39 @@ fn walk_into(doc: &Doc, prefix: &Mat, c: &mut Counts, mut spill: Option<(&mut Sp
                 ));
             }
             let Some((vs, fs)) = spill.as_mut() else { continue };
+            // Colours, one per position (white where a primitive has none).
+            if let Some(cs) = colours.as_mut() {
+                match index(path, &at, attrs, "COLOR_0", usize::MAX)? {
+                    None => {
+                        for _ in 0..pos.count {
+                            cs.write_bytes(&[255; 4])?;
+                        }
+                    }
+                    Some(ci) => {
+                        let a = Accessor::new(doc, ci, "VEC3|VEC4")?;
+                        if !matches!(a.comp, 5121 | 5123 | 5126) {
+                            return Err(bad(path, &a.at, format!("COLOR_0 of componentType {} (FLOAT, UNSIGNED_BYTE or UNSIGNED_SHORT expected)", a.comp)));
+                        }
+                        if a.count != pos.count {
+                            return Err(bad(path, &a.at, format!("COLOR_0 has {} elements, POSITION {}", a.count, pos.count)));
+                        }
+                        let comps = if arr(&doc.json, "accessors")[ci].get("type").and_then(Value::as_str) == Some("VEC4") { 4 } else { 3 };
+                        let mut sub: Vec<(usize, &[u8])> = a.sparse.clone();
+                        sub.sort_by_key(|s| s.0);
+                        let mut next = 0;
+                        for i in 0..a.count {
+                            let mut col = a.raw(i).map_or([0, 0, 0, 255], |b| read_colour(b, a.comp, comps));
+                            while next < sub.len() && sub[next].0 <= i {
+                                if sub[next].0 == i {
+                                    col = read_colour(sub[next].1, a.comp, comps);
+                                }
+                                next += 1;
+                            }
+                            cs.write_bytes(&col)?;
+                        }
+                    }
+                }
+            }
             // Positions, sparse values substituted, in world coordinates.
             let mut sub: Vec<(usize, &[u8])> = pos.sparse.clone();
             sub.sort_by_key(|s| s.0);
@@ -642,7 +698,7 @@ pub(crate) fn append(
     spill: Option<(&mut SpillFile, &mut SpillFile)>,
 ) -> Result<(), Error> {
     let doc = Doc::parse_range(path, map, range, spill_dir)?;
-    walk_into(&doc, prefix, c, spill)
+    walk_into(&doc, prefix, c, spill, None)
 }
 
 /// Streams triangles spilled as three little-endian u32 ids each: the body
@@ -673,7 +729,7 @@ pub(crate) fn info(path: &Path, data: &[u8]) -> Result<MeshInfo, Error> {
     // The buffers are mapped again for the check: `info` has only the bytes.
     let map = Arc::new(Mapped::open(path, &std::env::temp_dir())?);
     let doc = Doc::parse(path, &map, &std::env::temp_dir())?;
-    let c = walk(&doc, None)?;
+    let c = walk(&doc, None, None)?;
     Ok(make_info(&doc, is_glb(data), &c))
 }
 
@@ -827,16 +883,24 @@ impl FaceStream for InPlaceBody {
 
 pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Opened, Error> {
     let doc = Doc::parse(path, &map, spill_dir)?;
-    if let Some(opened) = open_in_place(&doc, &map)? {
-        return Ok(opened);
+    let coloured = has_colour(&doc);
+    if !coloured {
+        if let Some(opened) = open_in_place(&doc, &map)? {
+            return Ok(opened);
+        }
     }
     let (mut vs, mut fs) = (SpillFile::new(spill_dir, path)?, SpillFile::new(spill_dir, path)?);
-    let c = walk(&doc, Some((&mut vs, &mut fs)))?;
+    let mut cs = if coloured { Some(SpillFile::new(spill_dir, path)?) } else { None };
+    let c = walk(&doc, Some((&mut vs, &mut fs)), cs.as_mut())?;
+    let colours = match cs {
+        Some(cs) => Some(crate::colours::VertexColours::spilled(Arc::new(cs.into_mapped()?), c.vertices as u32)),
+        None => None,
+    };
     let info = make_info(&doc, is_glb(map.bytes()), &c);
     let positions = Positions::spilled(Arc::new(vs.into_mapped()?), c.vertices as u32);
     let faces = Arc::new(fs.into_mapped()?);
     let body = GltfBody { path: path.to_path_buf(), faces, tris: c.triangles, next: 0, total: map.bytes().len() as u64 };
-    Ok(Opened { info, positions, body: Box::new(body), range_grid: None, spilled_vertices: c.vertices, colours: None })
+    Ok(Opened { info, positions, body: Box::new(body), range_grid: None, spilled_vertices: c.vertices, colours })
 }
 
 struct GltfBody {

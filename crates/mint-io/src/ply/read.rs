@@ -187,16 +187,13 @@ fn roles(h: &PlyHeader, path: &Path) -> Result<Vec<Role>, Error> {
                 let mut rgb = None;
                 let mut alpha = None;
                 for prefix in ["", "diffuse_"] {
+                    // All three or no colour (a lone 'red' is some other
+                    // property, skipped as before).
                     let idx = ["red", "green", "blue"].map(|c| el.prop(&format!("{prefix}{c}")));
-                    if idx.iter().all(Option::is_none) {
-                        continue;
-                    }
-                    let mut found = [0; 3];
-                    for (k, i) in idx.iter().enumerate() {
-                        let name = format!("{prefix}{}", ["red", "green", "blue"][k]);
-                        let i = i.ok_or_else(|| err(ErrorKind::Format, format!("a colour without property '{name}' (red, green and blue go together)")))?;
-                        colour_type(el, i, &name).map_err(|m| err(ErrorKind::Unsupported, m))?;
-                        found[k] = i;
+                    let [Some(r), Some(g), Some(b)] = idx else { continue };
+                    let found = [r, g, b];
+                    for (k, &i) in found.iter().enumerate() {
+                        colour_type(el, i, &format!("{prefix}{}", ["red", "green", "blue"][k])).map_err(|m| err(ErrorKind::Unsupported, m))?;
                     }
                     if let Some(a) = el.prop(&format!("{prefix}alpha")) {
                         colour_type(el, a, &format!("{prefix}alpha")).map_err(|m| err(ErrorKind::Unsupported, m))?;

@@ -57,9 +57,11 @@ fn ply_colours_in_every_type_binary_and_ascii() {
         + "0 0 0 1 0.5 0\n1 0 0 2 -1 0.25\n0 1 0 0 0 1\n3 0 1 2\n";
     let p = write_file(d.path(), "f32.ply", t.as_bytes());
     assert_eq!(colours_of(&p).unwrap(), vec![[255, 128, 0, 255], [255, 0, 64, 255], [0, 0, 255, 255]]);
-    // No colour: none.
+    // No colour: none; red and green without blue are other properties.
     let t = ply_header("ascii", "", 3) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
     assert!(colours_of(&write_file(d.path(), "none.ply", t.as_bytes())).is_none());
+    let t = ply_header("ascii", "property uchar red\nproperty uchar green\n", 3) + "0 0 0 1 2\n1 0 0 1 2\n0 1 0 1 2\n3 0 1 2\n";
+    assert!(colours_of(&write_file(d.path(), "partial.ply", t.as_bytes())).is_none());
 }
 
 #[test]
@@ -82,7 +84,6 @@ fn bad_ply_colours_give_one_line() {
     let d = tempfile::tempdir().unwrap();
     for (name, props, needle) in [
         ("int.ply", "property int red\nproperty int green\nproperty int blue\n", "'red' of an odd type"),
-        ("partial.ply", "property uchar red\nproperty uchar green\n", "without property 'blue'"),
         ("list.ply", "property uchar red\nproperty uchar green\nproperty list uchar uchar blue\n", "'blue' is a list"),
         ("alpha.ply", "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty char alpha\n", "'alpha' of an odd type"),
     ] {
@@ -108,4 +109,43 @@ fn the_coloured_scans_read_with_their_stated_colours() {
     assert_eq!((levels.len(), levels.iter().min().copied(), levels.iter().max().copied()), (154, Some(0), Some(153)));
     // Textured or face-coloured captures carry no per-vertex colour.
     assert!(colours_of(&dir.join("colour_scans/copyroom_planeopt/copyroom_c2000_opt.ply")).is_none());
+}
+
+/// glTF `COLOR_0`: normalized u8 VEC4 and FLOAT VEC3 read as RGBA; a
+/// primitive without colour gets white; a COLOR_0 of the wrong count is
+/// one line naming its accessor.
+#[test]
+fn gltf_color_0() {
+    use super::gltf::{f32s, glb};
+    use serde_json::json;
+    let d = tempfile::tempdir().unwrap();
+    let mut bin = f32s(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]); // 36 bytes
+    bin.extend([255u8, 0, 0, 255, 0, 255, 0, 128, 0, 0, 255, 0]); // u8 VEC4, 12 bytes
+    bin.extend(f32s(&[0.5, 0.25, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0])); // f32 VEC3, 36 bytes
+    let doc = |colour_count: u64| {
+        json!({
+            "asset": {"version": "2.0"}, "scenes": [{"nodes": [0, 1, 2]}], "nodes": [{"mesh": 0}, {"mesh": 1}, {"mesh": 2}],
+            "meshes": [
+                {"primitives": [{"attributes": {"POSITION": 0, "COLOR_0": 1}}]},
+                {"primitives": [{"attributes": {"POSITION": 0, "COLOR_0": 2}}]},
+                {"primitives": [{"attributes": {"POSITION": 0}}]}
+            ],
+            "buffers": [{"byteLength": 84}],
+            "bufferViews": [{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 12}, {"buffer": 0, "byteOffset": 48, "byteLength": 36}],
+            "accessors": [
+                {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"},
+                {"bufferView": 1, "componentType": 5121, "normalized": true, "count": colour_count, "type": "VEC4"},
+                {"bufferView": 2, "componentType": 5126, "count": 3, "type": "VEC3"}
+            ]
+        })
+    };
+    let p = write_file(d.path(), "c.glb", &glb(&doc(3), &bin));
+    let c = colours_of(&p).unwrap();
+    assert_eq!(c.len(), 9);
+    assert_eq!(c[..3], [[255, 0, 0, 255], [0, 255, 0, 128], [0, 0, 255, 0]]);
+    assert_eq!(c[3..6], [[128, 64, 255, 255], [0, 0, 0, 255], [255, 255, 255, 255]]);
+    assert_eq!(c[6..], [[255; 4]; 3]);
+    let p = write_file(d.path(), "bad.glb", &glb(&doc(2), &bin));
+    let e = MeshReader::open(&p, ReadOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("bad.glb") && e.contains("accessors[1]") && e.contains("COLOR_0 has 2 elements") && !e.contains('\n'), "{e}");
 }

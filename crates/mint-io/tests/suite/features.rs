@@ -171,7 +171,7 @@ fn ply_range_grid() {
 #[test]
 fn obj_corner_forms_relative_indices_and_ignored_lines() {
     let dir = tempfile::tempdir().unwrap();
-    let text = "# exported by hand\r\nmtllib a.mtl\no thing\nv 0 0 0\nv 1 0 0 1.0\nv 1 1 0 0.5 0.5 0.5\nvt 0 0\nvn 0 0 1\n\
+    let text = "# exported by hand\r\nmtllib a.mtl\no thing\nv 0 0 0\nv 1 0 0 1.0\nv 1 1 0\nvt 0 0\nvn 0 0 1\n\
 v 0 1 0 # trailing comment\ng grp\nusemtl m\ns 1\nf 1/1/1 2/1/1 3/1/1 4/1/1\nf -4//1 -3//1 -2//1\nf 1 2\nl 1 2\n\
 v 5 5 5\nf -1 -2 -3\nf 5/1 4/1 3/1\n";
     let p = write_file(dir.path(), "a.obj", text.as_bytes());
