@@ -199,7 +199,7 @@ pub fn check_files(paths: &[PathBuf], opts: &CheckOptions, progress: &dyn Progre
         .tempdir_in(&tmp_root)
         .map_err(|source| CheckError::Temp { path: tmp_root.clone(), op: "creating the check's spill directory", source })?;
     let joined = tmp.path().join("surface.ply");
-    mint_io::concatenate(paths, &joined, mint_io::Format::Ply, mint_io::WriteOptions { ascii: false, double: true, spill_dir: Some(tmp.path().to_path_buf()) }, &|| progress.cancelled()).map_err(|e| if progress.cancelled() { CheckError::Cancelled } else { e.into() })?;
+    mint_io::concatenate(paths, &joined, mint_io::Format::Ply, mint_io::WriteOptions { ascii: false, double: true, spill_dir: Some(tmp.path().to_path_buf()), colours: false }, &|| progress.cancelled()).map_err(|e| if progress.cancelled() { CheckError::Cancelled } else { e.into() })?;
     check_file(&joined, opts, progress)
 }
 

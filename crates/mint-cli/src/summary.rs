@@ -103,6 +103,12 @@ pub(crate) fn summary_warnings(s: &mint_pipeline::ResampleSummary) -> Vec<String
 /// into a solid (`decimate` has no `--signs`: it names `mint resample`).
 pub(crate) fn summary_warnings_with(s: &mint_pipeline::ResampleSummary, close: &str) -> Vec<String> {
     let mut w = s.input_warnings.clone();
+    if s.input_coloured_files > 0 {
+        w.push(format!(
+            "{}: {} of the input files have per-vertex colour, which resampling does not carry yet: the output is geometry only",
+            s.input, s.input_coloured_files
+        ));
+    }
     if s.sign_rule == "sheet" && s.census_odd * 3 > s.census_lines {
         w.push(format!(
             "{}: the input is open ({} of {} grid lines cross it an odd number of times): resampled as an open sheet with its faces' orientation, enclosing no volume, its boundary within about two cells of the input's (the rim's last cells are dropped whole); {close} closes it into a solid",

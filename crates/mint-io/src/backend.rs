@@ -207,6 +207,10 @@ pub struct WriteOptions {
     /// Where the STL writer spills vertex positions. Default `None`: the
     /// system temporary directory, [`std::env::temp_dir`].
     pub spill_dir: Option<PathBuf>,
+    /// Write per-vertex colour (given by [`crate::MeshWriter::write_vertex_rgba`])
+    /// where the format holds it: PLY `uchar red green blue alpha`, OBJ
+    /// `v x y z r g b`. Default false.
+    pub colours: bool,
 }
 
 /// A buffered writer over an [`AtomicFile`], with in-place patching.
@@ -316,6 +320,11 @@ impl OutFile {
 /// order, finiteness and index ranges.
 pub(crate) trait FormatWriter: Send {
     fn vertex(&mut self, p: [f64; 3]) -> Result<(), Error>;
+    /// A vertex and its colour; only called when the writer was created
+    /// with [`WriteOptions::colours`] and its backend holds colour.
+    fn vertex_rgba(&mut self, p: [f64; 3], _c: [u8; 4]) -> Result<(), Error> {
+        self.vertex(p)
+    }
     fn face(&mut self, f: [u32; 3]) -> Result<(), Error>;
     /// Patches counts, syncs and renames; returns the file size.
     fn finish(self: Box<Self>, vertices: u64, faces: u64) -> Result<u64, Error>;

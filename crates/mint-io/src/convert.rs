@@ -42,6 +42,10 @@ pub struct ConvertSummary {
     pub read_stats: ReadStats,
     /// Size of the output file.
     pub bytes_written: u64,
+    /// Per-vertex colour: `None` when the input has none (or colour was
+    /// not asked for), `Some(true)` kept, `Some(false)` dropped because the
+    /// output format cannot hold it.
+    pub colour_kept: Option<bool>,
 }
 
 /// Converts `input` into `output` (format by the output's extension),
@@ -97,8 +101,13 @@ pub fn convert_cancellable(
         }
         _ => (write.double, if write.double { "f64 (asked)".to_string() } else { "f32".to_string() }),
     };
+    // Colour goes along when asked for and the output format holds it.
+    let colours = if write.colours { reader.colours() } else { None };
+    let keep = colours.is_some() && MeshWriter::holds_colour(output_format);
+    let colour_kept = colours.as_ref().map(|_| keep);
+    let colours = colours.filter(|_| keep);
     // The writer's temporary file lives beside the target until `finish`.
-    let mut writer = MeshWriter::create(output, output_format, WriteOptions { double, ..write })?;
+    let mut writer = MeshWriter::create(output, output_format, WriteOptions { double, colours: keep, ..write })?;
     // Vertices: copied, or welded for STL input.
     let nv = reader.vertex_count();
     let mut welded: HashMap<[u64; 3], u32> = HashMap::new();
@@ -122,7 +131,10 @@ pub fn convert_cancellable(
                 writer.write_vertex(p)?;
             }
         } else {
-            writer.write_vertex(p)?;
+            match &colours {
+                Some(c) => writer.write_vertex_rgba(p, c.get(i))?,
+                None => writer.write_vertex(p)?,
+            }
         }
     }
     // Triangles, chunk by chunk.
@@ -151,6 +163,7 @@ pub fn convert_cancellable(
         triangles: summary.faces,
         read_stats: reader.stats(),
         bytes_written: summary.bytes,
+        colour_kept,
     })
 }
 

@@ -27,6 +27,8 @@ pub(crate) struct Backend {
     /// It stores them relative to an origin it carries in f64 (glTF: the
     /// node's translation), so f32 need hold only the model's extent.
     pub(crate) origin: bool,
+    /// It holds per-vertex colour (PLY, OBJ).
+    pub(crate) colour: bool,
 }
 
 fn boxed<W: FormatWriter + 'static>(w: Result<W, Error>) -> Result<Box<dyn FormatWriter>, Error> {
@@ -42,23 +44,25 @@ pub(crate) fn backend(format: Format) -> Backend {
             create: |path, o| boxed(ply::write::PlyWriter::create(path, o)),
             f32_only: false,
             origin: false,
+            colour: true,
         },
-        Format::Obj => Backend { info: obj::info, open: obj::open, create: |path, o| boxed(obj::writer(path, o)), f32_only: false, origin: false },
-        Format::Stl => Backend { info: stl::info, open: stl::open, create: |path, o| boxed(stl::StlWriter::create(path, o)), f32_only: true, origin: false },
-        Format::Off => Backend { info: off::info, open: off::open, create: |path, o| boxed(off::writer(path, o)), f32_only: false, origin: false },
-        Format::Mesh => Backend { info: mesh::info, open: mesh::open, create: |path, o| boxed(mesh::writer(path, o)), f32_only: false, origin: false },
-        Format::Raw => Backend { info: raw::info, open: raw::open, create: |path, o| boxed(raw::RawWriter::create(path, o)), f32_only: false, origin: false },
-        Format::Vrml => Backend { info: vrml::info, open: vrml::open, create: |path, o| boxed(vrml::VrmlWriter::create(path, o)), f32_only: false, origin: false },
-        Format::Gltf => Backend { info: gltf::info, open: gltf::open, create: |path, o| boxed(gltf::GltfWriter::create(path, o)), f32_only: true, origin: true },
+        Format::Obj => Backend { info: obj::info, open: obj::open, create: |path, o| boxed(obj::writer(path, o)), f32_only: false, origin: false, colour: true },
+        Format::Stl => Backend { info: stl::info, open: stl::open, create: |path, o| boxed(stl::StlWriter::create(path, o)), f32_only: true, origin: false, colour: false },
+        Format::Off => Backend { info: off::info, open: off::open, create: |path, o| boxed(off::writer(path, o)), f32_only: false, origin: false, colour: false },
+        Format::Mesh => Backend { info: mesh::info, open: mesh::open, create: |path, o| boxed(mesh::writer(path, o)), f32_only: false, origin: false, colour: false },
+        Format::Raw => Backend { info: raw::info, open: raw::open, create: |path, o| boxed(raw::RawWriter::create(path, o)), f32_only: false, origin: false, colour: false },
+        Format::Vrml => Backend { info: vrml::info, open: vrml::open, create: |path, o| boxed(vrml::VrmlWriter::create(path, o)), f32_only: false, origin: false, colour: false },
+        Format::Gltf => Backend { info: gltf::info, open: gltf::open, create: |path, o| boxed(gltf::GltfWriter::create(path, o)), f32_only: true, origin: true, colour: false },
         Format::Tiles => Backend {
             info: tiles::info,
             open: tiles::open,
             create: |path, _| Err(Error::unsupported(path, "mint does not write 3D Tiles; write .glb (or .gltf, .ply) and tile it with a 3D Tiles tool")),
             f32_only: true,
             origin: true,
+            colour: false,
         },
         Format::ThreeDs => {
-            Backend { info: three_ds::info, open: three_ds::open, create: |path, o| boxed(three_ds::ThreeDsWriter::create(path, o)), f32_only: true, origin: false }
+            Backend { info: three_ds::info, open: three_ds::open, create: |path, o| boxed(three_ds::ThreeDsWriter::create(path, o)), f32_only: true, origin: false, colour: false }
         }
     }
 }

@@ -97,6 +97,8 @@ pub(crate) struct TextStyle {
     /// OFF: a counts line of fixed width after the header, patched at the
     /// end with the vertex and face counts.
     pub(crate) counts: Option<fn(u64, u64) -> String>,
+    /// OBJ: vertex colour as `v x y z r g b` (channels in [0, 1]).
+    pub(crate) colour: bool,
 }
 
 /// The one writer of the line-based formats.
@@ -120,6 +122,17 @@ impl TextWriter {
 impl FormatWriter for TextWriter {
     fn vertex(&mut self, p: [f64; 3]) -> Result<(), Error> {
         write_point(self.out.text(), self.style.vertex, p, self.double, b"\n");
+        self.out.maybe_flush()
+    }
+
+    fn vertex_rgba(&mut self, p: [f64; 3], c: [u8; 4]) -> Result<(), Error> {
+        if !self.style.colour {
+            return self.vertex(p);
+        }
+        let t = self.out.text();
+        write_point(t, self.style.vertex, p, self.double, b"");
+        // The shortest f32 decimal of c/255 reads back as the same byte.
+        let _ = writeln!(t, " {} {} {}", c[0] as f32 / 255.0, c[1] as f32 / 255.0, c[2] as f32 / 255.0);
         self.out.maybe_flush()
     }
 

@@ -250,7 +250,7 @@ impl FaceLines for MeshBody {
 /// `mesh` as mint writes it: its header, `v` lines, `f` lines with
 /// 0-based indices.
 pub(crate) fn writer(path: &Path, opts: &WriteOptions) -> Result<TextWriter, Error> {
-    TextWriter::create(path, opts, TextStyle { header: b"mesh\n# written by mint-io; face indices start at 0\n", vertex: b"v ", face: "f ", base: 0, counts: None })
+    TextWriter::create(path, opts, TextStyle { header: b"mesh\n# written by mint-io; face indices start at 0\n", vertex: b"v ", face: "f ", base: 0, counts: None, colour: false })
 }
 
 #[cfg(test)]

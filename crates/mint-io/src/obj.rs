@@ -260,7 +260,7 @@ impl FaceLines for ObjBody {
 
 /// OBJ as mint writes it: `v` then `f` lines, indices from 1.
 pub(crate) fn writer(path: &Path, opts: &WriteOptions) -> Result<TextWriter, Error> {
-    TextWriter::create(path, opts, TextStyle { header: b"# written by mint-io\n", vertex: b"v ", face: "f ", base: 1, counts: None })
+    TextWriter::create(path, opts, TextStyle { header: b"# written by mint-io\n", vertex: b"v ", face: "f ", base: 1, counts: None, colour: true })
 }
 
 #[cfg(test)]

@@ -270,7 +270,7 @@ fn counts_line(v: u64, f: u64) -> String {
 /// OFF as mint writes it: the counts line reserved after `OFF` and
 /// patched at the end, vertex lines, `3 a b c` face lines.
 pub(crate) fn writer(path: &Path, opts: &WriteOptions) -> Result<TextWriter, Error> {
-    TextWriter::create(path, opts, TextStyle { header: b"OFF\n", vertex: b"", face: "3 ", base: 0, counts: Some(counts_line) })
+    TextWriter::create(path, opts, TextStyle { header: b"OFF\n", vertex: b"", face: "3 ", base: 0, counts: Some(counts_line), colour: false })
 }
 
 #[cfg(test)]

@@ -46,6 +46,8 @@ pub struct MeshWriter {
     inner: Box<dyn FormatWriter>,
     /// Coordinates are stored as f32 (checked to fit).
     f32_out: bool,
+    /// Per-vertex colour is written (asked for, and the format holds it).
+    colours: bool,
     vertices: u64,
     faces: u64,
 }
@@ -68,12 +70,49 @@ impl MeshWriter {
         let backend = crate::formats::backend(format);
         let inner = (backend.create)(path, &opts)?;
         let f32_out = !opts.double || backend.f32_only;
-        Ok(MeshWriter { path: path.to_path_buf(), format, inner, f32_out, vertices: 0, faces: 0 })
+        let colours = opts.colours && backend.colour;
+        Ok(MeshWriter { path: path.to_path_buf(), format, inner, f32_out, colours, vertices: 0, faces: 0 })
+    }
+
+    /// True when `format` can hold per-vertex colour (PLY, OBJ).
+    pub fn holds_colour(format: Format) -> bool {
+        crate::formats::backend(format).colour
+    }
+
+    /// True when this writer writes per-vertex colour.
+    pub fn writes_colour(&self) -> bool {
+        self.colours
+    }
+
+    /// Appends a vertex with its colour (RGBA bytes). The colour is written
+    /// when the writer writes colour ([`MeshWriter::writes_colour`]), else
+    /// dropped; otherwise as [`MeshWriter::write_vertex`].
+    pub fn write_vertex_rgba(&mut self, p: [f64; 3], c: [u8; 4]) -> Result<(), Error> {
+        self.check_vertex(p)?;
+        if self.colours {
+            self.inner.vertex_rgba(p, c)?;
+        } else {
+            self.inner.vertex(p)?;
+        }
+        self.vertices += 1;
+        Ok(())
     }
 
     /// Appends a vertex. All vertices come before the first face; the
-    /// coordinates must be finite.
+    /// coordinates must be finite. A writer that writes colour gives it
+    /// white.
     pub fn write_vertex(&mut self, p: [f64; 3]) -> Result<(), Error> {
+        if self.colours {
+            return self.write_vertex_rgba(p, [255; 4]);
+        }
+        self.check_vertex(p)?;
+        self.inner.vertex(p)?;
+        self.vertices += 1;
+        Ok(())
+    }
+
+    /// What every vertex must be, with the error naming it.
+    fn check_vertex(&self, p: [f64; 3]) -> Result<(), Error> {
         if self.faces > 0 {
             return Err(Error::unsupported(&self.path, "a vertex after the first face (streaming writers need all vertices first)")
                 .at_element("vertex")
@@ -100,8 +139,6 @@ impl MeshWriter {
         if self.vertices >= u32::MAX as u64 {
             return Err(Error::unsupported(&self.path, format!("more than {} vertices (32-bit indices)", u32::MAX)).at_element("vertex"));
         }
-        self.inner.vertex(p)?;
-        self.vertices += 1;
         Ok(())
     }
 

@@ -324,6 +324,7 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
             s.input_files += files.len() as u64;
             s.input_vertices += files.iter().map(|f| f.vertices).sum::<u64>();
             s.input_tiles += files.iter().map(|f| f.tiles).sum::<u64>();
+            s.input_coloured_files += files.iter().filter(|f| f.colour).count() as u64;
             s.input_faces += ctx.faces_and_volume(j)?.0;
             mesh_ops.push(j);
         }

@@ -88,6 +88,10 @@ pub struct MeshFile {
     /// Tiles read from a 3D Tiles tileset (0 for other files).
     #[serde(default)]
     pub tiles: u64,
+    /// The file has per-vertex colour (binary formats and glTF; text files
+    /// are only counted when planned, so they say false).
+    #[serde(default)]
+    pub colour: bool,
 }
 
 /// What the plan knows of one operand of the scene.
@@ -191,11 +195,11 @@ fn open_all(paths: &[PathBuf], threads: usize) -> Vec<Result<MeshFile, mint_io::
         use mint_io::Format::*;
         if matches!(mint_io::Format::from_path(path)?, Obj | Off | Mesh | Raw) {
             let info = mint_io::read_info(path)?;
-            return Ok(MeshFile { path: path.clone(), bytes, vertices: info.vertex_count, split_faces: None, tiles: 0 });
+            return Ok(MeshFile { path: path.clone(), bytes, vertices: info.vertex_count, split_faces: None, tiles: 0, colour: false });
         }
         let r = MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false })?;
         let tiles = r.info().elements.iter().find(|e| r.info().format == mint_io::Format::Tiles && e.name == "tiles").map_or(0, |e| e.count);
-        Ok(MeshFile { path: path.clone(), bytes, vertices: r.vertex_count() as u64, split_faces: r.splittable_records(), tiles })
+        Ok(MeshFile { path: path.clone(), bytes, vertices: r.vertex_count() as u64, split_faces: r.splittable_records(), tiles, colour: r.colours().is_some() })
     };
     let threads = threads.clamp(1, paths.len().max(1));
     if threads == 1 {
@@ -426,7 +430,7 @@ mod tests {
     fn plan() -> Plan {
         let spec = RunSpec::resample("/data/in.ply", "/data/out.ply", GridSize::Cells(1000));
         let (parts, slabs) = (3, 2);
-        let operands = vec![OperandPlan::Mesh { files: vec![MeshFile { path: "/data/in.ply".into(), bytes: 100, vertices: 4, split_faces: Some(4), tiles: 0 }] }];
+        let operands = vec![OperandPlan::Mesh { files: vec![MeshFile { path: "/data/in.ply".into(), bytes: 100, vertices: 4, split_faces: Some(4), tiles: 0, colour: false }] }];
         Plan {
             format: PLAN_FORMAT.into(),
             version: PLAN_VERSION,

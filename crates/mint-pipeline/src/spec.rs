@@ -173,7 +173,7 @@ pub struct WriteSpec {
 impl WriteSpec {
     /// The writer's options, spilling into `spill_dir`.
     pub fn options(&self, spill_dir: Option<PathBuf>) -> mint_io::WriteOptions {
-        mint_io::WriteOptions { ascii: self.ascii, double: self.double, spill_dir }
+        mint_io::WriteOptions { ascii: self.ascii, double: self.double, spill_dir, colours: false }
     }
 }
 

@@ -14,6 +14,9 @@ pub struct ResampleSummary {
     pub input_files: u64,
     /// Tiles read from 3D Tiles tilesets (their finest level), 0 without.
     pub input_tiles: u64,
+    /// Input files with per-vertex colour, which the output does not carry
+    /// (yet: issue 27).
+    pub input_coloured_files: u64,
     pub input_vertices: u64,
     pub input_faces: u64,
     /// Signed volume enclosed by the input (negative: inside-out).

@@ -28,6 +28,10 @@ pub struct ConvertArgs {
     /// Directory for temporary spill files [default: the system temp dir].
     #[arg(long)]
     pub tmp: Option<PathBuf>,
+    /// Drop per-vertex colour [default: kept where the output format holds
+    /// it: PLY, OBJ; a warning says when it cannot].
+    #[arg(long)]
+    pub no_color: bool,
     #[command(flatten)]
     pub quiet: QuietArg,
 }
@@ -37,7 +41,8 @@ pub(crate) fn cmd_convert(a: ConvertArgs) -> Result<()> {
     crate::paths::check_output(&a.output, &files.iter().map(|p| p.as_path()).collect::<Vec<_>>())?;
     if files.len() > 1 {
         let format = mint_io::Format::from_path(&a.output)?;
-        let write = WriteOptions { ascii: a.ascii, double: a.double, spill_dir: a.tmp.clone() };
+        // Joining tiles keeps geometry only (for now).
+        let write = WriteOptions { ascii: a.ascii, double: a.double, spill_dir: a.tmp.clone(), colours: false };
         let (v, f) = mint_io::concatenate(&files, &a.output, format, write, &crate::progress::interrupted)?;
         if !a.quiet.quiet {
             eprintln!("joined {} files -> {} ({format:?}): {v} vertices, {f} triangles", files.len(), a.output.display());
@@ -49,7 +54,7 @@ pub(crate) fn cmd_convert(a: ConvertArgs) -> Result<()> {
     use mint_pipeline::{Phase, Progress};
     bars.start(Phase::named("convert"), 0);
     let read = mint_io::ReadOptions { spill_dir: a.tmp.clone(), ..Default::default() };
-    let write = WriteOptions { ascii: a.ascii, double: a.double, ..Default::default() };
+    let write = WriteOptions { ascii: a.ascii, double: a.double, colours: !a.no_color, ..Default::default() };
     let mut last = 0u64;
     let summary = mint_io::convert_cancellable(input, &a.output, read, write, &mut |done, _total| {
         bars.advance(done.saturating_sub(last));
@@ -58,6 +63,13 @@ pub(crate) fn cmd_convert(a: ConvertArgs) -> Result<()> {
     })
     .with_context(|| format!("converting {} to {}", input.display(), a.output.display()))?;
     bars.finish();
+    if summary.colour_kept == Some(false) {
+        eprintln!(
+            "mint: warning: {}: {} cannot hold per-vertex colour; the input's colours were dropped (PLY and OBJ keep them)",
+            a.output.display(),
+            summary.output_format
+        );
+    }
     if !a.quiet.quiet {
         eprintln!(
             "converted {} ({:?}) -> {} ({:?}): {} vertices, {} triangles, {}, coordinates {}",
@@ -70,6 +82,9 @@ pub(crate) fn cmd_convert(a: ConvertArgs) -> Result<()> {
             human_bytes(summary.bytes_written),
             summary.precision
         );
+        if summary.colour_kept == Some(true) {
+            eprintln!("  per-vertex colour kept");
+        }
     }
     Ok(())
 }

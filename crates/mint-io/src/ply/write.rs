@@ -19,17 +19,20 @@ pub(crate) struct PlyWriter {
     double: bool,
     /// Index type decided at the first face (all vertices are known then).
     uint: Option<bool>,
+    /// Vertices carry `uchar red green blue alpha`.
+    colours: bool,
     vertices: u64,
     reserved: usize,
 }
 
 /// The header text for the given counts, padded to `size` bytes if given.
-fn header(encoding: Encoding, double: bool, uint: bool, v: u64, f: u64, size: Option<usize>) -> String {
+fn header(encoding: Encoding, double: bool, colours: bool, uint: bool, v: u64, f: u64, size: Option<usize>) -> String {
     let coord = if double { "double" } else { "float" };
     let index = if uint { "uint" } else { "int" };
     let head = format!("ply\nformat {} 1.0\n", encoding.name());
+    let rgba = if colours { "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n" } else { "" };
     let tail = format!(
-        "element vertex {v}\nproperty {coord} x\nproperty {coord} y\nproperty {coord} z\n\
+        "element vertex {v}\nproperty {coord} x\nproperty {coord} y\nproperty {coord} z\n{rgba}\
          element face {f}\nproperty list uchar {index} vertex_indices\nend_header\n"
     );
     // The comment after the format line is padded with spaces.
@@ -42,16 +45,31 @@ fn header(encoding: Encoding, double: bool, uint: bool, v: u64, f: u64, size: Op
 impl PlyWriter {
     pub(crate) fn create(path: &Path, opts: &WriteOptions) -> Result<PlyWriter, Error> {
         let encoding = if opts.ascii { Encoding::Ascii } else { Encoding::BinaryLe };
-        let reserved = header(encoding, opts.double, true, u64::MAX, u64::MAX, None).len();
+        let reserved = header(encoding, opts.double, opts.colours, true, u64::MAX, u64::MAX, None).len();
         let mut out = OutFile::create(path)?;
-        let h = header(encoding, opts.double, false, 0, 0, Some(reserved));
+        let h = header(encoding, opts.double, opts.colours, false, 0, 0, Some(reserved));
         debug_assert_eq!(h.len(), reserved);
         out.put(h.as_bytes())?;
-        Ok(PlyWriter { out, encoding, double: opts.double, uint: None, vertices: 0, reserved })
+        Ok(PlyWriter { out, encoding, double: opts.double, uint: None, colours: opts.colours, vertices: 0, reserved })
     }
 }
 
 impl FormatWriter for PlyWriter {
+    fn vertex_rgba(&mut self, p: [f64; 3], c: [u8; 4]) -> Result<(), Error> {
+        if self.encoding == Encoding::Ascii {
+            self.vertices += 1;
+            let t = self.out.text();
+            for k in 0..3 {
+                write_coord(t, p[k], self.double);
+                t.push(b' ');
+            }
+            let _ = writeln!(t, "{} {} {} {}", c[0], c[1], c[2], c[3]);
+            return self.out.maybe_flush();
+        }
+        self.vertex(p)?;
+        self.out.put(&c)
+    }
+
     #[inline]
     fn vertex(&mut self, p: [f64; 3]) -> Result<(), Error> {
         self.vertices += 1;
@@ -100,7 +118,7 @@ impl FormatWriter for PlyWriter {
 
     fn finish(mut self: Box<Self>, vertices: u64, faces: u64) -> Result<u64, Error> {
         let uint = self.uint.unwrap_or(vertices > i32::MAX as u64);
-        let h = header(self.encoding, self.double, uint, vertices, faces, Some(self.reserved));
+        let h = header(self.encoding, self.double, self.colours, uint, vertices, faces, Some(self.reserved));
         debug_assert_eq!(h.len(), self.reserved);
         self.out.patch(0, h.as_bytes())?;
         self.out.commit()
@@ -113,9 +131,9 @@ mod tests {
 
     #[test]
     fn header_size_is_fixed() {
-        let r = header(Encoding::BinaryLe, false, true, u64::MAX, u64::MAX, None).len();
+        let r = header(Encoding::BinaryLe, false, false, true, u64::MAX, u64::MAX, None).len();
         for (v, f, u) in [(0, 0, false), (12345, 7, false), (u64::MAX, u64::MAX, true)] {
-            let h = header(Encoding::BinaryLe, false, u, v, f, Some(r));
+            let h = header(Encoding::BinaryLe, false, false, u, v, f, Some(r));
             assert_eq!(h.len(), r);
             assert!(h.contains(&format!("element vertex {v}\n")));
         }

@@ -149,3 +149,31 @@ fn gltf_color_0() {
     let e = MeshReader::open(&p, ReadOptions::default()).unwrap_err().to_string();
     assert!(e.contains("bad.glb") && e.contains("accessors[1]") && e.contains("COLOR_0 has 2 elements") && !e.contains('\n'), "{e}");
 }
+
+/// Converting keeps per-vertex colour where the output holds it (PLY
+/// binary and ASCII, OBJ) byte for byte, and says when it drops it (STL).
+#[test]
+fn convert_keeps_colours_where_the_format_holds_them() {
+    use mint_io::{convert, WriteOptions};
+    let Some(dir) = data_dir() else { return };
+    let src = dir.join("colour_scans/rgbd_object_iory/obj.ply");
+    let want = colours_of(&src).unwrap();
+    let d = tempfile::tempdir().unwrap();
+    for (name, ascii) in [("a.obj", false), ("b.ply", false), ("c.ply", true)] {
+        let out = d.path().join(name);
+        let s = convert(&src, &out, ReadOptions::default(), WriteOptions { ascii, colours: true, ..Default::default() }, &mut |_, _| {}).unwrap();
+        assert_eq!(s.colour_kept, Some(true), "{name}");
+        let got = colours_of(&out).unwrap();
+        // OBJ holds no alpha: compare RGB there.
+        if name.ends_with(".obj") {
+            assert!(got.iter().zip(&want).all(|(g, w)| g[..3] == w[..3]), "{name}: colours differ");
+        } else {
+            assert_eq!(got, want, "{name}");
+        }
+    }
+    let s = convert(&src, &d.path().join("d.stl"), ReadOptions::default(), WriteOptions { colours: true, ..Default::default() }, &mut |_, _| {}).unwrap();
+    assert_eq!(s.colour_kept, Some(false));
+    let s = convert(&src, &d.path().join("e.ply"), ReadOptions::default(), WriteOptions::default(), &mut |_, _| {}).unwrap();
+    assert_eq!(s.colour_kept, None, "not asked for");
+    assert!(colours_of(&d.path().join("e.ply")).is_none());
+}
