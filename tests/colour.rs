@@ -70,3 +70,26 @@ fn a_two_colour_sphere_renders_in_its_colours() {
     let [top, bottom] = halves(&png);
     assert_eq!((top.0, bottom.0), (0, 0), "no red without the colours");
 }
+
+/// `mint gen … --color`: every vertex carries the colour field's colour at
+/// its position (PLY and OBJ); a format without colour is refused.
+#[test]
+fn gen_color_writes_the_colour_field() {
+    let d = tempfile::tempdir().unwrap();
+    for name in ["t.ply", "t.obj"] {
+        let out = d.path().join(name);
+        let o = mint(&["gen", "torus", out.to_str().unwrap(), "--faces", "5000", "--color"]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let r = mint_io::MeshReader::open(&out, mint_io::ReadOptions::default()).unwrap();
+        let c = r.colours().expect("colours");
+        for i in 0..r.vertex_count() {
+            let want = mint_gen::colour::colour_at(r.vertex(i));
+            let got = c.get(i);
+            // OBJ stores the channels as decimals of c/255, read back exactly.
+            assert_eq!(got[..3], want[..3], "{name}: vertex {i}");
+        }
+    }
+    let o = mint(&["gen", "torus", d.path().join("t.stl").to_str().unwrap(), "--color"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.trim_end().lines().count() == 1 && err.contains("holds per-vertex colour"), "{err}");
+}

@@ -26,6 +26,7 @@
 //! their parameters.
 
 pub mod balls;
+pub mod colour;
 pub mod error;
 pub mod plate;
 pub mod rng;

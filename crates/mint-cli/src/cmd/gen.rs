@@ -45,6 +45,11 @@ pub struct GenArgs {
     /// Write ASCII instead of binary (PLY/STL).
     #[arg(long)]
     pub ascii: bool,
+    /// Give every vertex a colour (PLY, OBJ): smooth gradients with sharp
+    /// borders on the planes x, y, z = k/4, a function of the position
+    /// (`mint_gen::colour::colour_at`), for colour tests and benchmarks.
+    #[arg(long)]
+    pub color: bool,
     /// Order of the vertices and faces in the file: as generated (spatially
     /// coherent), or shuffled, as real scans often come (the same surface
     /// and triangles; the torus is shuffled as it streams, at any size; other
@@ -75,22 +80,41 @@ pub(crate) fn cmd_gen_into(a: &GenArgs, w: &mut dyn mint_core::MeshSink) -> Resu
     })
 }
 
+/// Writes each vertex with the colour field's colour at it.
+struct Coloured<'w>(&'w mut mint_io::MeshWriter);
+
+impl mint_core::MeshSink for Coloured<'_> {
+    fn vertex(&mut self, p: [f64; 3]) -> Result<(), mint_core::SinkError> {
+        Ok(self.0.write_vertex_rgba(p, mint_gen::colour::colour_at(p))?)
+    }
+    fn face(&mut self, f: [u32; 3]) -> Result<(), mint_core::SinkError> {
+        Ok(self.0.write_face(f)?)
+    }
+}
+
 pub(crate) fn cmd_gen(a: GenArgs) -> Result<()> {
     crate::paths::check_output(&a.output, &[])?;
     let format = mint_io::Format::from_path(&a.output)?;
-    let mut w = mint_io::MeshWriter::create(&a.output, format, WriteOptions { ascii: a.ascii, ..Default::default() })?;
-    let (generated, defects) = match (a.order, a.shape) {
-        (OrderArg::Shuffled, Shape::Torus) => (serde_json::to_value(mint_gen::torus_shuffled([0.0; 3], 1.0, 0.35, a.faces, a.seed, &mut w)?)?, None),
-        (OrderArg::Shuffled, _) => {
-            if a.faces > 50_000_000 {
-                bail!("--order shuffled: only the torus is shuffled as it streams; other shapes are shuffled in memory, up to 50,000,000 faces");
+    if a.color && !mint_io::MeshWriter::holds_colour(format) {
+        bail!("{}: --color needs a format that holds per-vertex colour (.ply or .obj)", a.output.display());
+    }
+    let mut w = mint_io::MeshWriter::create(&a.output, format, WriteOptions { ascii: a.ascii, colours: a.color, ..Default::default() })?;
+    let (generated, defects) = {
+        let mut coloured = Coloured(&mut w);
+        let sink: &mut dyn mint_core::MeshSink = if a.color { &mut coloured } else { coloured.0 };
+        match (a.order, a.shape) {
+            (OrderArg::Shuffled, Shape::Torus) => (serde_json::to_value(mint_gen::torus_shuffled([0.0; 3], 1.0, 0.35, a.faces, a.seed, sink)?)?, None),
+            (OrderArg::Shuffled, _) => {
+                if a.faces > 50_000_000 {
+                    bail!("--order shuffled: only the torus is shuffled as it streams; other shapes are shuffled in memory, up to 50,000,000 faces");
+                }
+                let mut m = mint_core::TriMesh::default();
+                let g = cmd_gen_into(&a, &mut m)?;
+                mint_gen::shuffle_mesh(&m, a.seed, sink)?;
+                g
             }
-            let mut m = mint_core::TriMesh::default();
-            let g = cmd_gen_into(&a, &mut m)?;
-            mint_gen::shuffle_mesh(&m, a.seed, &mut w)?;
-            g
+            (OrderArg::InOrder, _) => cmd_gen_into(&a, sink)?,
         }
-        (OrderArg::InOrder, _) => cmd_gen_into(&a, &mut w)?,
     };
     let written = w.finish()?;
     if let Some(d) = &defects {
