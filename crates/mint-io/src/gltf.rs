@@ -717,7 +717,10 @@ fn make_info(doc: &Doc, glb: bool, c: &Counts) -> MeshInfo {
         elements: vec![
             ElementInfo { name: "POSITION".into(), count: c.vertices, properties: vec!["float[3] x y z (node transforms applied)".into()] },
             ElementInfo { name: "triangles".into(), count: c.triangles, properties: vec![format!("from {} primitives ({} of points or lines skipped)", c.primitives, c.skipped)] },
-        ],
+        ]
+        .into_iter()
+        .chain(has_colour(doc).then(|| ElementInfo { name: "COLOR_0".into(), count: c.vertices, properties: vec!["RGBA per vertex (white where a primitive has none)".into()] }))
+        .collect(),
         comments: generator.into_iter().map(|g| format!("generator: {g}")).collect(),
         obj_info: Vec::new(),
     }

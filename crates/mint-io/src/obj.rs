@@ -90,8 +90,10 @@ fn parse_vertex(path: &Path, data: &[u8], rest: &[u8], record: u64, at: usize) -
     Ok((p, Some(c)))
 }
 
-/// Counts `v` and `f` lines and collects the leading comment block.
-fn scan(data: &[u8]) -> (u64, u64, Vec<String>) {
+/// Counts `v` and `f` lines and collects the leading comment block; says
+/// whether the first `v` line has a colour (`v x y z r g b`).
+fn scan(data: &[u8]) -> (u64, u64, Vec<String>, bool) {
+    let mut colour = false;
     let (mut nv, mut nf) = (0u64, 0u64);
     let mut comments = Vec::new();
     let mut leading = true;
@@ -100,7 +102,12 @@ fn scan(data: &[u8]) -> (u64, u64, Vec<String>) {
         let line = &line[..];
         let (kind, rest) = classify(line);
         match kind {
-            Kind::Vertex => nv += 1,
+            Kind::Vertex => {
+                if nv == 0 {
+                    colour = words(rest).take_while(|t| !t.starts_with(b"#")).count() >= 6;
+                }
+                nv += 1
+            }
             Kind::Face => nf += 1,
             Kind::Comment if leading => comments.push(String::from_utf8_lossy(rest).trim().to_string()),
             _ => {}
@@ -109,17 +116,17 @@ fn scan(data: &[u8]) -> (u64, u64, Vec<String>) {
             leading = false;
         }
     }
-    (nv, nf, comments)
+    (nv, nf, comments, colour)
 }
 
-fn make_info(nv: u64, nf: u64, comments: Vec<String>) -> MeshInfo {
+fn make_info(nv: u64, nf: u64, comments: Vec<String>, colour: bool) -> MeshInfo {
     MeshInfo {
         format: Format::Obj,
         encoding: "ascii".into(),
         vertex_count: nv,
         face_count: Some(nf),
         elements: vec![
-            ElementInfo { name: "v".into(), count: nv, properties: vec!["x".into(), "y".into(), "z".into()] },
+            ElementInfo { name: "v".into(), count: nv, properties: if colour { vec!["x".into(), "y".into(), "z".into(), "r".into(), "g".into(), "b".into()] } else { vec!["x".into(), "y".into(), "z".into()] } },
             ElementInfo { name: "f".into(), count: nf, properties: vec!["vertex_indices".into()] },
         ],
         comments,
@@ -129,8 +136,8 @@ fn make_info(nv: u64, nf: u64, comments: Vec<String>) -> MeshInfo {
 
 /// Header information of an OBJ file: a full scan counting lines.
 pub(crate) fn info(_path: &Path, data: &[u8]) -> Result<MeshInfo, Error> {
-    let (nv, nf, comments) = scan(data);
-    Ok(make_info(nv, nf, comments))
+    let (nv, nf, comments, colour) = scan(data);
+    Ok(make_info(nv, nf, comments, colour))
 }
 
 /// First pass: spills vertex positions; returns the reader parts.
@@ -183,7 +190,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         None => None,
     };
     let body = ObjBody { sec: Section::new(path, map, 0), v_seen: 0, f_rec: 0, rec_at: 0 };
-    Ok(Opened { info: make_info(nv, nf, comments), positions, body: Box::new(body), range_grid: None, spilled_vertices: nv, colours })
+    Ok(Opened { info: make_info(nv, nf, comments, colours.is_some()), positions, body: Box::new(body), range_grid: None, spilled_vertices: nv, colours })
 }
 
 /// Second pass: streams the faces (see the module docs).
