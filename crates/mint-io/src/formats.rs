@@ -52,7 +52,7 @@ pub(crate) fn backend(format: Format) -> Backend {
         Format::Mesh => Backend { info: mesh::info, open: mesh::open, create: |path, o| boxed(mesh::writer(path, o)), f32_only: false, origin: false, colour: false },
         Format::Raw => Backend { info: raw::info, open: raw::open, create: |path, o| boxed(raw::RawWriter::create(path, o)), f32_only: false, origin: false, colour: false },
         Format::Vrml => Backend { info: vrml::info, open: vrml::open, create: |path, o| boxed(vrml::VrmlWriter::create(path, o)), f32_only: false, origin: false, colour: false },
-        Format::Gltf => Backend { info: gltf::info, open: gltf::open, create: |path, o| boxed(gltf::GltfWriter::create(path, o)), f32_only: true, origin: true, colour: false },
+        Format::Gltf => Backend { info: gltf::info, open: gltf::open, create: |path, o| boxed(gltf::GltfWriter::create(path, o)), f32_only: true, origin: true, colour: true },
         Format::Tiles => Backend {
             info: tiles::info,
             open: tiles::open,

@@ -944,6 +944,8 @@ pub(crate) struct GltfWriter {
     glb: bool,
     vs: SpillFile,
     fs: SpillFile,
+    /// RGBA per vertex, when writing colour (`COLOR_0`).
+    cs: Option<SpillFile>,
     lo: [f64; 3],
     hi: [f64; 3],
 }
@@ -957,13 +959,15 @@ impl GltfWriter {
             glb,
             vs: SpillFile::new(&dir, path)?,
             fs: SpillFile::new(&dir, path)?,
+            cs: if opts.colours { Some(SpillFile::new(&dir, path)?) } else { None },
             lo: [f64::INFINITY; 3],
             hi: [f64::NEG_INFINITY; 3],
         })
     }
 
     fn limit(&self, vertices: u64, faces: u64) -> Result<(), Error> {
-        if self.glb && 12 * vertices + 12 * faces + (1 << 12) > GLB_MAX_BYTES {
+        let per_vertex = if self.cs.is_some() { 16 } else { 12 };
+        if self.glb && per_vertex * vertices + 12 * faces + (1 << 12) > GLB_MAX_BYTES {
             return Err(Error::unsupported(
                 &self.path,
                 format!("{vertices} vertices and {faces} triangles pass GLB's 4 GiB limit: write .gltf (its buffer goes to a .bin beside it, no limit) or .ply"),
@@ -974,6 +978,13 @@ impl GltfWriter {
 }
 
 impl FormatWriter for GltfWriter {
+    fn vertex_rgba(&mut self, p: [f64; 3], c: [u8; 4]) -> Result<(), Error> {
+        if let Some(cs) = self.cs.as_mut() {
+            cs.write_bytes(&c)?;
+        }
+        self.vertex(p)
+    }
+
     fn vertex(&mut self, p: [f64; 3]) -> Result<(), Error> {
         for d in 0..3 {
             self.lo[d] = self.lo[d].min(p[d]);
@@ -1001,6 +1012,10 @@ impl FormatWriter for GltfWriter {
         let origin = origin_for(me.lo, me.hi);
         let vmap = me.vs.into_mapped()?;
         let fmap = me.fs.into_mapped()?;
+        let cmap = match me.cs {
+            Some(cs) => Some(cs.into_mapped()?),
+            None => None,
+        };
         let (vb, fb) = (vmap.bytes(), fmap.bytes());
         let rel = |i: usize| -> [f32; 3] {
             let o = 24 * i;
@@ -1016,7 +1031,8 @@ impl FormatWriter for GltfWriter {
             }
         }
         let (pos_len, idx_len) = (12 * vertices, 12 * faces);
-        let bin_len = pos_len + idx_len;
+        let col_len = if cmap.is_some() { 4 * vertices } else { 0 };
+        let bin_len = pos_len + idx_len + col_len;
         let bin_name = format!("{}.bin", me.path.file_stem().map_or("mesh".into(), |s| s.to_string_lossy()));
         let mut node = serde_json::json!({ "name": "mint" });
         if origin != [0.0; 3] {
@@ -1039,6 +1055,11 @@ impl FormatWriter for GltfWriter {
                 { "buffer": 0, "byteOffset": 0, "byteLength": pos_len, "target": 34962 },
                 { "buffer": 0, "byteOffset": pos_len, "byteLength": idx_len, "target": 34963 },
             ]);
+            if col_len > 0 {
+                doc["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = 2.into();
+                doc["accessors"].as_array_mut().expect("accessors").push(serde_json::json!({ "bufferView": 2, "componentType": 5121, "normalized": true, "count": vertices, "type": "VEC4" }));
+                doc["bufferViews"].as_array_mut().expect("views").push(serde_json::json!({ "buffer": 0, "byteOffset": pos_len + idx_len, "byteLength": col_len, "target": 34962 }));
+            }
             let mut buffer = serde_json::json!({ "byteLength": bin_len });
             if !me.glb {
                 buffer["uri"] = Value::String(bin_name.clone());
@@ -1057,7 +1078,11 @@ impl FormatWriter for GltfWriter {
                 }
                 out.put(&b)?;
             }
-            out.put(&fb[..idx_len as usize])
+            out.put(&fb[..idx_len as usize])?;
+            match &cmap {
+                Some(c) => out.put(&c.bytes()[..col_len as usize]),
+                None => Ok(()),
+            }
         };
         let mut json = serde_json::to_vec(&doc).expect("a glTF document serializes");
         if me.glb {

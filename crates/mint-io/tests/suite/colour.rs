@@ -151,7 +151,8 @@ fn gltf_color_0() {
 }
 
 /// Converting keeps per-vertex colour where the output holds it (PLY
-/// binary and ASCII, OBJ) byte for byte, and says when it drops it (STL).
+/// binary and ASCII, OBJ, glTF `COLOR_0`) byte for byte, and says when it
+/// drops it (STL).
 #[test]
 fn convert_keeps_colours_where_the_format_holds_them() {
     use mint_io::{convert, WriteOptions};
@@ -159,7 +160,7 @@ fn convert_keeps_colours_where_the_format_holds_them() {
     let src = dir.join("colour_scans/rgbd_object_iory/obj.ply");
     let want = colours_of(&src).unwrap();
     let d = tempfile::tempdir().unwrap();
-    for (name, ascii) in [("a.obj", false), ("b.ply", false), ("c.ply", true)] {
+    for (name, ascii) in [("a.obj", false), ("b.ply", false), ("c.ply", true), ("f.glb", false), ("g.gltf", false)] {
         let out = d.path().join(name);
         let s = convert(&src, &out, ReadOptions::default(), WriteOptions { ascii, colours: true, ..Default::default() }, &mut |_, _| {}).unwrap();
         assert_eq!(s.colour_kept, Some(true), "{name}");
