@@ -29,7 +29,7 @@ pub struct ConvertArgs {
     #[arg(long)]
     pub tmp: Option<PathBuf>,
     /// Drop per-vertex colour [default: kept where the output format holds
-    /// it: PLY, OBJ; a warning says when it cannot].
+    /// it: PLY, OBJ, glTF; a warning says when it cannot].
     #[arg(long)]
     pub no_color: bool,
     #[command(flatten)]
@@ -65,7 +65,7 @@ pub(crate) fn cmd_convert(a: ConvertArgs) -> Result<()> {
     bars.finish();
     if summary.colour_kept == Some(false) {
         eprintln!(
-            "mint: warning: {}: {} cannot hold per-vertex colour; the input's colours were dropped (PLY and OBJ keep them)",
+            "mint: warning: {}: {} cannot hold per-vertex colour; the input's colours were dropped (PLY, OBJ and glTF keep them)",
             a.output.display(),
             summary.output_format
         );

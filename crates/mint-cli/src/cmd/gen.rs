@@ -45,7 +45,7 @@ pub struct GenArgs {
     /// Write ASCII instead of binary (PLY/STL).
     #[arg(long)]
     pub ascii: bool,
-    /// Give every vertex a colour (PLY, OBJ): smooth gradients with sharp
+    /// Give every vertex a colour (PLY, OBJ, glTF): smooth gradients with sharp
     /// borders on the planes x, y, z = k/4, a function of the position
     /// (`mint_gen::colour::colour_at`), for colour tests and benchmarks.
     #[arg(long)]
@@ -96,7 +96,7 @@ pub(crate) fn cmd_gen(a: GenArgs) -> Result<()> {
     crate::paths::check_output(&a.output, &[])?;
     let format = mint_io::Format::from_path(&a.output)?;
     if a.color && !mint_io::MeshWriter::holds_colour(format) {
-        bail!("{}: --color needs a format that holds per-vertex colour (.ply or .obj)", a.output.display());
+        bail!("{}: --color needs a format that holds per-vertex colour (.ply, .obj, .glb or .gltf)", a.output.display());
     }
     let mut w = mint_io::MeshWriter::create(&a.output, format, WriteOptions { ascii: a.ascii, colours: a.color, ..Default::default() })?;
     let (generated, defects) = {
