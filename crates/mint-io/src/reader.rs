@@ -475,6 +475,9 @@ impl MeshReader {
     }
 }
 
+/// Positions this small are not prefetched (they stay in the caches).
+pub const PREFETCH_CACHE_BYTES: u64 = 8 << 20;
+
 /// Sampled locality: windows of this many consecutive faces…
 const WINDOW: u64 = 1024;
 /// …this many of them, spread over the faces.
@@ -495,8 +498,11 @@ impl crate::visit::TriangleRecords {
     /// Below that, neighbouring faces share pages, the hardware prefetcher
     /// follows them, and the look-ahead only costs (a fifth of the visit on a
     /// generated torus in order). Which one runs does not change any result.
+    /// Positions of at most [`PREFETCH_CACHE_BYTES`] stay in the cache
+    /// whatever the order: no prefetching, and no sample (which a tile of
+    /// a few hundred thousand faces would pay 64 times over).
     pub fn prefetch_pays(&self, positions: &VertexPositions, range: (u64, u64)) -> bool {
-        self.pages_per_face(positions, range) > PREFETCH_PAGES_PER_FACE
+        positions.stored_bytes() > PREFETCH_CACHE_BYTES && self.pages_per_face(positions, range) > PREFETCH_PAGES_PER_FACE
     }
 
     /// Distinct 4 KiB pages of positions touched per face, over [`WINDOWS`]
