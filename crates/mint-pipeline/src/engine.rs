@@ -322,7 +322,7 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
     for (j, op) in plan.operands.iter().enumerate() {
         if let OperandPlan::Mesh { files } = op {
             s.input_files += files.len() as u64;
-            s.input_vertices += files.iter().map(|f| f.vertices).sum::<u64>();
+            s.input_vertices += ctx.vertices_read(j)?;
             s.input_tiles += files.iter().map(|f| f.tiles).sum::<u64>();
             s.input_coloured_files += files.iter().filter(|f| f.colour).count() as u64;
             s.input_faces += ctx.faces_and_volume(j)?.0;

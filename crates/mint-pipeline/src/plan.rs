@@ -35,7 +35,7 @@ pub use crate::spec::absolute;
 /// The plan format's version; a plan of another version is refused.
 /// 2: plain JSON with the checksum inside, the run spec embedded as it is.
 /// 3: a surface may be several files (`inputs`, `files`).
-pub const PLAN_VERSION: u32 = 4;
+pub const PLAN_VERSION: u32 = 5;
 const PLAN_FORMAT: &str = "mint stage plan";
 /// The most parts or slabs a run may be split into.
 pub const MAX_TASKS: u32 = 1 << 16;
@@ -83,7 +83,10 @@ impl Fingerprint {
 pub struct MeshFile {
     pub path: PathBuf,
     pub bytes: u64,
-    pub vertices: u64,
+    /// The vertex count when planning knows it; `None` for text formats,
+    /// whose vertices are counted as the bounds stage reads them (planning
+    /// does not read a text file twice).
+    pub vertices: Option<u64>,
     pub split_faces: Option<u64>,
     /// Tiles read from a 3D Tiles tileset (0 for other files).
     #[serde(default)]
@@ -183,23 +186,22 @@ fn first_difference(a: &Value, b: &Value, path: &str) -> Option<(String, Value, 
     }
 }
 
-/// Opens every file of a surface (headers; a text file is only scanned for
-/// its counts) on up to `threads` threads: many tiles are many files. The
-/// results come back in the files' order.
+/// Opens every file of a surface (headers; a text file only for its format)
+/// on up to `threads` threads: many tiles are many files. The results come
+/// back in the files' order.
 fn open_all(paths: &[PathBuf], threads: usize) -> Vec<Result<MeshFile, mint_io::Error>> {
     let open = |path: &PathBuf| -> Result<MeshFile, mint_io::Error> {
         let bytes = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
         // Text formats cannot be split, and opening one parses (and
-        // spills) every vertex: their counts are enough here, and the
-        // vertices are read by the bounds stage, in parallel parts.
+        // spills) every vertex, counting them a full scan: the bounds stage
+        // reads and counts them, in parallel parts.
         use mint_io::Format::*;
         if matches!(mint_io::Format::from_path(path)?, Obj | Off | Mesh | Raw) {
-            let info = mint_io::read_info(path)?;
-            return Ok(MeshFile { path: path.clone(), bytes, vertices: info.vertex_count, split_faces: None, tiles: 0, colour: false });
+            return Ok(MeshFile { path: path.clone(), bytes, vertices: None, split_faces: None, tiles: 0, colour: false });
         }
         let r = MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false })?;
         let tiles = r.info().elements.iter().find(|e| r.info().format == mint_io::Format::Tiles && e.name == "tiles").map_or(0, |e| e.count);
-        Ok(MeshFile { path: path.clone(), bytes, vertices: r.vertex_count() as u64, split_faces: r.splittable_records(), tiles, colour: r.colours().is_some() })
+        Ok(MeshFile { path: path.clone(), bytes, vertices: Some(r.vertex_count() as u64), split_faces: r.splittable_records(), tiles, colour: r.colours().is_some() })
     };
     let threads = threads.clamp(1, paths.len().max(1));
     if threads == 1 {
@@ -430,7 +432,7 @@ mod tests {
     fn plan() -> Plan {
         let spec = RunSpec::resample("/data/in.ply", "/data/out.ply", GridSize::Cells(1000));
         let (parts, slabs) = (3, 2);
-        let operands = vec![OperandPlan::Mesh { files: vec![MeshFile { path: "/data/in.ply".into(), bytes: 100, vertices: 4, split_faces: Some(4), tiles: 0, colour: false }] }];
+        let operands = vec![OperandPlan::Mesh { files: vec![MeshFile { path: "/data/in.ply".into(), bytes: 100, vertices: Some(4), split_faces: Some(4), tiles: 0, colour: false }] }];
         Plan {
             format: PLAN_FORMAT.into(),
             version: PLAN_VERSION,

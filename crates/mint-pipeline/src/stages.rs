@@ -61,6 +61,11 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct BoundsResult {
     pub operands: Vec<Option<[[f64; 3]; 2]>>,
+    /// Per operand, the vertices this task read (summed over tasks: the
+    /// surface's vertex count, which planning leaves to this stage for
+    /// text files).
+    #[serde(default)]
+    pub vertices: Vec<u64>,
 }
 
 /// A discretize task's result for one piece (a file, or a range of its
@@ -210,10 +215,10 @@ pub fn pieces(files: &[MeshFile], parts: u32, task: u32, faces: bool) -> Vec<(us
         }
         let range = match (f.split_faces, faces) {
             (Some(n), true) => part_range(n, e - s, task - s, CHUNK_TRIANGLES as u64),
-            (Some(_), false) => part_range(f.vertices, e - s, task - s, 1),
+            (Some(_), false) => part_range(f.vertices.unwrap_or(0), e - s, task - s, 1),
             (None, _) if task != s => continue,
             (None, true) => (0, u64::MAX),
-            (None, false) => (0, f.vertices),
+            (None, false) => (0, f.vertices.unwrap_or(u64::MAX)),
         };
         if range.0 < range.1 {
             v.push((i, range));
@@ -259,6 +264,16 @@ impl<'a> Ctx<'a> {
     // ----- reduces -----
 
     /// The grid, from every bounds task's boxes.
+    /// Vertices of mesh operand `j`, as the bounds stage read them.
+    pub fn vertices_read(&self, j: usize) -> Result<u64, PipelineError> {
+        let mut n = 0;
+        for t in 0..self.plan.tasks(Stage::Bounds) {
+            let r: BoundsResult = read_result(&self.dir, Stage::Bounds, t)?;
+            n += r.vertices.get(j).copied().unwrap_or(0);
+        }
+        Ok(n)
+    }
+
     pub fn grid(&self) -> Result<&Grid, PipelineError> {
         if let Some(g) = self.grid.get() {
             return Ok(g);
@@ -699,16 +714,22 @@ pub fn run_stage_task(ctx: &Ctx, stage: Stage, task: u32, build: &TaskBuild) -> 
 
 fn bounds_task(ctx: &Ctx, task: u32) -> Result<BoundsResult, PipelineError> {
     let mut operands = Vec::new();
+    let mut vertices = Vec::new();
     for (j, op) in ctx.scene.operands.iter().enumerate() {
         let (Operand::Mesh { .. }, OperandPlan::Mesh { files }) = (op, &ctx.plan.operands[j]) else {
             operands.push(None);
+            vertices.push(0);
             continue;
         };
         let mut bx: Option<[[f64; 3]; 2]> = None;
+        let mut read = 0u64;
         for (k, range) in pieces(files, ctx.plan.parts, task, false) {
             let path = &files[k].path;
             let b = (|| {
                 let reader = MeshReader::open(path, ctx.read_options())?;
+                // A text file's count is known once it is open.
+                let range = (range.0, range.1.min(reader.vertex_count() as u64));
+                read += range.1.saturating_sub(range.0);
                 bounds(&reader.positions(), range, path, ctx.threads, ctx.progress, ctx.transform(j))
             })()
             .map_err(|e| in_file_list(e, k, files.len()))?;
@@ -722,8 +743,9 @@ fn bounds_task(ctx: &Ctx, task: u32) -> Result<BoundsResult, PipelineError> {
             check_cancel(ctx.progress)?;
         }
         operands.push(bx);
+        vertices.push(read);
     }
-    Ok(BoundsResult { operands })
+    Ok(BoundsResult { operands, vertices })
 }
 
 fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult, PipelineError> {
