@@ -177,7 +177,6 @@ impl Progress for Shared<'_> {
 /// running task finishes; the error reported is that of the first task in
 /// task order that failed, as running them one by one would report.
 fn run_concurrently(ctx: &Ctx, tuning: &Tuning, stage: Stage, tasks: &[u32], workers: usize) -> Result<(), PipelineError> {
-    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
     let mut t = tuning.clone();
     t.threads = (ctx.threads / workers).max(1);
     t.mem_bytes = (tuning.mem_bytes / workers as u64).max(1);
@@ -187,26 +186,21 @@ fn run_concurrently(ctx: &Ctx, tuning: &Tuning, stage: Stage, tasks: &[u32], wor
         _ => crate::progress::DISCRETIZE,
     };
     ctx.progress.start(phase, 0);
-    let next = AtomicUsize::new(0);
-    let stop = AtomicBool::new(false);
-    let errors = std::sync::Mutex::new(Vec::new());
-    std::thread::scope(|sc| {
-        for _ in 0..workers {
-            sc.spawn(|| {
-                let wctx = Ctx::new(&ctx.dir, ctx.plan.clone(), ctx.scene.clone(), &t, &shared);
-                while !stop.load(Ordering::Relaxed) {
-                    let k = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(&task) = tasks.get(k) else { break };
-                    if let Err(e) = run_one(&wctx, stage, task) {
-                        stop.store(true, Ordering::Relaxed);
-                        errors.lock().unwrap_or_else(|p| p.into_inner()).push((task, e));
-                    }
-                }
-            });
-        }
-    });
+    // Each worker keeps the errors of its tasks; the pool stops handing out
+    // tasks at the first one, and the running ones finish.
+    let (_, errors, ()) = mint_core::pool::run(
+        workers,
+        tasks.len() as u64,
+        |_| (Ctx::new(&ctx.dir, ctx.plan.clone(), ctx.scene.clone(), &t, &shared), Vec::new()),
+        |(wctx, errs): &mut (Ctx, Vec<(u32, PipelineError)>), i| {
+            let task = tasks[i as usize];
+            run_one(wctx, stage, task).map_err(|e| errs.push((task, e)))
+        },
+        |(_, errs)| errs,
+        |_| (),
+    );
     ctx.progress.finish();
-    let mut errors = errors.into_inner().unwrap_or_else(|p| p.into_inner());
+    let mut errors: Vec<(u32, PipelineError)> = errors.into_iter().flatten().collect();
     errors.sort_by_key(|e| e.0);
     match errors.into_iter().next() {
         Some((_, e)) => Err(e),

@@ -203,23 +203,22 @@ fn open_all(paths: &[PathBuf], threads: usize) -> Vec<Result<MeshFile, mint_io::
         let tiles = r.info().elements.iter().find(|e| r.info().format == mint_io::Format::Tiles && e.name == "tiles").map_or(0, |e| e.count);
         Ok(MeshFile { path: path.clone(), bytes, vertices: Some(r.vertex_count() as u64), split_faces: r.splittable_records(), tiles, colour: r.colours().is_some() })
     };
-    let threads = threads.clamp(1, paths.len().max(1));
-    if threads == 1 {
-        return paths.iter().map(open).collect();
-    }
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let out: std::sync::Mutex<Vec<Option<Result<MeshFile, mint_io::Error>>>> = std::sync::Mutex::new((0..paths.len()).map(|_| None).collect());
-    std::thread::scope(|s| {
-        for _ in 0..threads {
-            s.spawn(|| loop {
-                let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                let Some(p) = paths.get(k) else { break };
-                let r = open(p);
-                out.lock().unwrap_or_else(|e| e.into_inner())[k] = Some(r);
-            });
-        }
-    });
-    out.into_inner().unwrap_or_else(|e| e.into_inner()).into_iter().map(|r| r.expect("every file opened")).collect()
+    // Every file is opened (the first error in file order is reported);
+    // each worker keeps what it opened, by index.
+    let (_, opened, ()) = mint_core::pool::run(
+        threads.clamp(1, paths.len().max(1)),
+        paths.len() as u64,
+        |_| Vec::new(),
+        |got: &mut Vec<(usize, Result<MeshFile, mint_io::Error>)>, k| -> Result<(), ()> {
+            got.push((k as usize, open(&paths[k as usize])));
+            Ok(())
+        },
+        |got| got,
+        |_| (),
+    );
+    let mut opened: Vec<(usize, Result<MeshFile, mint_io::Error>)> = opened.into_iter().flatten().collect();
+    opened.sort_by_key(|o| o.0);
+    opened.into_iter().map(|o| o.1).collect()
 }
 
 impl Plan {

@@ -255,18 +255,7 @@ pub fn read_glb(data: &[u8]) {
         let Some(json) = data.get(20..20 + jl) else { return };
         let rest = &data[20 + jl..];
         for edited in gltf_edits(json) {
-            let mut j = edited;
-            while j.len() % 4 != 0 {
-                j.push(b' ');
-            }
-            let mut out = b"glTF".to_vec();
-            out.extend(2u32.to_le_bytes());
-            out.extend(((20 + j.len() + rest.len()) as u32).to_le_bytes());
-            out.extend((j.len() as u32).to_le_bytes());
-            out.extend(0x4E4F_534Au32.to_le_bytes());
-            out.extend(j);
-            out.extend(rest);
-            mesh_reader("glb", &out);
+            mesh_reader("glb", &glb_of(edited, rest));
         }
     }
 }
@@ -317,19 +306,26 @@ fn tetra_glb() -> Vec<u8> {
     for i in [0u16, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3] {
         bin.extend(i.to_le_bytes());
     }
-    let mut json = br#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],"buffers":[{"byteLength":72}],"bufferViews":[{"buffer":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":24}],"accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3"},{"bufferView":1,"componentType":5123,"count":12,"type":"SCALAR"}]}"#.to_vec();
+    let json = br#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],"buffers":[{"byteLength":72}],"bufferViews":[{"buffer":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":24}],"accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3"},{"bufferView":1,"componentType":5123,"count":12,"type":"SCALAR"}]}"#.to_vec();
+    let mut chunk = (bin.len() as u32).to_le_bytes().to_vec();
+    chunk.extend(0x004E_4942u32.to_le_bytes());
+    chunk.extend(bin);
+    glb_of(json, &chunk)
+}
+
+/// A GLB of the JSON chunk `json` (padded with spaces) followed by the
+/// bytes `rest` (the BIN chunk with its header, or anything).
+fn glb_of(mut json: Vec<u8>, rest: &[u8]) -> Vec<u8> {
     while json.len() % 4 != 0 {
         json.push(b' ');
     }
     let mut out = b"glTF".to_vec();
     out.extend(2u32.to_le_bytes());
-    out.extend(((28 + json.len() + bin.len()) as u32).to_le_bytes());
+    out.extend(((20 + json.len() + rest.len()) as u32).to_le_bytes());
     out.extend((json.len() as u32).to_le_bytes());
     out.extend(0x4E4F_534Au32.to_le_bytes());
     out.extend(json);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(0x004E_4942u32.to_le_bytes());
-    out.extend(bin);
+    out.extend(rest);
     out
 }
 
