@@ -1,7 +1,10 @@
-//! Colour (issue 27, first step: reading it and drawing it). A sphere whose
-//! upper half is red and lower half blue, per vertex, renders red above and
-//! blue below; `--color shading` ignores the colours; the summary says
-//! which files were drawn in colour.
+//! Colour (issue 27): read, drawn, and carried through resampling and
+//! booleans. A sphere whose upper half is red and lower half blue, per
+//! vertex, renders red above and blue below (`--color shading` ignores
+//! the colours), and resamples to a sphere whose border between the two
+//! stays within one cell; OBJ colour comes out as OBJ colour; a format
+//! without colour, or `--no-color`, gives geometry only (with a warning in
+//! the first case); a file without colour counts as white beside one with.
 
 use crate::common::load;
 use std::path::{Path, PathBuf};
@@ -92,4 +95,125 @@ fn gen_color_writes_the_colour_field() {
     let o = mint(&["gen", "torus", d.path().join("t.stl").to_str().unwrap(), "--color"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.trim_end().lines().count() == 1 && err.contains("holds per-vertex colour"), "{err}");
+}
+
+/// Positions and colours of a mesh file's vertices.
+fn coloured_vertices(path: &Path) -> Vec<([f64; 3], [u8; 4])> {
+    let r = mint_io::MeshReader::open(path, mint_io::ReadOptions::default()).unwrap();
+    let c = r.colours().unwrap_or_else(|| panic!("{} has no colour", path.display()));
+    (0..r.vertex_count()).map(|i| (r.vertex(i), c.get(i))).collect()
+}
+
+const RED: [u8; 4] = [220, 30, 30, 255];
+const BLUE: [u8; 4] = [30, 30, 220, 255];
+
+/// The colour border of a resampled two-colour sphere lies within a cell
+/// (and an input edge, across which the input's own colours blend) of the
+/// input's; everywhere else the colours are exactly the input's.
+#[test]
+fn a_two_colour_sphere_keeps_its_border_after_resampling() {
+    let d = tempfile::tempdir().unwrap();
+    let sphere = two_colour_sphere(d.path());
+    // The input's longest edge: its colours blend across the border's faces.
+    let m = load(&sphere);
+    let edge = m.faces.iter().flat_map(|f| (0..3).map(move |i| (f[i], f[(i + 1) % 3]))).map(|(a, b)| {
+        let (p, q) = (m.positions[a as usize], m.positions[b as usize]);
+        ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+    });
+    let edge = edge.fold(0.0f64, f64::max);
+    for (cells, name) in [("30000", "a.ply"), ("300000", "b.ply")] {
+        let out = d.path().join(name);
+        let o = mint(&["resample", sphere.to_str().unwrap(), out.to_str().unwrap(), "--cells", cells, "--json"]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(summary["colour"], true, "{summary}");
+        assert!(!String::from_utf8_lossy(&o.stderr).contains("colour"), "no colour warning: {}", String::from_utf8_lossy(&o.stderr));
+        let cell = summary["cell_size"].as_f64().unwrap();
+        let vs = coloured_vertices(&out);
+        assert!(vs.len() > 1000);
+        let (mut pure, mut blended) = (0, 0);
+        for (p, c) in &vs {
+            if p[2].abs() > cell + edge {
+                assert_eq!(*c, if p[2] > 0.0 { RED } else { BLUE }, "{cells} cells: vertex at z = {}", p[2]);
+                pure += 1;
+            } else {
+                // Within the border band: a blend of the two, never anything else.
+                assert!(c[1] == 30 && c[0] as u32 + c[2] as u32 >= 248 && c[0] as u32 + c[2] as u32 <= 252, "{c:?} at z = {}", p[2]);
+                blended += 1;
+            }
+        }
+        assert!(pure > 4 * blended, "{pure} pure, {blended} in the border band");
+    }
+}
+
+/// OBJ colour in, OBJ colour out; a format without colour warns and keeps
+/// the geometry; `--no-color` drops colour without a warning.
+#[test]
+fn colour_follows_the_output_format_and_no_color() {
+    let d = tempfile::tempdir().unwrap();
+    let obj = d.path().join("t.obj");
+    assert!(mint(&["gen", "torus", obj.to_str().unwrap(), "--faces", "200000", "--color"]).status.success());
+    let out = d.path().join("o.obj");
+    let o = mint(&["resample", obj.to_str().unwrap(), out.to_str().unwrap(), "--cells", "500000", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cell = serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["cell_size"].as_f64().unwrap();
+    let vs = coloured_vertices(&out);
+    // Each vertex's colour is the colour field's near its position: the
+    // field is smooth between its borders (planes k/4; its channels change
+    // by at most 383 per unit), so away from them the colour is that of
+    // the input surface at the crossing, within a cell and an input edge.
+    let m = load(&obj);
+    let edge = m.faces.iter().map(|f| {
+        let (p, q) = (m.positions[f[0] as usize], m.positions[f[1] as usize]);
+        ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt()
+    });
+    let reach = cell + 2.0 * edge.fold(0.0f64, f64::max);
+    let mut checked = 0;
+    for (p, c) in &vs {
+        if p.iter().any(|x| ((4.0 * x).round() / 4.0 - x).abs() < reach) {
+            continue;
+        }
+        let want = mint_gen::colour::colour_at(*p);
+        let tol = (383.0 * reach).ceil() as i32 + 2;
+        assert!((0..3).all(|k| (c[k] as i32 - want[k] as i32).abs() <= tol), "{c:?} at {p:?}, the field says {want:?}");
+        checked += 1;
+    }
+    assert!(checked > 500, "{checked} of {} vertices away from the field's borders", vs.len());
+    let stl = d.path().join("o.stl");
+    let o = mint(&["resample", obj.to_str().unwrap(), stl.to_str().unwrap(), "--cells", "50000"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && err.contains("cannot hold: the output is geometry only"), "{err}");
+    let plain = d.path().join("p.ply");
+    let o = mint(&["resample", obj.to_str().unwrap(), plain.to_str().unwrap(), "--cells", "50000", "--no-color"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && !err.contains("colour"), "{err}");
+    assert!(mint_io::MeshReader::open(&plain, mint_io::ReadOptions::default()).unwrap().colours().is_none());
+}
+
+/// A boolean of a coloured and an uncoloured operand: the coloured one's
+/// surface keeps its colours, the other's is white.
+#[test]
+fn a_boolean_carries_each_operand_colour() {
+    let d = tempfile::tempdir().unwrap();
+    let sphere = two_colour_sphere(d.path());
+    let cube = d.path().join("cube.ply");
+    let b = crate::common::box_mesh([0.3, 0.3, 0.3], [1.5, 1.5, 1.5]);
+    std::fs::rename(crate::common::write_trimesh(d.path(), "cube-w.ply", &b), &cube).unwrap();
+    let out = d.path().join("u.ply");
+    let o = mint(&["bool", "union", sphere.to_str().unwrap(), cube.to_str().unwrap(), out.to_str().unwrap(), "--cells", "100000"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (mut white, mut other) = (0, 0);
+    for (p, c) in coloured_vertices(&out) {
+        let on_cube = p.iter().all(|&x| x > 0.35) && p.iter().any(|&x| x > 1.05);
+        if on_cube {
+            if c == [255; 4] {
+                white += 1;
+            } else {
+                other += 1;
+            }
+        } else if p[2] < -0.1 {
+            assert_eq!(c, BLUE, "the sphere's lower half at {p:?}");
+        }
+    }
+    assert!(white > 500 && other * 50 < white, "{white} white vertices on the cube, {other} others");
 }

@@ -70,6 +70,30 @@ fn every_deterministic_command_gives_the_same_bytes_under_every_configuration() 
             (&["--parts", "3", "--slabs", "4", "--work", &work], &[]),
         ],
     );
+    // Colour carried (binary PLY and text OBJ inputs, PLY and OBJ outputs).
+    let cscan = dir.join("cscan.ply");
+    run(&["gen", "scan", &p(&cscan), "--faces", "100000", "--color"]);
+    let cobj = dir.join("ctorus.obj");
+    run(&["gen", "torus", &p(&cobj), "--faces", "40000", "--color"]);
+    let work = w("work-c");
+    same_bytes(
+        dir,
+        "resample-colour",
+        &s(&["resample", &p(&cscan), "OUT", "--cells", "150000", "--quiet"]),
+        &[
+            (&["--threads", "1"], &[]),
+            (&["--threads", "2"], &[]),
+            (&["--slab", "2"], &[]),
+            (&["--mem", "40M", "--threads", "2"], &[]),
+            (&["--parts", "3", "--slabs", "4", "--work", &work], &[]),
+        ],
+    );
+    same_bytes(
+        dir,
+        "bool-colour",
+        &s(&["bool", "union", &p(&cobj), &p(&torus), "OUT", "--cells", "80000", "--quiet"]),
+        &[(&["--threads", "1"], &[]), (&["--threads", "2", "--slab", "1"], &[]), (&["--parts", "2", "--slabs", "3"], &[])],
+    );
     // bool and csg.
     same_bytes(
         dir,

@@ -117,6 +117,12 @@ pub struct RunArgs {
     /// geo-referenced (UTM) or tiny models; the summary says which].
     #[arg(long)]
     pub double: bool,
+    /// Write geometry only. By default the output carries the input's
+    /// per-vertex colour (PLY, OBJ or glTF output; files without colour
+    /// count as white): each vertex takes the colour of the input where its
+    /// grid line crosses it.
+    #[arg(long)]
+    pub no_color: bool,
     #[command(flatten)]
     pub mem: MemArg,
     /// Worker threads [default: all cores]. The output is the same for any value.
@@ -165,7 +171,7 @@ impl RunArgs {
         let mut spec = RunSpec::new(job, output, size);
         spec.grid = GridSpec { size, axis: self.axis, offset: self.grid_offset.unwrap_or([0.0; 3]) };
         spec.signs = self.signs;
-        spec.write = WriteSpec { ascii: self.ascii, double: self.double };
+        spec.write = WriteSpec { ascii: self.ascii, double: self.double, no_colour: self.no_color };
         if let Some(h) = holes {
             spec.max_hole = if h.close_all { None } else { Some(h.max_hole) };
         }

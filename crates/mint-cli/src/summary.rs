@@ -103,10 +103,10 @@ pub(crate) fn summary_warnings(s: &mint_pipeline::ResampleSummary) -> Vec<String
 /// into a solid (`decimate` has no `--signs`: it names `mint resample`).
 pub(crate) fn summary_warnings_with(s: &mint_pipeline::ResampleSummary, close: &str) -> Vec<String> {
     let mut w = s.input_warnings.clone();
-    if s.input_coloured_files > 0 {
+    if s.input_coloured_files > 0 && !s.colour && !s.no_colour {
         w.push(format!(
-            "{}: {} of the input files have per-vertex colour, which resampling does not carry yet: the output is geometry only",
-            s.input, s.input_coloured_files
+            "{}: {} of the input files have per-vertex colour, which {} cannot hold: the output is geometry only (write .ply, .obj, .gltf or .glb to keep it)",
+            s.input, s.input_coloured_files, s.output
         ));
     }
     if s.sign_rule == "sheet" && s.census_odd * 3 > s.census_lines {

@@ -12,6 +12,7 @@
 //!   with the large holes open).
 
 use crate::cells::SlabResult;
+use crate::colour::{colour_vertices, crossing_colour, sort_coloured, Rgba, Tinted};
 use crate::expr::Expr;
 use crate::grid::Grid;
 use crate::holes::{open_cells, HoleStats};
@@ -49,7 +50,7 @@ where
         filter_plane(p);
     }
     let result = reconstruct_slab(grid, 0, &planes, usize::MAX);
-    emit(&result, sink)?;
+    emit(&result, None, sink)?;
     Ok(result)
 }
 
@@ -85,7 +86,66 @@ where
         let r = resample_in_core(grid, triangles, sink)?;
         return Ok((r, Default::default(), SignRule::Orient, Default::default()));
     }
-    let mut planes = discretize_in_core(grid, triangles);
+    let planes = discretize_in_core(grid, triangles);
+    let (result, repair, rule, holes) = reconstruct_in_core(grid, planes, rule, max_hole);
+    emit(&result, None, sink)?;
+    Ok((result, repair, rule, holes))
+}
+
+/// The raw intercepts of coloured triangles (world coordinates, corner
+/// colours), per plane, each with the colour of its crossing
+/// ([`crossing_colour`]).
+pub fn discretize_in_core_coloured<I>(grid: &Grid, triangles: I) -> Vec<Vec<Tinted>>
+where
+    I: IntoIterator<Item = ([[f64; 3]; 3], [Rgba; 3])>,
+{
+    let [_, nb, ns] = grid.local_dims();
+    let mut planes: Vec<Vec<Tinted>> = vec![Vec::new(); ns as usize + 1];
+    for (t, colours) in triangles {
+        let local = t.map(|p| grid.to_local(p));
+        crate::discretize::discretize_triangle(&local, |c| {
+            let r = c.intercept(nb);
+            planes[r.plane as usize].push((r, crossing_colour(&local, &colours, &c)));
+        });
+    }
+    planes
+}
+
+/// [`resample_in_core_holes`] for coloured triangles: the same mesh, each
+/// vertex pushed with its colour ([`colour_vertices`]). Returns the same,
+/// and the vertex colours.
+pub fn resample_in_core_coloured<I>(
+    grid: &Grid,
+    triangles: I,
+    rule: SignRule,
+    max_hole: Option<u32>,
+    sink: &mut dyn MeshSink,
+) -> Result<(SlabResult, RepairStats, SignRule, HoleStats, Vec<Rgba>), SinkError>
+where
+    I: IntoIterator<Item = ([[f64; 3]; 3], [Rgba; 3])>,
+{
+    let mut tinted = discretize_in_core_coloured(grid, triangles);
+    let planes: Vec<Vec<Intercept>> = tinted.iter().map(|p| p.iter().map(|t| t.0).collect()).collect();
+    let (result, repair, rule, holes) = if rule == SignRule::Orient {
+        let mut planes = planes;
+        for p in &mut planes {
+            filter_plane(p);
+        }
+        (reconstruct_slab(grid, 0, &planes, usize::MAX), Default::default(), SignRule::Orient, Default::default())
+    } else {
+        reconstruct_in_core(grid, planes, rule, max_hole)
+    };
+    for p in &mut tinted {
+        sort_coloured(p);
+    }
+    let owned = tinted.len().saturating_sub(1);
+    let colours = colour_vertices(grid, 0, &result.vertices, &tinted[..owned]);
+    emit(&result, Some(&colours), sink)?;
+    Ok((result, repair, rule, holes, colours))
+}
+
+/// The robust reconstruction of raw planes with the hole protocol.
+fn reconstruct_in_core(grid: &Grid, mut planes: Vec<Vec<Intercept>>, rule: SignRule, max_hole: Option<u32>) -> (SlabResult, RepairStats, SignRule, HoleStats) {
     let rule = if rule == SignRule::Auto {
         let mut census = LineCensus::default();
         for p in &mut planes {
@@ -97,8 +157,7 @@ where
     };
     let Some(k) = max_hole else {
         let (result, repair) = reconstruct_slab_robust(grid, 0, planes, rule);
-        emit(&result, sink)?;
-        return Ok((result, repair, rule, Default::default()));
+        return (result, repair, rule, Default::default());
     };
     let (mut result, mut repair) = reconstruct_slab_robust(grid, 0, planes.clone(), rule);
     let mut cells = result.hole_cells.clone();
@@ -106,8 +165,7 @@ where
     if !open.is_empty() {
         (result, repair) = reconstruct_slab_solids(grid, 0, vec![planes], &[rule], &Expr::Operand(0), Some(&open), &[]);
     }
-    emit(&result, sink)?;
-    Ok((result, repair, rule, holes))
+    (result, repair, rule, holes)
 }
 
 /// The `--max-hole` that applies under `rule`: every hole cell of a sheet
@@ -120,10 +178,19 @@ pub fn effective_max_hole(rule: SignRule, max_hole: u32) -> u32 {
     }
 }
 
-/// Sends a result's vertices and faces to `sink`.
-fn emit(result: &SlabResult, sink: &mut dyn MeshSink) -> Result<(), SinkError> {
-    for v in &result.vertices {
-        sink.vertex(*v)?;
+/// Sends a result's vertices (with their colours, if any) and faces to `sink`.
+fn emit(result: &SlabResult, colours: Option<&[Rgba]>, sink: &mut dyn MeshSink) -> Result<(), SinkError> {
+    match colours {
+        Some(c) => {
+            for (v, c) in result.vertices.iter().zip(c) {
+                sink.vertex_rgba(*v, *c)?;
+            }
+        }
+        None => {
+            for v in &result.vertices {
+                sink.vertex(*v)?;
+            }
+        }
     }
     for f in &result.faces {
         sink.face(*f)?;

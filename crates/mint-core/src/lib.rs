@@ -6,6 +6,7 @@
 //! - [`predicates`]: exact orientation tests with the grid's symbolic tie-break;
 //! - [`discretize`]: one triangle → its signed [`Crossing`]s with grid lines;
 //! - [`intercept`]: the 16-byte [`Intercept`] record, per-line sorting and the removal filter;
+//! - [`colour`]: the colour of a crossing and of each output vertex (coloured inputs);
 //! - [`mc_table`]: the generated marching-cubes table;
 //! - [`cells`]: slab results and the one walk over a slab's cells, numbering vertices;
 //! - [`reconstruct`]: a slab of cells → vertices and triangles (the paper's strict rule);
@@ -22,6 +23,7 @@
 
 pub mod cells;
 pub mod choice;
+pub mod colour;
 pub mod discretize;
 pub mod expr;
 pub mod grid;

@@ -13,6 +13,11 @@ pub type SinkError = Box<dyn std::error::Error + Send + Sync + 'static>;
 pub trait MeshSink {
     /// Appends one vertex; its index is the number of vertices pushed before it.
     fn vertex(&mut self, p: [f64; 3]) -> Result<(), SinkError>;
+    /// Appends one vertex with its colour (RGBA bytes); sinks that keep no
+    /// colour drop it.
+    fn vertex_rgba(&mut self, p: [f64; 3], _rgba: [u8; 4]) -> Result<(), SinkError> {
+        self.vertex(p)
+    }
     /// Appends one triangle by vertex indices.
     fn face(&mut self, f: [u32; 3]) -> Result<(), SinkError>;
 }

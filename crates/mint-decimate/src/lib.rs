@@ -184,7 +184,7 @@ pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress
     drop((owner, mid));
     let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
     let tolerance = h * mint_pipeline::spec::defaults::F32_TOLERANCE_CELLS;
-    let (sr, output_precision, _, seconds_write) = simplify_and_write(input, output, format, &o.write.options(None), tolerance, positions, tris, &so, progress)?;
+    let (sr, output_precision, _, seconds_write) = simplify_and_write(input, output, format, &o.write.options(None, false), tolerance, positions, tris, &so, progress)?;
     // Reading the intermediate counts as simplifying.
     let seconds_simplify = t.elapsed().as_secs_f64() - seconds_write;
     Ok(DecimateSummary {

@@ -90,6 +90,19 @@ fn parse_vertex(path: &Path, data: &[u8], rest: &[u8], record: u64, at: usize) -
     Ok((p, Some(c)))
 }
 
+/// Whether the first `v` line of `data` carries a colour, reading only up
+/// to that line (planning asks this of text files it does not scan).
+pub(crate) fn first_vertex_coloured(data: &[u8]) -> bool {
+    let mut lines = Lines::new(data, 0);
+    while let Some((_, line)) = lines.next_joined() {
+        let (kind, rest) = classify(&line[..]);
+        if kind == Kind::Vertex {
+            return words(rest).take_while(|t| !t.starts_with(b"#")).count() >= 6;
+        }
+    }
+    false
+}
+
 /// Counts `v` and `f` lines and collects the leading comment block; says
 /// whether the first `v` line has a colour (`v x y z r g b`).
 fn scan(data: &[u8]) -> (u64, u64, Vec<String>, bool) {

@@ -34,6 +34,20 @@ pub fn read_info(path: &Path) -> Result<MeshInfo, Error> {
     (crate::formats::backend(format).info)(path, map.bytes())
 }
 
+/// True when the file has per-vertex colour that [`MeshReader::colours`]
+/// will give. Cheap for text OBJ (the first `v` line decides; the file is
+/// mapped, not parsed); other formats open their header.
+pub fn has_vertex_colour(path: &Path) -> Result<bool, Error> {
+    match Format::from_path(path)? {
+        Format::Obj => {
+            let map = Mapped::open(path, &std::env::temp_dir())?;
+            Ok(crate::obj::first_vertex_coloured(map.bytes()))
+        }
+        Format::Off | Format::Mesh | Format::Raw => Ok(false),
+        _ => Ok(MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false })?.colours().is_some()),
+    }
+}
+
 /// Reads a whole mesh into memory: every vertex position and every
 /// triangle (polygons fanned, strips unrolled, as the streaming reader
 /// delivers them). For the in-core tools (simplify, contours, render's

@@ -181,6 +181,9 @@ impl MeshSink for MeshWriter {
     fn vertex(&mut self, p: [f64; 3]) -> Result<(), SinkError> {
         Ok(self.write_vertex(p)?)
     }
+    fn vertex_rgba(&mut self, p: [f64; 3], c: [u8; 4]) -> Result<(), SinkError> {
+        Ok(self.write_vertex_rgba(p, c)?)
+    }
     fn face(&mut self, f: [u32; 3]) -> Result<(), SinkError> {
         Ok(self.write_face(f)?)
     }

@@ -9,6 +9,7 @@ use crate::kernels::{signed_volume6, visit_chunk, ChunkJob, LocalMap};
 use crate::progress::{check_cancel, Progress};
 use mint_core::grid::Grid;
 use mint_core::primitives::Transform;
+use mint_core::colour::{crossing_colour, Rgba};
 use mint_core::{discretize_triangle, Intercept};
 use mint_io::{MeshReader, TriangleChunk, TriangleRecords};
 use mint_store::{ShardWriter, StoreError};
@@ -35,7 +36,9 @@ pub(crate) fn chunk_outcome(visited: Result<(), mint_io::Error>, sink: Option<St
     }
 }
 
-/// Streams every triangle of `reader` through the workers into `store`.
+/// Streams every triangle of `reader` through the workers into `store`
+/// (with each crossing's colour when the store is coloured and the file
+/// has colour).
 /// Returns the number of triangles read and six times the signed volume of
 /// each chunk (in grid units), in chunk order, so that their sum does not
 /// depend on threads or on how the input was split into parts.
@@ -52,9 +55,12 @@ pub(crate) fn discretize_all(
     let [_, nb, _] = grid.local_dims();
     let positions = reader.positions();
     let positions = &positions;
+    // Each crossing's colour, when the store keeps colour and the file has it.
+    let colours = if store.coloured() { reader.colours() } else { None };
+    let colours = colours.as_ref();
     let (chunk_tx, chunk_rx) = bounded::<(usize, TriangleChunk)>(threads * 2);
     let (free_tx, free_rx) = bounded::<TriangleChunk>(threads * 3 + 2);
-    let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, f64)>(threads * 2);
+    let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, Vec<Rgba>, f64)>(threads * 2);
     progress.start(crate::progress::DISCRETIZE, expected_faces);
     let mut faces = 0u64;
     let mut volumes: Vec<f64> = Vec::new();
@@ -64,6 +70,7 @@ pub(crate) fn discretize_all(
             s.spawn(move || {
                 for (seq, chunk) in chunk_rx {
                     let mut recs = Vec::with_capacity(chunk.indices.len() / 4 + 16);
+                    let mut tints = Vec::new();
                     let mut volume = 0.0;
                     for tri in &chunk.indices {
                         // Indices were range-checked by the reader; positions
@@ -77,10 +84,19 @@ pub(crate) fn discretize_all(
                         };
                         let local = [at(tri[0]), at(tri[1]), at(tri[2])];
                         volume += signed_volume6(&local);
-                        discretize_triangle(&local, |c| recs.push(c.intercept(nb)));
+                        match colours {
+                            Some(cs) => {
+                                let corners = tri.map(|i| cs.get(i));
+                                discretize_triangle(&local, |c| {
+                                    recs.push(c.intercept(nb));
+                                    tints.push(crossing_colour(&local, &corners, &c));
+                                });
+                            }
+                            None => discretize_triangle(&local, |c| recs.push(c.intercept(nb))),
+                        }
                     }
                     let _ = free_tx.try_send(chunk);
-                    if rec_tx.send((seq, recs, volume)).is_err() {
+                    if rec_tx.send((seq, recs, tints, volume)).is_err() {
                         return; // the writer stopped on an error
                     }
                 }
@@ -89,12 +105,16 @@ pub(crate) fn discretize_all(
         drop((chunk_rx, free_tx, rec_tx));
         let volumes = &mut volumes;
         let writer = s.spawn(move || -> Result<(), StoreError> {
-            for (seq, recs, volume) in rec_rx {
+            for (seq, recs, tints, volume) in rec_rx {
                 if volumes.len() <= seq {
                     volumes.resize(seq + 1, 0.0);
                 }
                 volumes[seq] = volume;
-                store.append(&recs)?;
+                if tints.is_empty() {
+                    store.append(&recs)?;
+                } else {
+                    store.append_coloured(&recs, &tints)?;
+                }
             }
             Ok(())
         });

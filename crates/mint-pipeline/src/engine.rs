@@ -311,6 +311,8 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
         slab_axis: ['x', 'y', 'z'][grid.slab_axis],
         ..Default::default()
     };
+    s.colour = plan.coloured();
+    s.no_colour = plan.spec.write.no_colour;
     let parts: &[DiscretizeResult] = ctx.parts()?;
     let mut mesh_ops = Vec::new();
     for (j, op) in plan.operands.iter().enumerate() {

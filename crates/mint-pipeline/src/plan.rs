@@ -24,7 +24,7 @@ use crate::scene::{Operand, Scene};
 use crate::spec::{Job, RunSpec, Tuning};
 pub use crate::workdir::Stage;
 use crate::workdir::{write_atomic, PLAN_FILE};
-use mint_io::{MeshReader, ReadOptions};
+use mint_io::{MeshReader, MeshWriter, ReadOptions};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::io::{Read, Seek, SeekFrom};
@@ -91,8 +91,7 @@ pub struct MeshFile {
     /// Tiles read from a 3D Tiles tileset (0 for other files).
     #[serde(default)]
     pub tiles: u64,
-    /// The file has per-vertex colour (binary formats and glTF; text files
-    /// are only counted when planned, so they say false).
+    /// The file has per-vertex colour (an OBJ's first `v` line decides).
     #[serde(default)]
     pub colour: bool,
 }
@@ -197,7 +196,8 @@ fn open_all(paths: &[PathBuf], threads: usize) -> Vec<Result<MeshFile, mint_io::
         // reads and counts them, in parallel parts.
         use mint_io::Format::*;
         if matches!(mint_io::Format::from_path(path)?, Obj | Off | Mesh | Raw) {
-            return Ok(MeshFile { path: path.clone(), bytes, vertices: None, split_faces: None, tiles: 0, colour: false });
+            let colour = mint_io::has_vertex_colour(path)?;
+            return Ok(MeshFile { path: path.clone(), bytes, vertices: None, split_faces: None, tiles: 0, colour });
         }
         let r = MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false })?;
         let tiles = r.info().elements.iter().find(|e| r.info().format == mint_io::Format::Tiles && e.name == "tiles").map_or(0, |e| e.count);
@@ -280,6 +280,19 @@ impl Plan {
 
     pub fn has_stage(&self, stage: Stage) -> bool {
         self.stages.iter().any(|s| s.name == stage)
+    }
+
+    /// True when the run carries colour: some input file has it, the
+    /// output's format holds it, and `--no-color` was not given. Every
+    /// shard store of a coloured run holds coloured records (files without
+    /// colour count as white).
+    pub fn coloured(&self) -> bool {
+        !self.spec.write.no_colour && self.input_coloured() && mint_io::Format::from_path(&self.spec.output).is_ok_and(MeshWriter::holds_colour)
+    }
+
+    /// True when some input mesh file has per-vertex colour.
+    pub fn input_coloured(&self) -> bool {
+        self.operands.iter().any(|o| matches!(o, OperandPlan::Mesh { files } if files.iter().any(|f| f.colour)))
     }
 
     /// True for a strict `--signs orient` resampling (the paper's rule).

@@ -6,6 +6,7 @@
 use crate::error::PipelineError;
 use crate::progress::{check_cancel, Progress};
 use mint_core::cells::SlabResult;
+use mint_core::colour::Rgba;
 use mint_core::signs::RepairStats;
 use mint_core::FilterStats;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -14,6 +15,9 @@ use std::sync::{Condvar, Mutex};
 /// Estimated heap bytes per stored record while its slab is reconstructed:
 /// the record, its vertex, about two faces, active-cell ids, and slack.
 pub const BYTES_PER_RECORD_IN_SLAB: u64 = 128;
+/// What a record costs on top of [`BYTES_PER_RECORD_IN_SLAB`] in a coloured
+/// run: its coloured copy (24 bytes) and its vertex's colour.
+pub const COLOUR_BYTES_PER_RECORD_IN_SLAB: u64 = 32;
 
 /// Estimated heap bytes per plane of a slab being reconstructed, whatever
 /// its records: each plane holds a few vectors (records, edge vertices, S
@@ -53,7 +57,9 @@ pub fn plan_slabs(counts: &[u64], first: u32, ns: u32, fixed: Option<u32>, budge
 }
 
 /// What one slab's reconstruction returns.
-pub(crate) type Done = (SlabResult, FilterStats, RepairStats);
+/// A slab's result, its vertices' colours (empty when the run carries
+/// none), and its counters.
+pub(crate) type Done = (SlabResult, Vec<Rgba>, FilterStats, RepairStats);
 
 /// Reconstructs `slabs` on `threads` workers and hands results to `emit`
 /// strictly in slab order. At most `threads + 1` slabs are held at once.
@@ -62,7 +68,7 @@ pub(crate) fn reconstruct_ordered(
     threads: usize,
     compute: &(dyn Fn(u32, u32) -> Result<Done, PipelineError> + Sync),
     progress: &dyn Progress,
-    emit: &mut dyn FnMut(SlabResult, FilterStats, RepairStats, u64) -> Result<(), PipelineError>,
+    emit: &mut dyn FnMut(SlabResult, Vec<Rgba>, FilterStats, RepairStats, u64) -> Result<(), PipelineError>,
 ) -> Result<(), PipelineError> {
     let window = threads as u64 + 1;
     let next = AtomicU64::new(0);
@@ -99,9 +105,9 @@ pub(crate) fn reconstruct_ordered(
         for (i, r) in rx.iter() {
             pending.insert(i, r);
             while let Some(r) = pending.remove(&want) {
-                let step = r.and_then(|(res, f, rep)| {
+                let step = r.and_then(|(res, colours, f, rep)| {
                     let (k0, k1) = slabs[want as usize];
-                    emit(res, f, rep, (k1 - k0) as u64)
+                    emit(res, colours, f, rep, (k1 - k0) as u64)
                 });
                 let step = step.and_then(|_| check_cancel(progress));
                 if let Err(e) = step {

@@ -168,12 +168,17 @@ pub struct WriteSpec {
     /// [`defaults::F32_TOLERANCE_CELLS`] of a cell (elsewhere f64 is chosen
     /// anyway).
     pub double: bool,
+    /// Geometry only, even when the input has colour and the output's
+    /// format holds it (`--no-color`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub no_colour: bool,
 }
 
 impl WriteSpec {
-    /// The writer's options, spilling into `spill_dir`.
-    pub fn options(&self, spill_dir: Option<PathBuf>) -> mint_io::WriteOptions {
-        mint_io::WriteOptions { ascii: self.ascii, double: self.double, spill_dir, colours: false }
+    /// The writer's options, spilling into `spill_dir`; `colours` when the
+    /// run carries colour.
+    pub fn options(&self, spill_dir: Option<PathBuf>, colours: bool) -> mint_io::WriteOptions {
+        mint_io::WriteOptions { ascii: self.ascii, double: self.double, spill_dir, colours }
     }
 }
 

@@ -34,7 +34,7 @@ use mint_store::Budget;
 use crate::bounds::bounds;
 use crate::discretize::{discretize_all, discretize_direct, discretize_direct_many, DirectPiece, CHUNK_TRIANGLES};
 use crate::progress::check_cancel;
-use crate::slabs::{bytes_per_plane, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB};
+use crate::slabs::{bytes_per_plane, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, COLOUR_BYTES_PER_RECORD_IN_SLAB};
 use crate::plan::{MeshFile, OperandPlan, Plan, Stage};
 use crate::error::in_file_list;
 use crate::spec::{Job, Tuning};
@@ -50,6 +50,8 @@ use mint_core::reconstruct::reconstruct_slab;
 use mint_core::expr::{BoolOp, Expr};
 use mint_core::robust::{census_plane, reconstruct_slab_solids};
 use mint_core::signs::{LineCensus, RepairStats, SignRule};
+use mint_core::cells::SlabResult;
+use mint_core::colour::{colour_vertices, sort_coloured, Tinted, WHITE};
 use mint_core::{FilterStats, Intercept};
 use mint_io::{Format, MeshReader, MeshWriter, ReadOptions};
 use mint_store::{ShardManifest, ShardSet, ShardWriter};
@@ -559,17 +561,36 @@ impl<'a> Ctx<'a> {
     /// without its layer's S records, except under the Sheet rule), inside-out
     /// meshes reversed; and, per operand, its raw records of plane `k0 - 1`
     /// when the Sheet rule needs them (else empty).
-    fn operand_planes(&self, k0: u32, k1: u32) -> Result<(Vec<Vec<Vec<Intercept>>>, Vec<Vec<Intercept>>), PipelineError> {
+    ///
+    /// With `coloured`, also the coloured raw records of the owned planes
+    /// `k0 .. k1`, every operand's together, sorted for
+    /// [`colour_vertices`] (primitives are white).
+    #[allow(clippy::type_complexity)]
+    fn operand_planes(&self, k0: u32, k1: u32, coloured: bool) -> Result<(Vec<Vec<Vec<Intercept>>>, Vec<Vec<Intercept>>, Option<Vec<Vec<Tinted>>>), PipelineError> {
         let grid = self.grid()?;
         let rules = &self.rules()?.0;
         let mut operands = Vec::with_capacity(self.scene.operands.len());
         let mut below = Vec::with_capacity(self.scene.operands.len());
+        let mut tinted: Option<Vec<Vec<Tinted>>> = coloured.then(|| vec![Vec::new(); (k1 - k0) as usize]);
         for (j, op) in self.scene.operands.iter().enumerate() {
             let sheet = rules[j] == SignRule::Sheet;
             operands.push(match op {
                 Operand::Mesh { .. } => {
                     let first = if sheet && k0 > 0 { k0 - 1 } else { k0 };
-                    let mut planes = self.shards(j)?.read_planes(first, k1, !sheet)?;
+                    let mut planes = match tinted.as_mut() {
+                        Some(t) => {
+                            let read = self.shards(j)?.read_planes_coloured(first, k1, !sheet)?;
+                            let planes = read.iter().map(|p| p.iter().map(|r| r.0).collect()).collect();
+                            for (k, p) in read.into_iter().enumerate() {
+                                let k = first + k as u32;
+                                if k >= k0 && k < k1 {
+                                    t[(k - k0) as usize].extend(p);
+                                }
+                            }
+                            planes
+                        }
+                        None => self.shards(j)?.read_planes(first, k1, !sheet)?,
+                    };
                     check_records(&planes, first, grid, &self.dir)?;
                     if self.inverted(j)? {
                         planes.iter_mut().flatten().for_each(|r| r.signed_value = -r.signed_value);
@@ -579,11 +600,20 @@ impl<'a> Ctx<'a> {
                 }
                 Operand::Primitive(p) => {
                     below.push(Vec::new());
-                    (k0..=k1).map(|k| p.plane_intercepts(grid, k, k < k1)).collect()
+                    let planes: Vec<Vec<Intercept>> = (k0..=k1).map(|k| p.plane_intercepts(grid, k, k < k1)).collect();
+                    if let Some(t) = tinted.as_mut() {
+                        for (k, p) in planes[..(k1 - k0) as usize].iter().enumerate() {
+                            t[k].extend(p.iter().map(|&r| (r, WHITE)));
+                        }
+                    }
+                    planes
                 }
             });
         }
-        Ok((operands, below))
+        if let Some(t) = tinted.as_mut() {
+            t.iter_mut().for_each(|p| sort_coloured(p));
+        }
+        Ok((operands, below, tinted))
     }
 
     /// Sub-slabs of layers `a .. b` that fit the budget, and (with more
@@ -599,10 +629,18 @@ impl<'a> Ctx<'a> {
         let plane_bytes = bytes_per_plane(na, nb);
         let mut budget = self.budget.slab_in_flight();
         if self.threads > 1 {
-            let bytes = counts[a as usize..=b as usize].iter().sum::<u64>() * BYTES_PER_RECORD_IN_SLAB + (b - a + 1) as u64 * plane_bytes;
+            let bytes = counts[a as usize..=b as usize].iter().sum::<u64>() * self.record_bytes_in_slab() + (b - a + 1) as u64 * plane_bytes;
             budget = budget.min((bytes / (4 * self.threads as u64)).max(MIN_SUB_SLAB_BYTES));
         }
+        // plan_slabs counts geometry-only records: a coloured run's
+        // budget shrinks by what colour adds per record.
+        let budget = budget / self.record_bytes_in_slab() * BYTES_PER_RECORD_IN_SLAB;
         Ok(plan_slabs(&counts, a, b, self.slab_layers, budget, plane_bytes))
+    }
+
+    /// Planned heap bytes per record of a slab in memory.
+    fn record_bytes_in_slab(&self) -> u64 {
+        BYTES_PER_RECORD_IN_SLAB + if self.plan.coloured() { COLOUR_BYTES_PER_RECORD_IN_SLAB } else { 0 }
     }
 
     /// Warms every reduce a slab task needs, so that worker threads only read.
@@ -766,7 +804,8 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
         // One store for every piece: many small files (tiles) cost one set
         // of shard files per task, not one per file.
         let [_, _, ns] = ctx.grid()?.local_dims();
-        let mut writer = ShardWriter::create(&make_dir(&out.join(format!("op-{j}")))?, ns + 1);
+        let dir = make_dir(&out.join(format!("op-{j}")))?;
+        let mut writer = if ctx.plan.coloured() { ShardWriter::create_coloured(&dir, ns + 1) } else { ShardWriter::create(&dir, ns + 1) };
         let parts = match discretize_pieces_at_once(ctx, j, files, &mine, &mut writer)? {
             Some(parts) => parts,
             None => {
@@ -791,7 +830,8 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
 /// (nothing written) when one is not, or when one turns out to hold
 /// polygons: the caller then reads them one by one.
 fn discretize_pieces_at_once(ctx: &Ctx, j: usize, files: &[MeshFile], mine: &[(usize, (u64, u64))], writer: &mut ShardWriter) -> Result<Option<Vec<MeshPart>>, PipelineError> {
-    if mine.len() < 2 {
+    // Coloured files stream through the reader (see `discretize_piece`).
+    if mine.len() < 2 || (writer.coloured() && mine.iter().any(|&(k, _)| files[k].colour)) {
         return Ok(None);
     }
     let mut opened = Vec::with_capacity(mine.len());
@@ -839,9 +879,12 @@ fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u
     // Files with fixed-size records are read directly by every worker;
     // others (and, as one part, files that turn out to hold polygons)
     // stream through the reader.
+    // A coloured file in a coloured run streams through the reader, whose
+    // chunks carry each face's vertex indices for its corner colours.
+    let coloured = writer.coloured() && file.colour;
     let mut direct = match split_faces {
-        Some(_) => reader.triangle_records()?,
-        None => None,
+        Some(_) if !coloured => reader.triangle_records()?,
+        _ => None,
     };
     let positions = reader.positions();
     if let Some(records) = direct.as_mut() {
@@ -851,7 +894,10 @@ fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u
         // grid is made from its results), checked every vertex finite.
         records.set_positions_known_finite(true);
     }
-    let choice = choose(ctx.deref, direct.as_ref(), &positions, range);
+    let mut choice = choose(ctx.deref, direct.as_ref(), &positions, range);
+    if coloured {
+        choice.sort = false;
+    }
     let mut result = None;
     let mut sort_stats = None;
     let mut warnings = Vec::new();
@@ -955,14 +1001,20 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<Re
     let [na, nb, _] = grid.local_dims();
     r.planned_slab_bytes = subs
         .iter()
-        .map(|&(k0, k1)| counts[k0 as usize..=k1 as usize].iter().sum::<u64>() * BYTES_PER_RECORD_IN_SLAB + (k1 - k0 + 1) as u64 * bytes_per_plane(na, nb))
+        .map(|&(k0, k1)| counts[k0 as usize..=k1 as usize].iter().sum::<u64>() * ctx.record_bytes_in_slab() + (k1 - k0 + 1) as u64 * bytes_per_plane(na, nb))
         .max()
         .unwrap_or(0);
+    let coloured = ctx.plan.coloured();
     let compute = |k0: u32, k1: u32| -> Result<Done, PipelineError> {
-        let (mut operands, below) = ctx.operand_planes(k0, k1)?;
+        let (mut operands, below, tinted) = ctx.operand_planes(k0, k1, coloured)?;
+        let colour = |res: &SlabResult| match &tinted {
+            Some(t) => colour_vertices(grid, k0, &res.vertices, t),
+            None => Vec::new(),
+        };
         if !strict {
             let (res, rep) = reconstruct_slab_solids(grid, k0, operands, rules, &ctx.scene.expr, open, &below);
-            return Ok((res, FilterStats::default(), rep));
+            let c = colour(&res);
+            return Ok((res, c, FilterStats::default(), rep));
         }
         let mut planes = operands.swap_remove(0);
         let mut stats = FilterStats::default();
@@ -973,7 +1025,9 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<Re
                 stats += f;
             }
         }
-        Ok((reconstruct_slab(grid, k0, &planes, max_listed), stats, RepairStats::default()))
+        let res = reconstruct_slab(grid, k0, &planes, max_listed);
+        let c = colour(&res);
+        Ok((res, c, stats, RepairStats::default()))
     };
     let mut vfile = SumWriter::create(out.join("vertices.bin"))?;
     let mut ffile = SumWriter::create(out.join("faces.bin"))?;
@@ -982,7 +1036,7 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<Re
     let mut filter = FilterStats::default();
     let mut repair = RepairStats::default();
     ctx.progress.start(crate::progress::RECONSTRUCT, (b - a) as u64);
-    reconstruct_ordered(&subs, ctx.threads, &compute, ctx.progress, &mut |res, f, rep, layers| {
+    reconstruct_ordered(&subs, ctx.threads, &compute, ctx.progress, &mut |res, colours, f, rep, layers| {
         filter += f;
         repair += rep;
         if let Some(h) = holes.as_mut() {
@@ -991,12 +1045,18 @@ fn reconstruct_task(ctx: &Ctx, task: u32, out: &Path, reopen: bool) -> Result<Re
             }
             hole_cells += res.hole_cells.len() as u64;
         }
-        for v in &res.vertices {
-            let mut bytes = [0u8; 24];
+        for (i, v) in res.vertices.iter().enumerate() {
+            let mut bytes = [0u8; VERTEX_BYTES + 4];
             for d in 0..3 {
                 bytes[8 * d..8 * d + 8].copy_from_slice(&v[d].to_le_bytes());
             }
-            vfile.write(&bytes)?;
+            match colours.get(i) {
+                Some(c) => {
+                    bytes[VERTEX_BYTES..].copy_from_slice(c);
+                    vfile.write(&bytes)?;
+                }
+                None => vfile.write(&bytes[..VERTEX_BYTES])?,
+            }
         }
         for f in &res.faces {
             let mut bytes = [0u8; 12];
@@ -1110,6 +1170,10 @@ pub fn boundary_of(loose: &[(u32, u32)]) -> (u64, u64) {
     (boundary.len() as u64, loops)
 }
 
+/// Bytes of one vertex in a slab's `vertices.bin` (three f64), followed
+/// in a coloured run by its RGBA.
+const VERTEX_BYTES: usize = 24;
+
 fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
     let output = &ctx.plan.spec.output;
     let format = Format::from_path(output)?;
@@ -1119,22 +1183,32 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
     let hi: [f64; 3] = std::array::from_fn(|d| grid.origin[d] + grid.dims[d] as f64 * grid.cell);
     let tolerance = grid.cell * crate::spec::defaults::F32_TOLERANCE_CELLS;
     let (double, precision) = mint_io::precision::choose(output, format, ctx.plan.spec.write.double, grid.origin, hi, tolerance)?;
-    let write = mint_io::WriteOptions { double, ..ctx.plan.spec.write.options(Some(ctx.dir.clone())) };
+    let coloured = ctx.plan.coloured();
+    let write = mint_io::WriteOptions { double, ..ctx.plan.spec.write.options(Some(ctx.dir.clone()), coloured) };
     let slabs: Vec<(Stage, ReconstructResult)> = (0..ctx.plan.tasks(Stage::Reconstruct)).map(|t| ctx.final_slab(t)).collect::<Result<_, _>>()?;
     let total_faces: u64 = slabs.iter().map(|(_, s)| s.faces).sum();
     let mut writer = MeshWriter::create(output, format, write)?;
     ctx.progress.start(crate::progress::WRITE, total_faces);
     for (t, (stage, s)) in slabs.iter().enumerate() {
         let path = crate::workdir::task_dir(&ctx.dir, *stage, t as u32).join("vertices.bin");
-        read_records::<24>(&path, s.vertices_file.unwrap_or(FileSum { len: 0, crc32: 0 }), |b| {
+        let sum = s.vertices_file.unwrap_or(FileSum { len: 0, crc32: 0 });
+        let mut vertex = |b: &[u8], rgba: Option<[u8; 4]>| -> Result<(), PipelineError> {
             let c = |d: usize| f64::from_le_bytes(b[8 * d..8 * d + 8].try_into().unwrap());
             let v = [c(0), c(1), c(2)];
             if !v.iter().all(|x| x.is_finite()) {
                 return Err(PipelineError::NonFiniteResult { path: ctx.name(), x: v[0], y: v[1], z: v[2] });
             }
-            writer.write_vertex(v)?;
+            match rgba {
+                Some(c) => writer.write_vertex_rgba(v, c)?,
+                None => writer.write_vertex(v)?,
+            }
             Ok(())
-        })?;
+        };
+        if coloured {
+            read_records::<{ VERTEX_BYTES + 4 }>(&path, sum, |b| vertex(b, Some(b[VERTEX_BYTES..].try_into().unwrap())))?;
+        } else {
+            read_records::<VERTEX_BYTES>(&path, sum, |b| vertex(b, None))?;
+        }
         check_cancel(ctx.progress)?;
     }
     let total_vertices: u64 = slabs.iter().map(|(_, s)| s.vertices).sum();

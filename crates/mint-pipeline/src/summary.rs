@@ -14,9 +14,12 @@ pub struct ResampleSummary {
     pub input_files: u64,
     /// Tiles read from 3D Tiles tilesets (their finest level), 0 without.
     pub input_tiles: u64,
-    /// Input files with per-vertex colour, which the output does not carry
-    /// (yet: issue 27).
+    /// Input files with per-vertex colour.
     pub input_coloured_files: u64,
+    /// The output carries per-vertex colour (see `mint_core::colour`).
+    pub colour: bool,
+    /// `--no-color` was given.
+    pub no_colour: bool,
     pub input_vertices: u64,
     pub input_faces: u64,
     /// Signed volume enclosed by the input (negative: inside-out).

@@ -3,7 +3,8 @@
 //! During discretization every [`Intercept`] is appended by a
 //! [`ShardWriter`] to one *shard* file chosen by its slab-axis plane: shard
 //! `b` holds planes `b * planes_per_shard .. (b + 1) * planes_per_shard`.
-//! Shards are plain concatenations of 16-byte little-endian records in
+//! Shards are plain concatenations of 16-byte little-endian records (20
+//! bytes in a coloured store: the record, then its RGBA colour) in
 //! arrival order (the format is in docs/FORMATS.md); order inside a shard
 //! does not matter because every reader sorts by [`Intercept::sort_key`],
 //! a total order. The writer counts records per plane and checksums every
@@ -28,6 +29,7 @@ pub mod buckets;
 
 pub use buckets::{Bucket, BucketReader, Buckets, Record};
 pub use budget::{default_mem_bytes, Budget};
+use mint_core::colour::{Rgba, Tinted, WHITE};
 use mint_core::intercept::FAMILY_S;
 use mint_core::Intercept;
 use serde::{Deserialize, Serialize};
@@ -39,6 +41,8 @@ use std::path::{Path, PathBuf};
 pub const MAX_SHARDS: u32 = 256;
 /// Bytes per stored record.
 pub const RECORD: usize = 16;
+/// Bytes per stored record in a coloured store (the record and its RGBA).
+pub const COLOURED_RECORD: usize = 20;
 const WRITE_BUFFER: usize = 64 * 1024;
 
 /// Store failures; each names the file involved.
@@ -80,6 +84,9 @@ pub struct ShardManifest {
     pub counts: Vec<u64>,
     /// The shard files that exist (shards never written are empty).
     pub shards: Vec<ShardFile>,
+    /// Records carry their colour ([`COLOURED_RECORD`] bytes each).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub colour: bool,
 }
 
 impl ShardManifest {
@@ -103,14 +110,24 @@ impl ShardManifest {
         if !self.shards.windows(2).all(|w| w[0].index < w[1].index) || self.shards.iter().any(|s| s.index >= shards) {
             return Err(format!("shard numbers out of order or past {shards}"));
         }
-        if let Some(s) = self.shards.iter().find(|s| s.len % RECORD as u64 != 0) {
+        let record = self.record_bytes() as u64;
+        if let Some(s) = self.shards.iter().find(|s| s.len % record != 0) {
             return Err(format!("shard {} of {} bytes, not whole records", s.index, s.len));
         }
         let total: u128 = self.counts.iter().map(|&c| c as u128).sum();
-        if total * RECORD as u128 != self.shards.iter().map(|s| s.len as u128).sum::<u128>() {
+        if total * record as u128 != self.shards.iter().map(|s| s.len as u128).sum::<u128>() {
             return Err("plane counts that do not add up to the shards' records".into());
         }
         Ok(())
+    }
+
+    /// Bytes per record in this store's shards.
+    pub fn record_bytes(&self) -> usize {
+        if self.colour {
+            COLOURED_RECORD
+        } else {
+            RECORD
+        }
     }
 
     /// Total records.
@@ -147,9 +164,22 @@ pub struct ShardWriter {
     planes_per_shard: u32,
     open: Vec<Option<OpenShard>>,
     counts: Vec<u64>,
+    colour: bool,
 }
 
 impl ShardWriter {
+    /// A writer of coloured records ([`COLOURED_RECORD`] bytes each) for
+    /// `planes` planes into `dir`; records appended without a colour get
+    /// [`WHITE`].
+    pub fn create_coloured(dir: &Path, planes: u32) -> ShardWriter {
+        ShardWriter { colour: true, ..ShardWriter::create(dir, planes) }
+    }
+
+    /// True when the records carry colour.
+    pub fn coloured(&self) -> bool {
+        self.colour
+    }
+
     /// A writer for `planes` slab-axis planes into `dir` (which must exist).
     pub fn create(dir: &Path, planes: u32) -> ShardWriter {
         let planes = planes.max(1);
@@ -161,12 +191,26 @@ impl ShardWriter {
             planes_per_shard,
             open: (0..shards).map(|_| None).collect(),
             counts: vec![0; planes as usize],
+            colour: false,
         }
     }
 
-    /// Appends records (any planes below `planes`, any order).
+    /// Appends records (any planes below `planes`, any order); a coloured
+    /// store gives them [`WHITE`].
     pub fn append(&mut self, records: &[Intercept]) -> Result<(), StoreError> {
-        for r in records {
+        self.append_with(records, |_| WHITE)
+    }
+
+    /// Appends records with their colours (`colours[i]` is `records[i]`'s;
+    /// an uncoloured store drops them).
+    pub fn append_coloured(&mut self, records: &[Intercept], colours: &[Rgba]) -> Result<(), StoreError> {
+        assert_eq!(records.len(), colours.len());
+        self.append_with(records, |i| colours[i])
+    }
+
+    fn append_with(&mut self, records: &[Intercept], colour: impl Fn(usize) -> Rgba) -> Result<(), StoreError> {
+        let record = if self.colour { COLOURED_RECORD } else { RECORD };
+        for (i, r) in records.iter().enumerate() {
             debug_assert!(r.plane < self.planes);
             let shard = (r.plane / self.planes_per_shard) as usize;
             if self.open[shard].is_none() {
@@ -175,13 +219,16 @@ impl ShardWriter {
                 self.open[shard] = Some(OpenShard { file: BufWriter::with_capacity(WRITE_BUFFER, f), crc: crc32fast::Hasher::new(), len: 0 });
             }
             let s = self.open[shard].as_mut().unwrap();
-            let bytes = r.to_le_bytes();
-            if let Err(e) = s.file.write_all(&bytes) {
+            let mut bytes = [0u8; COLOURED_RECORD];
+            bytes[..RECORD].copy_from_slice(&r.to_le_bytes());
+            bytes[RECORD..].copy_from_slice(&colour(i));
+            let bytes = &bytes[..record];
+            if let Err(e) = s.file.write_all(bytes) {
                 let path = self.dir.join(shard_name(shard as u32));
                 return Err(io_err(&path, "writing a shard")(e));
             }
-            s.crc.update(&bytes);
-            s.len += RECORD as u64;
+            s.crc.update(bytes);
+            s.len += record as u64;
             self.counts[r.plane as usize] += 1;
         }
         Ok(())
@@ -232,7 +279,7 @@ impl ShardWriter {
                 shards.push(ShardFile { index: index as u32, len: s.len, crc32: s.crc.finalize() });
             }
         }
-        Ok(ShardManifest { planes: self.planes, planes_per_shard: self.planes_per_shard, counts: self.counts, shards })
+        Ok(ShardManifest { planes: self.planes, planes_per_shard: self.planes_per_shard, counts: self.counts, shards, colour: self.colour })
     }
 }
 
@@ -271,8 +318,23 @@ impl ShardSet {
     /// For the last plane, only family-A and -B records are kept when
     /// `boundary_last` is set (the slab above owns its layer).
     pub fn read_planes(&self, first: u32, last: u32, boundary_last: bool) -> Result<Vec<Vec<Intercept>>, StoreError> {
+        self.read_planes_as(first, last, boundary_last, |r, _| r)
+    }
+
+    /// True when any store of the set holds colours.
+    pub fn coloured(&self) -> bool {
+        self.parts.iter().any(|(_, m)| m.colour)
+    }
+
+    /// [`ShardSet::read_planes`] with each record's colour ([`WHITE`] from
+    /// stores without colour).
+    pub fn read_planes_coloured(&self, first: u32, last: u32, boundary_last: bool) -> Result<Vec<Vec<Tinted>>, StoreError> {
+        self.read_planes_as(first, last, boundary_last, |r, c| (r, c))
+    }
+
+    fn read_planes_as<T>(&self, first: u32, last: u32, boundary_last: bool, make: impl Fn(Intercept, Rgba) -> T) -> Result<Vec<Vec<T>>, StoreError> {
         let counts = self.plane_counts();
-        let mut out: Vec<Vec<Intercept>> =
+        let mut out: Vec<Vec<T>> =
             (first..=last).map(|k| Vec::with_capacity(counts.get(k as usize).copied().unwrap_or(0) as usize)).collect();
         let mut buf = vec![0u8; 1 << 20];
         for (dir, m) in &self.parts {
@@ -287,7 +349,7 @@ impl ShardSet {
             let mut seen = vec![0u64; (last_in - first + 1) as usize];
             for shard in m.shards.iter().filter(|s| s.index >= s0 && s.index <= s1) {
                 let path = dir.join(shard_name(shard.index));
-                read_shard(&path, shard, &mut buf, |r| {
+                read_shard(&path, shard, m.record_bytes(), &mut buf, |r, c| {
                     if r.plane < first || r.plane > last {
                         return;
                     }
@@ -297,7 +359,7 @@ impl ShardSet {
                     if boundary_last && r.plane == last && r.family() == FAMILY_S {
                         return;
                     }
-                    out[(r.plane - first) as usize].push(r);
+                    out[(r.plane - first) as usize].push(make(r, c));
                 })?;
             }
             for (i, &n) in seen.iter().enumerate() {
@@ -316,7 +378,7 @@ impl ShardSet {
 }
 
 /// Streams one shard's records to `keep`, checking its length and checksum.
-fn read_shard(path: &Path, want: &ShardFile, buf: &mut [u8], mut keep: impl FnMut(Intercept)) -> Result<(), StoreError> {
+fn read_shard(path: &Path, want: &ShardFile, record: usize, buf: &mut [u8], mut keep: impl FnMut(Intercept, Rgba)) -> Result<(), StoreError> {
     let mut file = match File::open(path) {
         Ok(f) => f,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -330,13 +392,16 @@ fn read_shard(path: &Path, want: &ShardFile, buf: &mut [u8], mut keep: impl FnMu
     }
     let mut crc = crc32fast::Hasher::new();
     let mut remaining = len as usize;
+    // Whole records per read.
+    let size = buf.len() / record * record;
     while remaining > 0 {
-        let n = remaining.min(buf.len());
+        let n = remaining.min(size);
         file.read_exact(&mut buf[..n]).map_err(io_err(path, "reading a shard"))?;
         remaining -= n;
         crc.update(&buf[..n]);
-        for rec in buf[..n].chunks_exact(RECORD) {
-            keep(Intercept::from_le_bytes(rec));
+        for rec in buf[..n].chunks_exact(record) {
+            let colour = if record == COLOURED_RECORD { rec[RECORD..].try_into().unwrap() } else { WHITE };
+            keep(Intercept::from_le_bytes(rec), colour);
         }
     }
     let got = crc.finalize();
@@ -385,6 +450,36 @@ mod tests {
         assert!(planes[3].iter().all(|r| r.plane == 13));
         let all = set.read_planes(0, 999, false).unwrap();
         assert_eq!(all.iter().map(|p| p.len()).sum::<usize>(), 3000);
+    }
+
+    #[test]
+    fn coloured_records_come_back_with_their_colours_and_plain_stores_give_white() {
+        let root = tempfile::tempdir().unwrap();
+        let recs = records(300);
+        let cols: Vec<Rgba> = (0..recs.len()).map(|i| [i as u8, (i >> 8) as u8, 7, 200]).collect();
+        let (a, b) = (root.path().join("a"), root.path().join("b"));
+        std::fs::create_dir(&a).unwrap();
+        std::fs::create_dir(&b).unwrap();
+        let mut w = ShardWriter::create_coloured(&a, 300);
+        w.append_coloured(&recs[..600], &cols[..600]).unwrap();
+        let ma = w.finish().unwrap();
+        assert!(ma.colour && ma.bytes() == 600 * COLOURED_RECORD as u64);
+        ma.validate(300).unwrap();
+        let mut w = ShardWriter::create(&b, 300);
+        w.append(&recs[600..]).unwrap();
+        let mb = w.finish().unwrap();
+        let mut set = ShardSet::new();
+        set.push(a, ma);
+        set.push(b, mb);
+        assert!(set.coloured());
+        let planes = set.read_planes_coloured(0, 299, false).unwrap();
+        let mut got: Vec<(u32, u32, u64, Rgba)> = planes.iter().flatten().map(|(r, c)| (r.plane, r.line, r.signed_value.to_bits(), *c)).collect();
+        let mut want: Vec<(u32, u32, u64, Rgba)> = recs.iter().enumerate().map(|(i, r)| (r.plane, r.line, r.signed_value.to_bits(), if i < 600 { cols[i] } else { WHITE })).collect();
+        got.sort();
+        want.sort();
+        assert_eq!(got, want);
+        // The geometry alone reads the same from either kind of store.
+        assert_eq!(set.read_planes(0, 299, false).unwrap().iter().map(|p| p.len()).sum::<usize>(), 900);
     }
 
     #[test]
