@@ -585,7 +585,7 @@ fn assemble<C: Coord>(gather: Vec<BucketReader<Resolved<C>>>, blocks: &Blocks, s
                 discretize_slice(&tris[at..at + m], axis, local, xf, nb, &mut recs, &mut volume);
                 at += m;
                 progress.advance(m as u64);
-                if tx.send((ci, recs, volume)).is_err() {
+                if tx.send((ci, recs, Vec::new(), volume)).is_err() {
                     break; // the writer stopped on an error and raised `stop`
                 }
             }

@@ -11,7 +11,7 @@ use mint_core::grid::Grid;
 use mint_core::primitives::Transform;
 use mint_core::colour::{crossing_colour, Rgba};
 use mint_core::{discretize_triangle, Intercept};
-use mint_io::{MeshReader, TriangleChunk, TriangleRecords};
+use mint_io::{MeshReader, TriangleChunk, TriangleRecords, VertexColours, VertexPositions};
 use mint_store::{ShardWriter, StoreError};
 use crossbeam_channel::Sender;
 use std::sync::atomic::Ordering;
@@ -86,10 +86,11 @@ pub(crate) fn discretize_all(
                         volume += signed_volume6(&local);
                         match colours {
                             Some(cs) => {
-                                let corners = tri.map(|i| cs.get(i));
+                                let mut corners = None;
                                 discretize_triangle(&local, |c| {
                                     recs.push(c.intercept(nb));
-                                    tints.push(crossing_colour(&local, &corners, &c));
+                                    let corners = corners.get_or_insert_with(|| tri.map(|i| cs.get(i)));
+                                    tints.push(crossing_colour(&local, corners, &c));
                                 });
                             }
                             None => discretize_triangle(&local, |c| recs.push(c.intercept(nb))),
@@ -232,15 +233,74 @@ pub(crate) fn discretize_direct_many(
         }
         progress.advance(b - a);
         // A closed channel: the writer stopped on an error and raised `stop`.
-        let _ = tx.send((g as usize, recs, volume));
+        let _ = tx.send((g as usize, recs, Vec::new(), volume));
         Ok(())
     })?;
     Ok((0..pieces.len()).map(|p| (faces[p], volumes[starts[p] as usize..starts[p + 1] as usize].to_vec())).collect())
 }
 
+/// [`discretize_direct`] for a file with per-vertex colour in a coloured
+/// store: the workers read each record's vertex indices
+/// ([`TriangleRecords::visit_indices`]) and fetch positions and colours by
+/// index, so that every crossing gets its triangle's colour there
+/// ([`crossing_colour`]). The volumes are those of every other path (the
+/// same chunks, the same arithmetic as [`Grid::to_local`]).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn discretize_direct_coloured(
+    records: &TriangleRecords,
+    positions: &VertexPositions,
+    colours: &VertexColours,
+    (first, end): (u64, u64),
+    grid: &Grid,
+    store: &mut ShardWriter,
+    threads: usize,
+    progress: &dyn Progress,
+    xf: Option<&Transform>,
+) -> Result<(u64, Vec<f64>), PipelineError> {
+    let [_, nb, _] = grid.local_dims();
+    let chunk = CHUNK_TRIANGLES as u64;
+    let end = end.min(records.len());
+    let faces = end.saturating_sub(first);
+    let chunks = faces.div_ceil(chunk);
+    progress.start(crate::progress::DISCRETIZE, faces);
+    let volumes = discretize_on_pool(threads, chunks, chunks as usize, store, progress, |_| (), |_, tx, g| {
+        if progress.cancelled() {
+            return Err(PipelineError::Cancelled);
+        }
+        let (a, b) = (first + g * chunk, (first + (g + 1) * chunk).min(end));
+        let ahead = a + READ_AHEAD * chunk;
+        records.read_ahead(ahead, (ahead + chunk).min(end));
+        let (mut recs, mut tints) = (Vec::with_capacity(1024), Vec::with_capacity(1024));
+        let mut volume = 0.0;
+        records.visit_indices(a, b, |_, tri| {
+            let at = |i: u32| {
+                let p = positions.get(i);
+                grid.to_local(match xf {
+                    Some(t) => t.apply_point(p),
+                    None => p,
+                })
+            };
+            let local = [at(tri[0]), at(tri[1]), at(tri[2])];
+            volume += signed_volume6(&local);
+            // Most triangles of a fine mesh cross no line: colours are
+            // fetched on the first crossing.
+            let mut corners = None;
+            discretize_triangle(&local, |c| {
+                recs.push(c.intercept(nb));
+                let corners = corners.get_or_insert_with(|| tri.map(|i| colours.get(i)));
+                tints.push(crossing_colour(&local, corners, &c));
+            });
+        })?;
+        progress.advance(b - a);
+        let _ = tx.send((g as usize, recs, tints, volume));
+        Ok(())
+    })?;
+    Ok((faces, volumes))
+}
+
 /// A chunk of records on its way to the shard writer: its number, its
-/// records, six times its signed volume.
-pub(crate) type ChunkOut = (usize, Vec<Intercept>, f64);
+/// records, their colours (empty when none), six times its signed volume.
+pub(crate) type ChunkOut = (usize, Vec<Intercept>, Vec<Rgba>, f64);
 
 /// The parallel discretize passes' one shape (direct and sorted): `work`
 /// runs over `items` on the worker pool, each worker with its own state from
@@ -268,9 +328,10 @@ pub(crate) fn discretize_on_pool<W: Send>(
         |(tx, state), i| work(state, tx, i),
         drop,
         |stop| -> Result<(), StoreError> {
-            for (seq, recs, volume) in rx {
+            for (seq, recs, tints, volume) in rx {
                 volumes[seq] = volume;
-                if let Err(e) = store.append(&recs) {
+                let appended = if tints.is_empty() { store.append(&recs) } else { store.append_coloured(&recs, &tints) };
+                if let Err(e) = appended {
                     stop.store(true, Ordering::Relaxed);
                     return Err(e);
                 }

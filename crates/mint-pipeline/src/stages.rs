@@ -32,7 +32,7 @@ use crate::error::PipelineError;
 use crate::deref::{choose, discretize_sorted, Deref, DerefChoice, Faces, SortStats};
 use mint_store::Budget;
 use crate::bounds::bounds;
-use crate::discretize::{discretize_all, discretize_direct, discretize_direct_many, DirectPiece, CHUNK_TRIANGLES};
+use crate::discretize::{discretize_all, discretize_direct, discretize_direct_coloured, discretize_direct_many, DirectPiece, CHUNK_TRIANGLES};
 use crate::progress::check_cancel;
 use crate::slabs::{bytes_per_plane, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, COLOUR_BYTES_PER_RECORD_IN_SLAB};
 use crate::plan::{MeshFile, OperandPlan, Plan, Stage};
@@ -879,12 +879,12 @@ fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u
     // Files with fixed-size records are read directly by every worker;
     // others (and, as one part, files that turn out to hold polygons)
     // stream through the reader.
-    // A coloured file in a coloured run streams through the reader, whose
-    // chunks carry each face's vertex indices for its corner colours.
-    let coloured = writer.coloured() && file.colour;
+    // A coloured file in a coloured run: its crossings take its colours
+    // (read by vertex index; never by the sort, which carries positions only).
+    let colours = if writer.coloured() { reader.colours() } else { None };
     let mut direct = match split_faces {
-        Some(_) if !coloured => reader.triangle_records()?,
-        _ => None,
+        Some(_) => reader.triangle_records()?,
+        None => None,
     };
     let positions = reader.positions();
     if let Some(records) = direct.as_mut() {
@@ -895,7 +895,7 @@ fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u
         records.set_positions_known_finite(true);
     }
     let mut choice = choose(ctx.deref, direct.as_ref(), &positions, range);
-    if coloured {
+    if colours.is_some() {
         choice.sort = false;
     }
     let mut result = None;
@@ -903,7 +903,9 @@ fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u
     let mut warnings = Vec::new();
     if let Some(records) = &direct {
         let checkpoint = writer.checkpoint();
-        let run = if choice.sort {
+        let run = if let Some(cs) = &colours {
+            discretize_direct_coloured(records, &positions, cs, range, grid, writer, ctx.threads, ctx.progress, ctx.transform(j))
+        } else if choice.sort {
             let faces = Faces::Records { records, first: range.0, end: range.1 };
             discretize_sorted(faces, &positions, grid, writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, &ctx.budget).map(|(n, v, st)| {
                 sort_stats = Some(st);
