@@ -173,6 +173,8 @@ pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress
     };
     let mut spec = RunSpec::new(mint_pipeline::Job::Resample { inputs: inputs.to_vec() }, &mid_path, GridSize::CellSize(h));
     spec.write.double = true;
+    // The quadric stage keeps no colour (yet): the intermediate needs none.
+    spec.write.no_colour = true;
     let rs = run(&spec, &o.tuning, progress)?;
     let seconds_resample = t.elapsed().as_secs_f64();
     if let Some(why) = rs.empty_reason() {

@@ -75,7 +75,10 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         write_before_after(&files, &a.output, a.preview_up.up, a.quiet.quiet || a.json.json, &bars)?;
     }
     // The resampling's warnings (an open input read as a sheet, …).
-    let warnings = crate::summary::summary_warnings_with(&s.resample, "`mint resample --signs union`");
+    let mut warnings = crate::summary::summary_warnings_with(&s.resample, "`mint resample --signs union`");
+    if s.resample.input_coloured_files > 0 {
+        warnings.insert(0, format!("{}: {} of the input files have per-vertex colour, which decimation does not carry yet: the output is geometry only (`mint resample` carries it)", s.resample.input, s.resample.input_coloured_files));
+    }
     for w in &warnings {
         eprintln!("mint: warning: {w}");
     }

@@ -1,0 +1,167 @@
+#!/usr/bin/env python3
+"""How well a resampled mesh keeps its input's per-vertex colour: mean CIELAB
+colour difference against the input at the nearest point, beside the ideal
+vertex attribute transfer on the same output geometry.
+
+    colour_metrics.py INPUT.ply OUTPUT.ply [SAMPLES]
+
+Both files are binary little-endian PLY with uchar red, green, blue per
+vertex (convert others with `mint convert`). The output surface is sampled
+(SAMPLES points, area-weighted, fixed seed; default 200000); at each sample
+the output's colour (its vertex colours interpolated) is compared with the
+input's colour at the nearest input point (the corner colours interpolated
+at the exact closest point, among the triangles of the 16 nearest
+centroids). The *ideal* transfer colours each output vertex from the input's
+nearest point and is measured the same way. Prints JSON: ΔE (CIE76, sRGB D65)
+mean and p95 for mint and the ideal, and their ratio.
+
+A checker written apart from mint (numpy and scipy's k-d tree), for the
+colour benchmark and independent review; not used by the tests.
+"""
+import json
+import sys
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+TYPES = {"char": "i1", "uchar": "u1", "int8": "i1", "uint8": "u1", "short": "i2", "ushort": "u2", "int16": "i2",
+         "uint16": "u2", "int": "i4", "uint": "u4", "int32": "i4", "uint32": "u4", "float": "f4", "float32": "f4",
+         "double": "f8", "float64": "f8"}
+
+
+def read_ply(path):
+    with open(path, "rb") as f:
+        data = f.read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    header = data[:end].decode("ascii").splitlines()
+    assert "format binary_little_endian 1.0" in header, f"{path}: binary little-endian PLY only"
+    elements = []
+    for line in header:
+        w = line.split()
+        if w and w[0] == "element":
+            elements.append((w[1], int(w[2]), []))
+        elif w and w[0] == "property":
+            elements[-1][2].append(w[1:])
+    pos = end
+    verts = cols = faces = None
+    for name, count, props in elements:
+        if all(p[0] != "list" for p in props):
+            dt = np.dtype([(p[1], "<" + TYPES[p[0]]) for p in props])
+            arr = np.frombuffer(data, dt, count, pos)
+            pos += dt.itemsize * count
+            if name == "vertex":
+                verts = np.stack([arr["x"], arr["y"], arr["z"]], 1).astype(np.float64)
+                names = dt.names
+                assert all(c in names for c in ("red", "green", "blue")), f"{path}: no vertex colour"
+                cols = np.stack([arr["red"], arr["green"], arr["blue"]], 1).astype(np.float64)
+                if arr["red"].dtype.kind == "f":
+                    cols = np.clip(np.round(cols * 255), 0, 255)
+                elif arr["red"].dtype.itemsize == 2:
+                    cols = np.floor(cols / 256)
+        else:
+            assert name == "face", "faces: a list property first"
+            ct, it = TYPES[props[0][1]], TYPES[props[0][2]]
+            rest = [(p[1], "<" + TYPES[p[0]]) for p in props[1:]]
+            dt = np.dtype([("n", "<" + ct), ("v", "<" + it, (3,))] + rest)
+            arr = np.frombuffer(data, dt, count, pos)
+            assert (arr["n"] == 3).all(), "triangles only"
+            faces = arr["v"].astype(np.int64)
+            pos += dt.itemsize * count
+    return verts, cols, faces
+
+
+def srgb_to_lab(rgb):
+    c = rgb / 255.0
+    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    m = np.array([[0.4124564, 0.3575761, 0.1804375], [0.2126729, 0.7151522, 0.0721750], [0.0193339, 0.1191920, 0.9503041]])
+    xyz = lin @ m.T / np.array([0.95047, 1.0, 1.08883])
+    f = np.where(xyz > (6 / 29) ** 3, np.cbrt(xyz), xyz / (3 * (6 / 29) ** 2) + 4 / 29)
+    return np.stack([116 * f[:, 1] - 16, 500 * (f[:, 0] - f[:, 1]), 200 * (f[:, 1] - f[:, 2])], 1)
+
+
+def closest_on_triangles(p, a, b, c):
+    """Closest points of p (n, 3) on triangles (a, b, c) (n, 3 each), as
+    barycentric weights (n, 3) (Ericson, Real-Time Collision Detection 5.1.5)."""
+    ab, ac, ap = b - a, c - a, p - a
+    d1, d2 = (ab * ap).sum(1), (ac * ap).sum(1)
+    bp = p - b
+    d3, d4 = (ab * bp).sum(1), (ac * bp).sum(1)
+    cp = p - c
+    d5, d6 = (ab * cp).sum(1), (ac * cp).sum(1)
+    va = d3 * d6 - d5 * d4
+    vb = d5 * d2 - d1 * d6
+    vc = d1 * d4 - d3 * d2
+    denom = va + vb + vc
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = vb / denom
+        w = vc / denom
+        w_ab = d1 / (d1 - d3)
+        w_ac = d2 / (d2 - d6)
+        w_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+    out = np.stack([1 - v - w, v, w], 1)
+    e = lambda cond, bary: np.where(cond[:, None], bary, out)  # noqa: E731
+    z, o = np.zeros_like(v), np.ones_like(v)
+    # Regions, from the last assigned (lowest priority) to the first.
+    out = e((va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0), np.stack([z, 1 - w_bc, w_bc], 1))
+    out = e((vb <= 0) & (d2 >= 0) & (d6 <= 0), np.stack([1 - w_ac, z, w_ac], 1))
+    out = e((vc <= 0) & (d1 >= 0) & (d3 <= 0), np.stack([1 - w_ab, w_ab, z], 1))
+    out = e((d6 >= 0) & (d5 <= d6), np.stack([z, z, o], 1))
+    out = e((d3 >= 0) & (d4 <= d3), np.stack([z, o, z], 1))
+    out = e((d1 <= 0) & (d2 <= 0), np.stack([o, z, z], 1))
+    return np.nan_to_num(out, nan=1 / 3)
+
+
+def colour_at_nearest(points, verts, cols, faces, tree, k=16, batch=20000):
+    out = np.empty((len(points), 3))
+    for s in range(0, len(points), batch):
+        p = points[s:s + batch]
+        _, idx = tree.query(p, k=k)
+        best = np.full(len(p), np.inf)
+        for j in range(k):
+            f = faces[idx[:, j]]
+            a, b, c = verts[f[:, 0]], verts[f[:, 1]], verts[f[:, 2]]
+            bary = closest_on_triangles(p, a, b, c)
+            q = bary[:, 0:1] * a + bary[:, 1:2] * b + bary[:, 2:3] * c
+            d = ((q - p) ** 2).sum(1)
+            col = bary[:, 0:1] * cols[f[:, 0]] + bary[:, 1:2] * cols[f[:, 1]] + bary[:, 2:3] * cols[f[:, 2]]
+            better = d < best
+            best[better] = d[better]
+            out[s:s + batch][better] = col[better]
+    return out
+
+
+def main():
+    inp, outp = sys.argv[1], sys.argv[2]
+    n = int(sys.argv[3]) if len(sys.argv) > 3 else 200000
+    iv, ic, if_ = read_ply(inp)
+    ov, oc, of = read_ply(outp)
+    tree = cKDTree(iv[if_].mean(1))
+    rng = np.random.default_rng(1)
+    a, b, c = ov[of[:, 0]], ov[of[:, 1]], ov[of[:, 2]]
+    area = np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    pick = rng.choice(len(of), size=n, p=area / area.sum())
+    r1, r2 = rng.random(n), rng.random(n)
+    s = np.sqrt(r1)
+    bary = np.stack([1 - s, s * (1 - r2), s * r2], 1)
+    f = of[pick]
+    pts = bary[:, 0:1] * ov[f[:, 0]] + bary[:, 1:2] * ov[f[:, 1]] + bary[:, 2:3] * ov[f[:, 2]]
+    truth = srgb_to_lab(colour_at_nearest(pts, iv, ic, if_, tree))
+    ideal_vertex = colour_at_nearest(ov, iv, ic, if_, tree)
+
+    def at_samples(vc):
+        return srgb_to_lab(bary[:, 0:1] * vc[f[:, 0]] + bary[:, 1:2] * vc[f[:, 1]] + bary[:, 2:3] * vc[f[:, 2]])
+
+    de_mint = np.linalg.norm(at_samples(oc) - truth, axis=1)
+    de_ideal = np.linalg.norm(at_samples(ideal_vertex) - truth, axis=1)
+    print(json.dumps({
+        "samples": n,
+        "delta_e_mean": float(de_mint.mean()),
+        "delta_e_p95": float(np.percentile(de_mint, 95)),
+        "ideal_delta_e_mean": float(de_ideal.mean()),
+        "ideal_delta_e_p95": float(np.percentile(de_ideal, 95)),
+        "ratio_to_ideal": float(de_mint.mean() / max(de_ideal.mean(), 1e-12)),
+    }, indent=1))
+
+
+if __name__ == "__main__":
+    main()
