@@ -12,7 +12,8 @@ the output's colour (its vertex colours interpolated) is compared with the
 input's colour at the nearest input point (the corner colours interpolated
 at the exact closest point, among the triangles of the 16 nearest
 centroids). The *ideal* transfer colours each output vertex from the input's
-nearest point and is measured the same way. Prints JSON: ΔE (CIE76, sRGB D65)
+nearest point (rounded to bytes, as a file stores it) and is measured the
+same way. Prints JSON: ΔE (CIE76, sRGB D65)
 mean and p95 for mint and the ideal, and their ratio.
 
 A checker written apart from mint (numpy and scipy's k-d tree), for the
@@ -146,7 +147,8 @@ def main():
     f = of[pick]
     pts = bary[:, 0:1] * ov[f[:, 0]] + bary[:, 1:2] * ov[f[:, 1]] + bary[:, 2:3] * ov[f[:, 2]]
     truth = srgb_to_lab(colour_at_nearest(pts, iv, ic, if_, tree))
-    ideal_vertex = colour_at_nearest(ov, iv, ic, if_, tree)
+    # Stored as bytes, as any output file stores them.
+    ideal_vertex = np.clip(np.round(colour_at_nearest(ov, iv, ic, if_, tree)), 0, 255)
 
     def at_samples(vc):
         return srgb_to_lab(bary[:, 0:1] * vc[f[:, 0]] + bary[:, 1:2] * vc[f[:, 1]] + bary[:, 2:3] * vc[f[:, 2]])

@@ -12,10 +12,11 @@
 //!   colour of the crossing nearest to it on that edge (the one it was made
 //!   from; overlapping layers merged into their mean take the nearest one's);
 //!   a vertex *synthesized* where its edge holds none (hole caps, the back
-//!   and rim of an open sheet) takes the mean colour of the crossings of its
-//!   plane nearest to it: those of the first ring of in-plane nodes, in
-//!   Chebyshev distance, that holds any (at most [`SEARCH_RINGS`] rings; then
-//!   the plane's mean; a plane without crossings gives [`NO_COLOUR`]).
+//!   and rim of an open sheet) takes the colour of the crossing of its plane
+//!   nearest to it in the plane (searched within [`SEARCH_RINGS`] rings of
+//!   nodes; farther, the plane's mean colour; a plane without crossings
+//!   gives [`NO_COLOUR`]), the in-plane stand-in for the input's nearest
+//!   point.
 //!
 //! Both rules read only the raw records of the vertex's own plane, so the
 //! colours, like the positions, do not depend on the slab partition, the
@@ -36,8 +37,8 @@ pub const WHITE: Rgba = [255; 4];
 /// A synthesized vertex's colour when its plane holds no crossing at all.
 pub const NO_COLOUR: Rgba = [128, 128, 128, 255];
 
-/// How many rings of in-plane nodes a synthesized vertex searches for
-/// coloured crossings before it takes its plane's mean colour.
+/// How many rings of in-plane nodes a synthesized vertex searches for the
+/// nearest crossing before it takes its plane's mean colour.
 pub const SEARCH_RINGS: u32 = 16;
 
 /// One raw record with its colour; a plane of them sorted by
@@ -97,6 +98,8 @@ struct Edge {
     value: f64,
     /// In-plane node coordinates (a, b) of the edge's lower end.
     node: [u32; 2],
+    /// The vertex's in-plane position (a, b).
+    at: [f64; 2],
 }
 
 /// The edge an output vertex (world position) lies on. Vertices sit a
@@ -116,15 +119,15 @@ fn edge_of(grid: &Grid, p: [f64; 3]) -> Option<Edge> {
     Some(match axis {
         0 => {
             let (b, k) = (r(l[1])?, r(l[2])?);
-            Edge { plane: k, line: (FAMILY_A << 30) | b, cell, value, node: [cell, b] }
+            Edge { plane: k, line: (FAMILY_A << 30) | b, cell, value, node: [cell, b], at: [value, b as f64] }
         }
         1 => {
             let (a, k) = (r(l[0])?, r(l[2])?);
-            Edge { plane: k, line: (FAMILY_B << 30) | a, cell, value, node: [a, cell] }
+            Edge { plane: k, line: (FAMILY_B << 30) | a, cell, value, node: [a, cell], at: [a as f64, value] }
         }
         _ => {
             let (a, b) = (r(l[0])?, r(l[1])?);
-            Edge { plane: cell, line: (FAMILY_S << 30) | (a * (nb + 1) + b), cell, value, node: [a, b] }
+            Edge { plane: cell, line: (FAMILY_S << 30) | (a * (nb + 1) + b), cell, value, node: [a, b], at: [a as f64, b as f64] }
         }
     })
 }
@@ -138,44 +141,47 @@ fn node_of(r: &Intercept, nb: u32) -> [u32; 2] {
     }
 }
 
-/// Sums of colours per in-plane node of one plane, for synthesized vertices.
+/// One plane's crossings by in-plane node, for synthesized vertices: each
+/// with its in-plane position and colour, in sorted order.
 struct PlaneColours {
-    nodes: HashMap<[u32; 2], ([u64; 4], u64)>,
+    nodes: HashMap<[u32; 2], Vec<([f64; 2], Rgba)>>,
     mean: Option<Rgba>,
 }
 
 impl PlaneColours {
     fn new(records: &[Tinted], nb: u32) -> PlaneColours {
-        let mut nodes: HashMap<[u32; 2], ([u64; 4], u64)> = HashMap::new();
-        let mut all = ([0u64; 4], 0u64);
+        let mut nodes: HashMap<[u32; 2], Vec<([f64; 2], Rgba)>> = HashMap::new();
+        let (mut sum, mut n) = ([0u64; 4], 0u64);
         for (r, c) in records {
-            let e = nodes.entry(node_of(r, nb)).or_default();
+            nodes.entry(node_of(r, nb)).or_default().push((in_plane(r, nb), *c));
             for k in 0..4 {
-                e.0[k] += c[k] as u64;
-                all.0[k] += c[k] as u64;
+                sum[k] += c[k] as u64;
             }
-            e.1 += 1;
-            all.1 += 1;
+            n += 1;
         }
-        PlaneColours { nodes, mean: (all.1 > 0).then(|| mean(all.0, all.1)) }
+        PlaneColours { nodes, mean: (n > 0).then(|| mean(sum, n)) }
     }
 
-    /// The mean colour of the nearest ring of nodes around `at` that holds
-    /// any record.
-    fn near(&self, at: [u32; 2]) -> Rgba {
+    /// The colour of the crossing nearest to in-plane position `at` (node
+    /// `node`): the rings of nodes around it are searched outwards until
+    /// one holds a crossing, then as far again as a nearer one could lie.
+    /// Ties go to the crossing first in sorted order.
+    fn near(&self, node: [u32; 2], at: [f64; 2]) -> Rgba {
         let Some(fallback) = self.mean else { return NO_COLOUR };
-        let (a, b) = (at[0] as i64, at[1] as i64);
-        for ring in 0..=SEARCH_RINGS as i64 {
-            let (mut sum, mut n) = ([0u64; 4], 0u64);
+        let (a, b) = (node[0] as i64, node[1] as i64);
+        let mut best: Option<(f64, Rgba)> = None;
+        let mut last = SEARCH_RINGS as i64;
+        let mut ring = 0i64;
+        while ring <= last {
             let mut take = |i: i64, j: i64| {
                 if i < 0 || j < 0 || i > u32::MAX as i64 || j > u32::MAX as i64 {
                     return;
                 }
-                if let Some((s, m)) = self.nodes.get(&[i as u32, j as u32]) {
-                    for k in 0..4 {
-                        sum[k] += s[k];
+                for (p, c) in self.nodes.get(&[i as u32, j as u32]).into_iter().flatten() {
+                    let d = (p[0] - at[0]).powi(2) + (p[1] - at[1]).powi(2);
+                    if best.is_none_or(|(bd, _)| d < bd) {
+                        best = Some((d, *c));
                     }
-                    n += m;
                 }
             };
             if ring == 0 {
@@ -188,11 +194,22 @@ impl PlaneColours {
                     take(a - ring, b - t);
                 }
             }
-            if n > 0 {
-                return mean(sum, n);
+            if let Some((d, _)) = best {
+                // A node of ring r holds crossings at least r - 1 away.
+                last = last.min(d.sqrt().ceil() as i64 + 1);
             }
+            ring += 1;
         }
-        fallback
+        best.map_or(fallback, |(_, c)| c)
+    }
+}
+
+/// A record's position in its plane's (a, b) coordinates.
+fn in_plane(r: &Intercept, nb: u32) -> [f64; 2] {
+    match r.family() {
+        FAMILY_A => [r.value(), r.index() as f64],
+        FAMILY_B => [r.index() as f64, r.value()],
+        _ => [(r.index() / (nb + 1)) as f64, (r.index() % (nb + 1)) as f64],
     }
 }
 
@@ -219,7 +236,7 @@ pub fn colour_vertices(grid: &Grid, k0: u32, vertices: &[[f64; 3]], planes: &[Ve
             if let Some(best) = on_edge.iter().min_by(|x, y| (x.0.value() - e.value).abs().total_cmp(&(y.0.value() - e.value).abs())) {
                 return best.1;
             }
-            near[i].get_or_insert_with(|| PlaneColours::new(recs, nb)).near(e.node)
+            near[i].get_or_insert_with(|| PlaneColours::new(recs, nb)).near(e.node, e.at)
         })
         .collect()
 }
