@@ -217,3 +217,87 @@ fn a_boolean_carries_each_operand_colour() {
     }
     assert!(white > 500 && other * 50 < white, "{white} white vertices on the cube, {other} others");
 }
+
+/// A binary PLY of `mint gen sphere` with uchar RGB per *face*: red where
+/// the face's centroid has x > 0, blue elsewhere.
+fn face_coloured_sphere(dir: &Path) -> PathBuf {
+    let plain = dir.join("fplain.ply");
+    assert!(mint(&["gen", "sphere", plain.to_str().unwrap(), "--faces", "20000"]).status.success());
+    let m = load(&plain);
+    let mut b = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty double x\nproperty double y\nproperty double z\nelement face {}\nproperty list uchar int vertex_indices\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n",
+        m.positions.len(),
+        m.faces.len()
+    )
+    .into_bytes();
+    for p in &m.positions {
+        p.iter().for_each(|c| b.extend(c.to_le_bytes()));
+    }
+    for f in &m.faces {
+        b.push(3);
+        f.iter().for_each(|v| b.extend((*v as i32).to_le_bytes()));
+        let x: f64 = f.iter().map(|&v| m.positions[v as usize][0]).sum();
+        b.extend(if x > 0.0 { [220u8, 30, 30] } else { [30, 30, 220] });
+    }
+    let path = dir.join("fcoloured.ply");
+    std::fs::write(&path, b).unwrap();
+    path
+}
+
+/// Face colours stay on their side of the border between them, read
+/// directly, by parts, and streamed (ascii); polygons give each of their
+/// triangles their colour.
+#[test]
+fn face_colours_stay_on_their_side() {
+    let d = tempfile::tempdir().unwrap();
+    let sphere = face_coloured_sphere(d.path());
+    let a = d.path().join("a.ply");
+    let o = mint(&["resample", sphere.to_str().unwrap(), a.to_str().unwrap(), "--cells", "100000", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cell = serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["cell_size"].as_f64().unwrap();
+    let edge = 0.05; // the longest edge of a 20,000-face unit sphere is below this
+    let vs = coloured_vertices(&a);
+    let mut checked = 0;
+    for (p, c) in &vs {
+        if p[0].abs() > cell + edge {
+            assert_eq!(*c, if p[0] > 0.0 { RED } else { BLUE }, "vertex at {p:?}");
+            checked += 1;
+        } else {
+            assert!(*c == RED || *c == BLUE, "a face colour, not a blend: {c:?}");
+        }
+    }
+    assert!(checked * 10 > vs.len() * 7, "{checked} of {}", vs.len());
+    // Split into parts: the same bytes.
+    let b = d.path().join("b.ply");
+    let o = mint(&["resample", sphere.to_str().unwrap(), b.to_str().unwrap(), "--cells", "100000", "--parts", "3", "--slabs", "2", "--quiet"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap(), "parts change the bytes");
+    // An ascii box of six quads, one colour per side.
+    let cols = [[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 0], [0, 255, 255], [255, 0, 255]];
+    let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+    let mut t = String::from("ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\nelement face 6\nproperty list uchar int vertex_indices\nproperty uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n");
+    for i in 0..8 {
+        t += &format!("{} {} {}\n", i & 1, (i >> 1) & 1, (i >> 2) & 1);
+    }
+    for (q, c) in quads.iter().zip(cols) {
+        t += &format!("4 {} {} {} {} {} {} {}\n", q[0], q[1], q[2], q[3], c[0], c[1], c[2]);
+    }
+    let boxp = d.path().join("box.ply");
+    std::fs::write(&boxp, t).unwrap();
+    let out = d.path().join("box-out.ply");
+    let o = mint(&["resample", boxp.to_str().unwrap(), out.to_str().unwrap(), "--cells", "8000"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Each side: (axis, value) of its plane.
+    let sides = [(2, 0.0), (2, 1.0), (1, 0.0), (1, 1.0), (0, 0.0), (0, 1.0)];
+    let mut seen = [0; 6];
+    for (p, c) in coloured_vertices(&out) {
+        // Vertices a tenth of the box from every other side lie on one side.
+        let near: Vec<usize> = (0..6).filter(|&s| (p[sides[s].0] - sides[s].1).abs() < 0.1).collect();
+        if near.len() == 1 {
+            let s = near[0];
+            assert_eq!(c[..3], cols[s], "side {s} at {p:?}");
+            seen[s] += 1;
+        }
+    }
+    assert!(seen.iter().all(|&n| n > 20), "{seen:?}");
+}

@@ -190,6 +190,8 @@ pub(crate) struct Opened {
     pub(crate) spilled_vertices: u64,
     /// Per-vertex colour, when the file has it.
     pub(crate) colours: Option<crate::colours::VertexColours>,
+    /// Per-face colour, when the file has it (and no per-vertex colour).
+    pub(crate) face_colours: Option<crate::colours::FaceColours>,
 }
 
 /// Options of [`MeshWriter::create`].

@@ -1,11 +1,15 @@
-//! Per-vertex colour fetched by index, as [`crate::positions`] fetches
-//! positions: from a binary PLY's vertex records in place, or from a spill
-//! of RGBA bytes written while a text file was read.
+//! Colour fetched by index, as [`crate::positions`] fetches positions:
+//! - [`VertexColours`], per vertex: from a binary PLY's vertex records in
+//!   place, or from a spill of RGBA bytes written while a text file was read;
+//! - [`FaceColours`], per face (PLY `face` elements with `red green blue
+//!   [alpha]`): a spill of RGBA bytes per *triangle*, in the order the reader
+//!   delivers triangles (a polygon of n corners gives n − 2), written by one
+//!   pass over the faces when the file is opened.
 //!
 //! Colours come back as 8-bit RGBA whatever the file holds: `uchar` as is,
 //! `ushort` by its high byte, `float`/`double` from `[0, 1]` (clamped,
-//! rounded; NaN gives 0). Alpha is 255 when the file has none. This module
-//! only reads: carrying colour through the engine is issue 27's next step.
+//! rounded; NaN gives 0). Alpha is 255 when the file has none. The engine
+//! carries them through resampling (`mint_core::colour`).
 
 use std::sync::Arc;
 
@@ -63,6 +67,35 @@ impl VertexColours {
             c[k] = to_u8(self.ty[k], &b[rec + self.off[k]..], self.be);
         }
         c
+    }
+}
+
+/// Per-triangle colour, by the triangle's place in the file's stream of
+/// triangles; cheap to clone, shareable by threads.
+#[derive(Debug, Clone)]
+pub struct FaceColours {
+    map: Arc<Mapped>,
+    count: u64,
+}
+
+impl FaceColours {
+    /// A spill of RGBA bytes, four per triangle.
+    pub(crate) fn spilled(map: Arc<Mapped>) -> FaceColours {
+        let count = map.bytes().len() as u64 / 4;
+        FaceColours { map, count }
+    }
+
+    /// Number of triangles.
+    pub fn count(&self) -> u64 {
+        self.count
+    }
+
+    /// Triangle `t`'s colour as RGBA bytes. Panics if `t >= count()`.
+    #[inline]
+    pub fn get(&self, t: u64) -> [u8; 4] {
+        assert!(t < self.count, "triangle {t} out of range (triangle count {})", self.count);
+        let at = t as usize * 4;
+        self.map.bytes()[at..at + 4].try_into().unwrap()
     }
 }
 

@@ -56,7 +56,7 @@ mod vrml;
 pub mod writer;
 
 pub use atomic::AtomicFile;
-pub use colours::VertexColours;
+pub use colours::{FaceColours, VertexColours};
 pub use convert::{concatenate, convert, convert_cancellable, ConvertSummary};
 pub use error::{Error, ErrorKind, Position};
 pub use format::Format;

@@ -203,7 +203,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         None => None,
     };
     let body = ObjBody { sec: Section::new(path, map, 0), v_seen: 0, f_rec: 0, rec_at: 0 };
-    Ok(Opened { info: make_info(nv, nf, comments, colours.is_some()), positions, body: Box::new(body), range_grid: None, spilled_vertices: nv, colours })
+    Ok(Opened { info: make_info(nv, nf, comments, colours.is_some()), positions, body: Box::new(body), range_grid: None, spilled_vertices: nv, colours, face_colours: None })
 }
 
 /// Second pass: streams the faces (see the module docs).

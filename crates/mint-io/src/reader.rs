@@ -35,7 +35,7 @@ pub fn read_info(path: &Path) -> Result<MeshInfo, Error> {
 }
 
 /// True when the file has per-vertex colour that [`MeshReader::colours`]
-/// will give. Cheap for text OBJ (the first `v` line decides; the file is
+/// will give, or per-face colour ([`MeshReader::face_colours`]). Cheap for text OBJ (the first `v` line decides; the file is
 /// mapped, not parsed); other formats open their header.
 pub fn has_vertex_colour(path: &Path) -> Result<bool, Error> {
     match Format::from_path(path)? {
@@ -44,7 +44,7 @@ pub fn has_vertex_colour(path: &Path) -> Result<bool, Error> {
             Ok(crate::obj::first_vertex_coloured(map.bytes()))
         }
         Format::Off | Format::Mesh | Format::Raw => Ok(false),
-        _ => Ok(MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false })?.colours().is_some()),
+        _ => Ok(MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false }).map(|r| r.colours().is_some() || r.face_colours().is_some())?),
     }
 }
 
@@ -294,6 +294,7 @@ pub struct MeshReader {
     body: Box<dyn FaceStream>,
     range_grid: Option<RangeGrid>,
     colours: Option<crate::colours::VertexColours>,
+    face_colours: Option<crate::colours::FaceColours>,
     stats: ReadStats,
     opts: ReadOptions,
     bytes_total: u64,
@@ -328,6 +329,7 @@ impl MeshReader {
             body: opened.body,
             range_grid: opened.range_grid,
             colours: opened.colours,
+            face_colours: opened.face_colours,
             stats: ReadStats { spilled_vertices: opened.spilled_vertices, ..ReadStats::default() },
             opts,
             bytes_total,
@@ -399,6 +401,16 @@ impl MeshReader {
     /// [alpha]`, OBJ `v x y z r g b`); RGBA bytes by vertex index.
     pub fn colours(&self) -> Option<crate::colours::VertexColours> {
         self.colours.clone()
+    }
+
+    /// Per-face colour (PLY faces with `red green blue [alpha]`), by
+    /// triangle: triangle `t` of the whole file's stream (a polygon of n
+    /// corners gives n − 2 triangles, in order; a reader opened on records
+    /// `first ..` of a split file starts at triangle `first`). `None` when
+    /// the file has none, or has per-vertex colour ([`MeshReader::colours`]
+    /// wins).
+    pub fn face_colours(&self) -> Option<crate::colours::FaceColours> {
+        self.face_colours.clone()
     }
 
     /// Number of vertices (for STL: 3 per facet).

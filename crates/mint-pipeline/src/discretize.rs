@@ -11,7 +11,7 @@ use mint_core::grid::Grid;
 use mint_core::primitives::Transform;
 use mint_core::colour::{crossing_colour, Rgba};
 use mint_core::{discretize_triangle, Intercept};
-use mint_io::{MeshReader, TriangleChunk, TriangleRecords, VertexColours, VertexPositions};
+use mint_io::{FaceColours, MeshReader, TriangleChunk, TriangleRecords, VertexColours, VertexPositions};
 use mint_store::{ShardWriter, StoreError};
 use crossbeam_channel::Sender;
 use std::sync::atomic::Ordering;
@@ -42,6 +42,9 @@ pub(crate) fn chunk_outcome(visited: Result<(), mint_io::Error>, sink: Option<St
 /// Returns the number of triangles read and six times the signed volume of
 /// each chunk (in grid units), in chunk order, so that their sum does not
 /// depend on threads or on how the input was split into parts.
+/// `first_triangle`: the place of the reader's first triangle in the file
+/// (a part of a split file), for per-face colours.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn discretize_all(
     reader: &mut MeshReader,
     grid: &Grid,
@@ -50,15 +53,16 @@ pub(crate) fn discretize_all(
     progress: &dyn Progress,
     xf: Option<&Transform>,
     expected_faces: u64,
+    first_triangle: u64,
 ) -> Result<(u64, Vec<f64>), PipelineError> {
     use crossbeam_channel::bounded;
     let [_, nb, _] = grid.local_dims();
     let positions = reader.positions();
     let positions = &positions;
     // Each crossing's colour, when the store keeps colour and the file has it.
-    let colours = if store.coloured() { reader.colours() } else { None };
+    let colours = if store.coloured() { CornerColours::of(reader) } else { None };
     let colours = colours.as_ref();
-    let (chunk_tx, chunk_rx) = bounded::<(usize, TriangleChunk)>(threads * 2);
+    let (chunk_tx, chunk_rx) = bounded::<(usize, u64, TriangleChunk)>(threads * 2);
     let (free_tx, free_rx) = bounded::<TriangleChunk>(threads * 3 + 2);
     let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, Vec<Rgba>, f64)>(threads * 2);
     progress.start(crate::progress::DISCRETIZE, expected_faces);
@@ -68,11 +72,11 @@ pub(crate) fn discretize_all(
         for _ in 0..threads {
             let (chunk_rx, free_tx, rec_tx) = (chunk_rx.clone(), free_tx.clone(), rec_tx.clone());
             s.spawn(move || {
-                for (seq, chunk) in chunk_rx {
+                for (seq, first, chunk) in chunk_rx {
                     let mut recs = Vec::with_capacity(chunk.indices.len() / 4 + 16);
                     let mut tints = Vec::new();
                     let mut volume = 0.0;
-                    for tri in &chunk.indices {
+                    for (n, tri) in chunk.indices.iter().enumerate() {
                         // Indices were range-checked by the reader; positions
                         // were checked finite by the bounds pass.
                         let at = |i: u32| {
@@ -89,7 +93,7 @@ pub(crate) fn discretize_all(
                                 let mut corners = None;
                                 discretize_triangle(&local, |c| {
                                     recs.push(c.intercept(nb));
-                                    let corners = corners.get_or_insert_with(|| tri.map(|i| cs.get(i)));
+                                    let corners = corners.get_or_insert_with(|| cs.corners(first + n as u64, *tri));
                                     tints.push(crossing_colour(&local, corners, &c));
                                 });
                             }
@@ -128,8 +132,9 @@ pub(crate) fn discretize_all(
                     return Ok(());
                 }
                 let n = chunk.indices.len() as u64;
+                let first = first_triangle + faces;
                 faces += n;
-                if chunk_tx.send((seq, chunk)).is_err() {
+                if chunk_tx.send((seq, first, chunk)).is_err() {
                     return Ok(()); // workers gone: the writer failed; its error follows
                 }
                 seq += 1;
@@ -239,6 +244,30 @@ pub(crate) fn discretize_direct_many(
     Ok((0..pieces.len()).map(|p| (faces[p], volumes[starts[p] as usize..starts[p + 1] as usize].to_vec())).collect())
 }
 
+/// Where a coloured file's corner colours come from: its vertices, or its
+/// faces (by the triangle's place in the file's stream of triangles, which
+/// is the face record's index in files read directly).
+pub(crate) enum CornerColours {
+    Vertex(VertexColours),
+    Face(FaceColours),
+}
+
+impl CornerColours {
+    /// The colours `reader` gives (per vertex first).
+    pub(crate) fn of(reader: &MeshReader) -> Option<CornerColours> {
+        reader.colours().map(CornerColours::Vertex).or_else(|| reader.face_colours().map(CornerColours::Face))
+    }
+
+    /// The corner colours of triangle `t` (vertex indices `tri`).
+    #[inline]
+    fn corners(&self, t: u64, tri: [u32; 3]) -> [Rgba; 3] {
+        match self {
+            CornerColours::Vertex(c) => tri.map(|i| c.get(i)),
+            CornerColours::Face(c) => [c.get(t); 3],
+        }
+    }
+}
+
 /// [`discretize_direct`] for a file with per-vertex colour in a coloured
 /// store: the workers read each record's vertex indices
 /// ([`TriangleRecords::visit_indices`]) and fetch positions and colours by
@@ -249,7 +278,7 @@ pub(crate) fn discretize_direct_many(
 pub(crate) fn discretize_direct_coloured(
     records: &TriangleRecords,
     positions: &VertexPositions,
-    colours: &VertexColours,
+    colours: &CornerColours,
     (first, end): (u64, u64),
     grid: &Grid,
     store: &mut ShardWriter,
@@ -272,7 +301,7 @@ pub(crate) fn discretize_direct_coloured(
         records.read_ahead(ahead, (ahead + chunk).min(end));
         let (mut recs, mut tints) = (Vec::with_capacity(1024), Vec::with_capacity(1024));
         let mut volume = 0.0;
-        records.visit_indices(a, b, |_, tri| {
+        records.visit_indices(a, b, |k, tri| {
             let at = |i: u32| {
                 let p = positions.get(i);
                 grid.to_local(match xf {
@@ -287,7 +316,7 @@ pub(crate) fn discretize_direct_coloured(
             let mut corners = None;
             discretize_triangle(&local, |c| {
                 recs.push(c.intercept(nb));
-                let corners = corners.get_or_insert_with(|| tri.map(|i| colours.get(i)));
+                let corners = corners.get_or_insert_with(|| colours.corners(k, tri));
                 tints.push(crossing_colour(&local, corners, &c));
             });
         })?;

@@ -32,7 +32,7 @@ use crate::error::PipelineError;
 use crate::deref::{choose, discretize_sorted, Deref, DerefChoice, Faces, SortStats};
 use mint_store::Budget;
 use crate::bounds::bounds;
-use crate::discretize::{discretize_all, discretize_direct, discretize_direct_coloured, discretize_direct_many, DirectPiece, CHUNK_TRIANGLES};
+use crate::discretize::{discretize_all, discretize_direct, discretize_direct_coloured, CornerColours, discretize_direct_many, DirectPiece, CHUNK_TRIANGLES};
 use crate::progress::check_cancel;
 use crate::slabs::{bytes_per_plane, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, COLOUR_BYTES_PER_RECORD_IN_SLAB};
 use crate::plan::{MeshFile, OperandPlan, Plan, Stage};
@@ -881,7 +881,7 @@ fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u
     // stream through the reader.
     // A coloured file in a coloured run: its crossings take its colours
     // (read by vertex index; never by the sort, which carries positions only).
-    let colours = if writer.coloured() { reader.colours() } else { None };
+    let colours = if writer.coloured() { CornerColours::of(&reader) } else { None };
     let mut direct = match split_faces {
         Some(_) => reader.triangle_records()?,
         None => None,
@@ -933,7 +933,8 @@ fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u
                 sort_stats = Some(st);
                 (n, v)
             } else {
-                discretize_all(&mut reader, grid, writer, ctx.threads, ctx.progress, ctx.transform(j), expected)?
+                let first = if !whole && split_faces.is_some() { range.0 } else { 0 };
+                discretize_all(&mut reader, grid, writer, ctx.threads, ctx.progress, ctx.transform(j), expected, first)?
             };
             warnings = reader.warnings();
             r

@@ -153,6 +153,14 @@ fn mesh_reader_at(path: &Path) {
                     }
                 }
             }
+            // Face colours: one per triangle of the (first) face element.
+            if let (Some(fc), true) = (r.face_colours(), stream_ok) {
+                assert!(r.colours().is_none(), "vertex and face colours both given");
+                assert!(fc.count() <= total, "{} face colours for {total} triangles", fc.count());
+                for t in 0..fc.count() {
+                    let _ = fc.get(t);
+                }
+            }
             match records {
                 Err(e) => one_line_naming(&e, &path),
                 Ok(None) => {}

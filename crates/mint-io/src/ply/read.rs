@@ -32,7 +32,7 @@ use std::sync::Arc;
 use super::header::{parse, Element, Encoding, PlyHeader, PropType, Property};
 use crate::error::{show_token, Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
-use crate::colours::VertexColours;
+use crate::colours::{FaceColours, VertexColours};
 use crate::positions::{check_finite, not_finite, Emit, Layout, PosKind, Positions, Reject, Scalar};
 use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, RangeGrid, ReadStats};
 use crate::text::{line_of, parse_f64, parse_int, Tokens};
@@ -44,7 +44,9 @@ enum Role {
     /// Positions, and colour properties (red, green, blue, alpha; alpha
     /// when the last is `Some`).
     Vertex { xyz: [usize; 3], rgb: Option<[usize; 3]>, alpha: Option<usize> },
-    Faces { list: usize, strip: bool },
+    /// Faces (or triangle strips), with their colour properties when the
+    /// element has them (faces only).
+    Faces { list: usize, strip: bool, rgb: Option<[usize; 3]>, alpha: Option<usize> },
     RangeGrid { list: usize },
     Other,
 }
@@ -131,6 +133,20 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         }
         body.next_elem = last + 1;
     }
+    // Per-face colour, when the vertices have none: one pass over the
+    // first face element (pending, or next) spills a colour per triangle.
+    let mut face_colours = None;
+    if colours.is_none() {
+        let first_faces = body.roles.iter().position(|r| matches!(r, Role::Faces { .. }));
+        if let Some(e) = first_faces {
+            if let Role::Faces { list, rgb: Some(rgb), alpha, .. } = body.roles[e] {
+                let start = body.pending.iter().find(|p| p.0 == e).map(|p| p.1).or((e == body.next_elem).then_some(body.next_offset));
+                if let Some(start) = start {
+                    face_colours = Some(body.read_face_colours(e, list, rgb, alpha, start, spill_dir)?);
+                }
+            }
+        }
+    }
     // Madvise: positions are fetched at random, faces read front to back.
     let (pstart, plen) = positions.byte_range();
     if !std::ptr::eq(positions.mapped(), &*map) {
@@ -145,7 +161,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     if body.pending.is_empty() && !body.roles[body.next_elem..].iter().any(|r| matches!(r, Role::Faces { .. })) {
         body.walk_to_end()?;
     }
-    Ok(Opened { info, positions, body: Box::new(body), range_grid: grid, spilled_vertices: spilled, colours })
+    Ok(Opened { info, positions, body: Box::new(body), range_grid: grid, spilled_vertices: spilled, colours, face_colours })
 }
 
 /// Checks that property `i` of `el` may hold a colour channel.
@@ -182,26 +198,7 @@ fn roles(h: &PlyHeader, path: &Path) -> Result<Vec<Role>, Error> {
                         None => return Err(err(ErrorKind::Format, format!("the vertex element has no property '{name}'"))),
                     }
                 }
-                // Colour: red green blue [alpha] (MeshLab, Open3D), or
-                // diffuse_red … (older scanners' exports).
-                let mut rgb = None;
-                let mut alpha = None;
-                for prefix in ["", "diffuse_"] {
-                    // All three or no colour (a lone 'red' is some other
-                    // property, skipped as before).
-                    let idx = ["red", "green", "blue"].map(|c| el.prop(&format!("{prefix}{c}")));
-                    let [Some(r), Some(g), Some(b)] = idx else { continue };
-                    let found = [r, g, b];
-                    for (k, &i) in found.iter().enumerate() {
-                        colour_type(el, i, &format!("{prefix}{}", ["red", "green", "blue"][k])).map_err(|m| err(ErrorKind::Unsupported, m))?;
-                    }
-                    if let Some(a) = el.prop(&format!("{prefix}alpha")) {
-                        colour_type(el, a, &format!("{prefix}alpha")).map_err(|m| err(ErrorKind::Unsupported, m))?;
-                        alpha = Some(a);
-                    }
-                    rgb = Some(found);
-                    break;
-                }
+                let (rgb, alpha) = colour_props(el).map_err(|m| err(ErrorKind::Unsupported, m))?;
                 Role::Vertex { xyz, rgb, alpha }
             }
             "vertex" => return Err(err(ErrorKind::Unsupported, "more than one 'vertex' element".into())),
@@ -215,7 +212,11 @@ fn roles(h: &PlyHeader, path: &Path) -> Result<Vec<Role>, Error> {
                 }
                 match el.name.as_str() {
                     "range_grid" => Role::RangeGrid { list },
-                    name => Role::Faces { list, strip: name == "tristrips" },
+                    "face" => {
+                        let (rgb, alpha) = colour_props(el).map_err(|m| err(ErrorKind::Unsupported, m))?;
+                        Role::Faces { list, strip: false, rgb, alpha }
+                    }
+                    _ => Role::Faces { list, strip: true, rgb: None, alpha: None },
                 }
             }
             _ => Role::Other,
@@ -223,6 +224,28 @@ fn roles(h: &PlyHeader, path: &Path) -> Result<Vec<Role>, Error> {
         roles.push(role);
     }
     Ok(roles)
+}
+
+/// The colour properties of an element: `red green blue [alpha]` (MeshLab,
+/// Open3D), or `diffuse_red …` (older scanners' exports); all three or no
+/// colour (a lone 'red' is some other property, skipped).
+#[allow(clippy::type_complexity)]
+fn colour_props(el: &Element) -> Result<(Option<[usize; 3]>, Option<usize>), String> {
+    for prefix in ["", "diffuse_"] {
+        let idx = ["red", "green", "blue"].map(|c| el.prop(&format!("{prefix}{c}")));
+        let [Some(r), Some(g), Some(b)] = idx else { continue };
+        let found = [r, g, b];
+        for (k, &i) in found.iter().enumerate() {
+            colour_type(el, i, &format!("{prefix}{}", ["red", "green", "blue"][k]))?;
+        }
+        let mut alpha = None;
+        if let Some(a) = el.prop(&format!("{prefix}alpha")) {
+            colour_type(el, a, &format!("{prefix}alpha"))?;
+            alpha = Some(a);
+        }
+        return Ok((Some(found), alpha));
+    }
+    Ok((None, None))
 }
 
 /// The list property holding vertex indices: `vertex_indices`,
@@ -688,6 +711,49 @@ impl PlyBody {
         Ok((Positions::spilled(map, count), colours, end, el.count))
     }
 
+    /// One pass over face element `e` (from `start`): the colour of each
+    /// record, written once per triangle it gives (n − 2 for n corners).
+    fn read_face_colours(&self, e: usize, list: usize, rgb: [usize; 3], alpha: Option<usize>, start: usize, spill_dir: &Path) -> Result<FaceColours, Error> {
+        let data = self.map.bytes();
+        let el = &self.header.elements[e];
+        let ctx = self.ctx(data, e);
+        let mut spill = SpillFile::new(spill_dir, &self.path)?;
+        let chans = [Some(rgb[0]), Some(rgb[1]), Some(rgb[2]), alpha];
+        with_src!(self.header.encoding, data, start, |s| {
+            for r in 0..el.count {
+                let at = s.mark();
+                let mut c = [255u8; 4];
+                let mut corners = 0u64;
+                for (i, prop) in el.props.iter().enumerate() {
+                    let res = match prop.ty {
+                        PropType::Scalar(t) => match chans.iter().position(|&k| k == Some(i)) {
+                            Some(k) => s.float(t).map(|v| {
+                                c[k] = match t {
+                                    Scalar::U8 => v as u8,
+                                    Scalar::U16 => ((v as u64) >> 8) as u8,
+                                    _ => crate::colours::unit_to_u8(v),
+                                }
+                            }),
+                            None => s.skip_n(t, 1),
+                        },
+                        PropType::List { count, item } => s.list_len(count).and_then(|n| {
+                            if i == list {
+                                corners = n;
+                            }
+                            s.skip_n(item, n)
+                        }),
+                    };
+                    res.map_err(|err| ctx.src(err, r, at))?;
+                }
+                s.end_record();
+                for _ in 0..corners.saturating_sub(2) {
+                    spill.write_bytes(&c)?;
+                }
+            }
+        });
+        Ok(FaceColours::spilled(Arc::new(spill.into_mapped()?)))
+    }
+
     /// Parses a `range_grid` element; `nv` is the vertex count.
     fn read_range_grid(&self, e: usize, list: usize, start: usize, nv: u32) -> Result<(RangeGrid, usize), Error> {
         let data = self.map.bytes();
@@ -791,7 +857,7 @@ impl PlyBody {
                 self.next_elem += 1;
             }
         };
-        let Role::Faces { list, strip } = self.roles[elem] else { unreachable!() };
+        let Role::Faces { list, strip, .. } = self.roles[elem] else { unreachable!() };
         let count = self.header.elements[elem].count;
         self.cur = Some(Cursor { elem, list, strip, count, record: 0, pos: start, rec_start: start, ls: None, walked, tri_only: false, extra: Extra::default() });
         Ok(())
@@ -1028,7 +1094,7 @@ impl FaceStream for PlyBody {
             return None;
         }
         let mut faces = self.roles.iter().enumerate().filter(|(_, r)| matches!(r, Role::Faces { .. }));
-        let (e, Role::Faces { list, strip: false }) = faces.next()? else { return None };
+        let (e, Role::Faces { list, strip: false, .. }) = faces.next()? else { return None };
         if faces.next().is_some() || self.range_only {
             return None;
         }
