@@ -192,6 +192,8 @@ pub(crate) struct Opened {
     pub(crate) colours: Option<crate::colours::VertexColours>,
     /// Per-face colour, when the file has it (and no per-vertex colour).
     pub(crate) face_colours: Option<crate::colours::FaceColours>,
+    /// Texture coordinates and materials, when the file has them.
+    pub(crate) texturing: Option<crate::textures::Texturing>,
 }
 
 /// Options of [`MeshWriter::create`].

@@ -796,7 +796,7 @@ fn open_in_place(doc: &Doc, map: &Arc<Mapped>) -> Result<Option<Opened>, Error> 
         next: 0,
         total: c.triangles,
     };
-    Ok(Some(Opened { info: make_info(doc, is_glb(map.bytes()), &c), positions, body: Box::new(body), range_grid: None, spilled_vertices: 0, colours: None, face_colours: None }))
+    Ok(Some(Opened { info: make_info(doc, is_glb(map.bytes()), &c), positions, body: Box::new(body), range_grid: None, spilled_vertices: 0, colours: None, face_colours: None, texturing: None }))
 }
 
 /// Triangles streamed from an index accessor in the mapped GLB (or, without
@@ -903,7 +903,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     let positions = Positions::spilled(Arc::new(vs.into_mapped()?), c.vertices as u32);
     let faces = Arc::new(fs.into_mapped()?);
     let body = GltfBody { path: path.to_path_buf(), faces, tris: c.triangles, next: 0, total: map.bytes().len() as u64 };
-    Ok(Opened { info, positions, body: Box::new(body), range_grid: None, spilled_vertices: c.vertices, colours, face_colours: None })
+    Ok(Opened { info, positions, body: Box::new(body), range_grid: None, spilled_vertices: c.vertices, colours, face_colours: None, texturing: None })
 }
 
 struct GltfBody {

@@ -37,6 +37,7 @@ mod formats;
 pub mod colours;
 pub mod gltf;
 pub mod tiles;
+pub mod textures;
 pub mod inputs;
 mod line_formats;
 mod mapped;

@@ -187,7 +187,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     }
     let positions = Positions::spilled(Arc::new(spill.into_mapped()?), s.nv as u32);
     let body = MeshBody { sec: Section::new(path, map.clone(), s.body), base: s.base(), f_rec: 0, rec_at: 0 };
-    Ok(Opened { info: make_info(&s), positions, body: Box::new(body), range_grid: None, spilled_vertices: s.nv, colours: None, face_colours: None })
+    Ok(Opened { info: make_info(&s), positions, body: Box::new(body), range_grid: None, spilled_vertices: s.nv, colours: None, face_colours: None, texturing: None })
 }
 
 /// Second pass: streams the `f` lines.

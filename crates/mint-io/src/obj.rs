@@ -24,7 +24,9 @@ use crate::backend::{ElementInfo, MeshInfo, Opened};
 use crate::text::{line_of, parse_f64, parse_i64, words, Lines};
 use crate::backend::WriteOptions;
 use crate::line_formats::{FaceLines, Section, TextStyle, TextWriter};
+use crate::textures::{ImageSource, Material, TextureInfo, Texturing, TexturingBuilder, Wrap, NONE};
 use crate::Format;
+use std::path::PathBuf;
 
 /// The kind of an OBJ line we care about.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -90,14 +92,18 @@ fn parse_vertex(path: &Path, data: &[u8], rest: &[u8], record: u64, at: usize) -
     Ok((p, Some(c)))
 }
 
-/// Whether the first `v` line of `data` carries a colour, reading only up
-/// to that line (planning asks this of text files it does not scan).
+/// Whether the file will come with colour, reading only up to its first
+/// `v` line (planning asks this of text files it does not scan): that line
+/// has a colour, or an `mtllib` line comes before it (materials and
+/// textures; exporters write it first).
 pub(crate) fn first_vertex_coloured(data: &[u8]) -> bool {
     let mut lines = Lines::new(data, 0);
+    let mut materials = false;
     while let Some((_, line)) = lines.next_joined() {
-        let (kind, rest) = classify(&line[..]);
-        if kind == Kind::Vertex {
-            return words(rest).take_while(|t| !t.starts_with(b"#")).count() >= 6;
+        match classify(&line[..]) {
+            (Kind::Vertex, rest) => return materials || words(rest).take_while(|t| !t.starts_with(b"#")).count() >= 6,
+            (Kind::Other, rest) if rest.starts_with(b"mtllib") => materials = true,
+            _ => {}
         }
     }
     false
@@ -163,11 +169,17 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     let (mut nv, mut nf) = (0u64, 0u64);
     let mut comments = Vec::new();
     let mut leading = true;
+    let mut tex = ObjTexturing::default();
     let mut lines = Lines::new(data, 0);
     while let Some((at, line)) = lines.next_joined() {
         let line = &line[..];
         let (kind, rest) = classify(line);
         match kind {
+            Kind::Other => tex.line(rest, data, at, spill_dir, path)?,
+            Kind::Face if tex.builder.is_some() => {
+                tex.face(rest)?;
+                nf += 1;
+            }
             Kind::Vertex => {
                 let (p, c) = parse_vertex(path, data, rest, nv, at)?;
                 match (c, cspill.as_mut()) {
@@ -202,8 +214,188 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         Some(cs) => Some(crate::colours::VertexColours::spilled(Arc::new(cs.into_mapped()?), nv as u32)),
         None => None,
     };
+    // Vertex colour wins over materials.
+    let texturing = if colours.is_none() { tex.finish(path)? } else { None };
     let body = ObjBody { sec: Section::new(path, map, 0), v_seen: 0, f_rec: 0, rec_at: 0 };
-    Ok(Opened { info: make_info(nv, nf, comments, colours.is_some()), positions, body: Box::new(body), range_grid: None, spilled_vertices: nv, colours, face_colours: None })
+    Ok(Opened { info: make_info(nv, nf, comments, colours.is_some()), positions, body: Box::new(body), range_grid: None, spilled_vertices: nv, colours, face_colours: None, texturing })
+}
+
+/// What the first pass gathers of an OBJ's materials: `vt` pairs,
+/// `mtllib` files, the `usemtl` in force, and per triangle (once the file
+/// has shown any of these) its material and corner `vt` indices, fanned as
+/// the faces are.
+#[derive(Default)]
+struct ObjTexturing {
+    builder: Option<TexturingBuilder>,
+    libraries: Vec<String>,
+    names: Vec<String>,
+    current: Option<u32>,
+    corners: Vec<u32>,
+}
+
+impl ObjTexturing {
+    /// A line of another kind than `v`, `f` and comments.
+    fn line(&mut self, l: &[u8], data: &[u8], at: usize, spill_dir: &Path, path: &Path) -> Result<(), Error> {
+        let (key, rest) = match l.iter().position(|&b| b == b' ' || b == b'\t') {
+            Some(n) => (&l[..n], &l[n + 1..]),
+            None => (l, &l[l.len()..]),
+        };
+        if !matches!(key, b"vt" | b"usemtl" | b"mtllib") {
+            return Ok(());
+        }
+        let rest = String::from_utf8_lossy(rest.split(|&b| b == b'#').next().unwrap_or(&[])).trim().to_string();
+        if self.builder.is_none() {
+            let mut b = TexturingBuilder::new(spill_dir, path)?;
+            // Triangles of faces seen before: no material.
+            for _ in 0..count_triangles(&data[..at]) {
+                b.triangle(NONE, [NONE; 3])?;
+            }
+            self.builder = Some(b);
+        }
+        let b = self.builder.as_mut().unwrap();
+        match key {
+            b"vt" => {
+                let mut w = rest.split_ascii_whitespace().map(|t| parse_f64(t.as_bytes()).unwrap_or(0.0) as f32);
+                let uv = [w.next().unwrap_or(0.0), w.next().unwrap_or(0.0)];
+                b.uv(uv)?;
+            }
+            b"usemtl" => {
+                let i = match self.names.iter().position(|n| *n == rest) {
+                    Some(i) => i,
+                    None => {
+                        self.names.push(rest);
+                        self.names.len() - 1
+                    }
+                };
+                self.current = Some(i as u32);
+            }
+            _ => self.libraries.push(rest),
+        }
+        Ok(())
+    }
+
+    /// An `f` line: its triangles' records.
+    fn face(&mut self, rest: &[u8]) -> Result<(), Error> {
+        let b = self.builder.as_mut().unwrap();
+        let seen = b.uv_count() as i64;
+        self.corners.clear();
+        for tok in words(rest) {
+            let mut parts = tok.split(|&c| c == b'/');
+            parts.next();
+            let t = parts.next().and_then(parse_i64).map_or(NONE, |t| match t {
+                t if t > 0 => (t - 1).min(NONE as i64 - 1) as u32,
+                t if t < 0 && seen + t >= 0 => (seen + t) as u32,
+                _ => NONE,
+            });
+            self.corners.push(t);
+        }
+        let m = self.current.unwrap_or(NONE);
+        for i in 1..self.corners.len().saturating_sub(1) {
+            b.triangle(m, [self.corners[0], self.corners[i], self.corners[i + 1]])?;
+        }
+        Ok(())
+    }
+
+    /// The materials from the `mtllib` files (beside the OBJ), their
+    /// textures' sizes; `None` when the file named no material and no `vt`.
+    fn finish(self, path: &Path) -> Result<Option<Texturing>, Error> {
+        let Some(b) = self.builder else { return Ok(None) };
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let mut warnings = Vec::new();
+        let mut found: Vec<(Material, Option<PathBuf>)> = Vec::new();
+        for lib in &self.libraries {
+            let mtl = dir.join(lib.replace('\\', "/"));
+            match std::fs::read(&mtl) {
+                Ok(text) => found.extend(parse_mtl(&text, mtl.parent().unwrap_or(dir))),
+                Err(_) => warnings.push(format!("{}: material library '{}' not found: its materials are white", path.display(), mtl.display())),
+            }
+        }
+        let mut textures: Vec<TextureInfo> = Vec::new();
+        let mut materials = Vec::with_capacity(self.names.len());
+        for name in &self.names {
+            let Some((m, file)) = found.iter().find(|(m, _)| m.name == *name) else {
+                if !self.libraries.is_empty() {
+                    warnings.push(format!("{}: material '{name}' is in no material library: white", path.display()));
+                }
+                materials.push(Material::white(name));
+                continue;
+            };
+            let mut m = m.clone();
+            if let Some(file) = file {
+                match textures.iter().position(|t| t.source.name() == file.display().to_string()) {
+                    Some(i) => m.texture = Some(i),
+                    None if file.is_file() => {
+                        let source = ImageSource::file(file.clone());
+                        let (width, height) = crate::textures::image_size(&source, path)?;
+                        textures.push(TextureInfo { source, width, height });
+                        m.texture = Some(textures.len() - 1);
+                    }
+                    None => warnings.push(format!("{}: texture '{}' of material '{name}' not found: its faces take the material's colour", path.display(), file.display())),
+                }
+            }
+            materials.push(m);
+        }
+        Ok(Some(b.finish(materials, textures, warnings)?))
+    }
+}
+
+/// Triangles of the `f` lines in `data` (corners − 2 each).
+fn count_triangles(data: &[u8]) -> u64 {
+    let mut n = 0;
+    let mut lines = Lines::new(data, 0);
+    while let Some((_, line)) = lines.next_joined() {
+        if let (Kind::Face, rest) = classify(&line[..]) {
+            n += (words(rest).count() as u64).saturating_sub(2);
+        }
+    }
+    n
+}
+
+/// The materials of an MTL file: `newmtl`, `Kd` and `map_Kd` (its options
+/// skipped, `-clamp on` kept); texture paths relative to `dir`.
+fn parse_mtl(text: &[u8], dir: &Path) -> Vec<(Material, Option<PathBuf>)> {
+    let mut out: Vec<(Material, Option<PathBuf>)> = Vec::new();
+    for line in String::from_utf8_lossy(text).lines() {
+        let line = line.trim();
+        let (key, rest) = line.split_once(char::is_whitespace).map_or((line, ""), |(k, r)| (k, r.trim()));
+        match key {
+            "newmtl" => out.push((Material::white(rest), None)),
+            "Kd" => {
+                if let Some((m, None)) = out.last_mut() {
+                    let c: Vec<f32> = rest.split_whitespace().filter_map(|t| t.parse().ok()).collect();
+                    if c.len() >= 3 {
+                        m.colour = [c[0].clamp(0.0, 1.0), c[1].clamp(0.0, 1.0), c[2].clamp(0.0, 1.0), 1.0];
+                    }
+                }
+            }
+            "map_Kd" => {
+                if let Some((m, file)) = out.last_mut() {
+                    // Options take a fixed number of arguments; the rest is the file name.
+                    let words: Vec<&str> = rest.split_whitespace().collect();
+                    let mut i = 0;
+                    while i < words.len() && words[i].starts_with('-') {
+                        let n = match words[i] {
+                            "-o" | "-s" | "-t" => 3,
+                            "-mm" => 2,
+                            _ => 1,
+                        };
+                        if words[i] == "-clamp" && words.get(i + 1) == Some(&"on") {
+                            m.wrap = [Wrap::Clamp; 2];
+                        }
+                        i += 1 + n;
+                    }
+                    if i < words.len() {
+                        // The Kd colour multiplies the texture only when
+                        // given; a texture alone is its own colour.
+                        m.colour = [1.0; 4];
+                        *file = Some(dir.join(words[i..].join(" ").replace('\\', "/")));
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    out
 }
 
 /// Second pass: streams the faces (see the module docs).

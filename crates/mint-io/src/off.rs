@@ -177,7 +177,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     }
     let positions = Positions::spilled(Arc::new(spill.into_mapped()?), h.nv as u32);
     let body = OffBody { sec: Section::new(path, map.clone(), lines.pos.min(data.len())), nf: h.nf, rec: 0, rec_at: 0 };
-    Ok(Opened { info: make_info(&h), positions, body: Box::new(body), range_grid: None, spilled_vertices: h.nv, colours: None, face_colours: None })
+    Ok(Opened { info: make_info(&h), positions, body: Box::new(body), range_grid: None, spilled_vertices: h.nv, colours: None, face_colours: None, texturing: None })
 }
 
 /// Streams OFF faces (see the module docs).

@@ -89,7 +89,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     }
     let positions = Positions::spilled(Arc::new(spill.into_mapped()?), 3 * tris as u32);
     let body = RawBody { path: path.to_path_buf(), tris, next: 0, total: data.len() as u64 };
-    Ok(Opened { info: make_info(tris), positions, body: Box::new(body), range_grid: None, spilled_vertices: 3 * tris, colours: None, face_colours: None })
+    Ok(Opened { info: make_info(tris), positions, body: Box::new(body), range_grid: None, spilled_vertices: 3 * tris, colours: None, face_colours: None, texturing: None })
 }
 
 struct RawBody {

@@ -44,7 +44,7 @@ pub fn has_vertex_colour(path: &Path) -> Result<bool, Error> {
             Ok(crate::obj::first_vertex_coloured(map.bytes()))
         }
         Format::Off | Format::Mesh | Format::Raw => Ok(false),
-        _ => Ok(MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false }).map(|r| r.colours().is_some() || r.face_colours().is_some())?),
+        _ => Ok(MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false }).map(|r| r.colours().is_some() || r.face_colours().is_some() || r.texturing().is_some())?),
     }
 }
 
@@ -295,6 +295,7 @@ pub struct MeshReader {
     range_grid: Option<RangeGrid>,
     colours: Option<crate::colours::VertexColours>,
     face_colours: Option<crate::colours::FaceColours>,
+    texturing: Option<crate::textures::Texturing>,
     stats: ReadStats,
     opts: ReadOptions,
     bytes_total: u64,
@@ -330,6 +331,7 @@ impl MeshReader {
             range_grid: opened.range_grid,
             colours: opened.colours,
             face_colours: opened.face_colours,
+            texturing: opened.texturing,
             stats: ReadStats { spilled_vertices: opened.spilled_vertices, ..ReadStats::default() },
             opts,
             bytes_total,
@@ -411,6 +413,13 @@ impl MeshReader {
     /// wins).
     pub fn face_colours(&self) -> Option<crate::colours::FaceColours> {
         self.face_colours.clone()
+    }
+
+    /// Texture coordinates and materials (OBJ with `mtllib` and `vt`; glTF
+    /// with `baseColorTexture`), by triangle as [`MeshReader::face_colours`].
+    /// `None` when the file has none, or has per-vertex colour.
+    pub fn texturing(&self) -> Option<crate::textures::Texturing> {
+        self.texturing.clone()
     }
 
     /// Number of vertices (for STL: 3 per facet).
@@ -497,6 +506,9 @@ impl MeshReader {
             w.push(format!("{}: {n} bytes after the last element the header declares were ignored (the header counts may not match the body)", self.path.display()));
         }
         w.extend(self.body.warnings());
+        if let Some(t) = &self.texturing {
+            w.extend(t.warnings.iter().cloned());
+        }
         w
     }
 }

@@ -144,6 +144,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
             spilled_vertices: 3 * facets,
             colours: None,
             face_colours: None,
+            texturing: None,
         })
     } else {
         let facets = binary_count(path, data)?;
@@ -154,7 +155,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
         let layout = Layout { base: 84 + 12, stride: 50, group: 3, inner: 12, off: [0, 4, 8], ty: [Scalar::F32; 3], be: false };
         let positions = Positions::new(map.clone(), 3 * facets as u32, layout);
         let body = StlBody { path: path.to_path_buf(), facets, next: 0, total_bytes: data.len() as u64, binary: true };
-        Ok(Opened { info: make_info("binary", facets, header_text(data)), positions, body: Box::new(body), range_grid: None, spilled_vertices: 0, colours: None, face_colours: None })
+        Ok(Opened { info: make_info("binary", facets, header_text(data)), positions, body: Box::new(body), range_grid: None, spilled_vertices: 0, colours: None, face_colours: None, texturing: None })
     }
 }
 

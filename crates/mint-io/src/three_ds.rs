@@ -185,7 +185,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     }
     let positions = Positions::spilled(Arc::new(spill.into_mapped()?), nv as u32);
     let body = Body { path: path.to_path_buf(), map: map.clone(), objs: objs.clone(), bases, obj: 0, face: 0, total: d.len() as u64 };
-    Ok(Opened { info: make_info(&objs), positions, body: Box::new(body), range_grid: None, spilled_vertices: nv, colours: None, face_colours: None })
+    Ok(Opened { info: make_info(&objs), positions, body: Box::new(body), range_grid: None, spilled_vertices: nv, colours: None, face_colours: None, texturing: None })
 }
 
 /// Streams the objects' faces from the map.

@@ -315,5 +315,5 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     let positions = Positions::spilled(Arc::new(vs.into_mapped()?), c.vertices as u32);
     let faces = Arc::new(fs.into_mapped()?);
     let body = spilled_body(path, faces, c.triangles, map.bytes().len() as u64);
-    Ok(Opened { info, positions, body, range_grid: None, spilled_vertices: c.vertices, colours: None, face_colours: None })
+    Ok(Opened { info, positions, body, range_grid: None, spilled_vertices: c.vertices, colours: None, face_colours: None, texturing: None })
 }

@@ -739,7 +739,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     let positions = Positions::spilled(Arc::new(s.points.into_mapped()?), s.np as u32);
     let tris = Arc::new(s.tris.into_mapped()?);
     let body = VrmlBody { path: path.to_path_buf(), tris, count: s.nt, next: 0, total: data.len() as u64 };
-    Ok(Opened { info, positions, body: Box::new(body), range_grid: None, spilled_vertices: s.np, colours: None, face_colours: None })
+    Ok(Opened { info, positions, body: Box::new(body), range_grid: None, spilled_vertices: s.np, colours: None, face_colours: None, texturing: None })
 }
 
 /// Streams the spilled triangles.

@@ -9,8 +9,9 @@ use crate::kernels::{signed_volume6, visit_chunk, ChunkJob, LocalMap};
 use crate::progress::{check_cancel, Progress};
 use mint_core::grid::Grid;
 use mint_core::primitives::Transform;
-use mint_core::colour::{crossing_colour, Rgba};
-use mint_core::{discretize_triangle, Intercept};
+use mint_core::colour::{barycentric, crossing_colour, Rgba};
+use mint_core::{discretize_triangle, Crossing, Intercept};
+use mint_io::textures::{Image, Texturing};
 use mint_io::{FaceColours, MeshReader, TriangleChunk, TriangleRecords, VertexColours, VertexPositions};
 use mint_store::{ShardWriter, StoreError};
 use crossbeam_channel::Sender;
@@ -54,14 +55,14 @@ pub(crate) fn discretize_all(
     xf: Option<&Transform>,
     expected_faces: u64,
     first_triangle: u64,
+    colours: Option<&CornerColours>,
 ) -> Result<(u64, Vec<f64>), PipelineError> {
     use crossbeam_channel::bounded;
     let [_, nb, _] = grid.local_dims();
     let positions = reader.positions();
     let positions = &positions;
     // Each crossing's colour, when the store keeps colour and the file has it.
-    let colours = if store.coloured() { CornerColours::of(reader) } else { None };
-    let colours = colours.as_ref();
+
     let (chunk_tx, chunk_rx) = bounded::<(usize, u64, TriangleChunk)>(threads * 2);
     let (free_tx, free_rx) = bounded::<TriangleChunk>(threads * 3 + 2);
     let (rec_tx, rec_rx) = bounded::<(usize, Vec<Intercept>, Vec<Rgba>, f64)>(threads * 2);
@@ -93,8 +94,7 @@ pub(crate) fn discretize_all(
                                 let mut corners = None;
                                 discretize_triangle(&local, |c| {
                                     recs.push(c.intercept(nb));
-                                    let corners = corners.get_or_insert_with(|| cs.corners(first + n as u64, *tri));
-                                    tints.push(crossing_colour(&local, corners, &c));
+                                    tints.push(cs.crossing(first + n as u64, *tri, &local, &c, &mut corners));
                                 });
                             }
                             None => discretize_triangle(&local, |c| recs.push(c.intercept(nb))),
@@ -244,26 +244,53 @@ pub(crate) fn discretize_direct_many(
     Ok((0..pieces.len()).map(|p| (faces[p], volumes[starts[p] as usize..starts[p + 1] as usize].to_vec())).collect())
 }
 
-/// Where a coloured file's corner colours come from: its vertices, or its
-/// faces (by the triangle's place in the file's stream of triangles, which
-/// is the face record's index in files read directly).
+/// Where a coloured file's colours come from: its vertices, its faces (by
+/// the triangle's place in the file's stream of triangles, which is the
+/// face record's index in files read directly), or its textures (decoded).
 pub(crate) enum CornerColours {
     Vertex(VertexColours),
     Face(FaceColours),
+    Texture(Texturing, Vec<Image>),
 }
 
 impl CornerColours {
-    /// The colours `reader` gives (per vertex first).
-    pub(crate) fn of(reader: &MeshReader) -> Option<CornerColours> {
-        reader.colours().map(CornerColours::Vertex).or_else(|| reader.face_colours().map(CornerColours::Face))
+    /// The colours `reader` gives (per vertex first), textures decoded if
+    /// they fit in `budget` bytes.
+    pub(crate) fn of(reader: &MeshReader, budget: u64) -> Result<Option<CornerColours>, PipelineError> {
+        if let Some(c) = reader.colours() {
+            return Ok(Some(CornerColours::Vertex(c)));
+        }
+        if let Some(c) = reader.face_colours() {
+            return Ok(Some(CornerColours::Face(c)));
+        }
+        let Some(t) = reader.texturing() else { return Ok(None) };
+        let need = t.decoded_bytes();
+        if need > budget {
+            let mib = |b: u64| b.div_ceil(1 << 20);
+            return Err(PipelineError::stage(
+                reader.path(),
+                format!(
+                    "its {} textures take {} MiB decoded, more than the {} MiB the memory budget leaves them; give --mem {}M or more (or --no-color)",
+                    t.textures.len(),
+                    mib(need),
+                    mib(budget),
+                    mib(need * 2) + 64
+                ),
+            ));
+        }
+        let images = t.decode(reader.path())?;
+        Ok(Some(CornerColours::Texture(t, images)))
     }
 
-    /// The corner colours of triangle `t` (vertex indices `tri`).
+    /// The colour of crossing `c` of triangle `t` (vertex indices `tri`,
+    /// grid coordinates `local`); `corners` caches the triangle's corner
+    /// colours across its crossings.
     #[inline]
-    fn corners(&self, t: u64, tri: [u32; 3]) -> [Rgba; 3] {
+    fn crossing(&self, t: u64, tri: [u32; 3], local: &[[f64; 3]; 3], c: &Crossing, corners: &mut Option<[Rgba; 3]>) -> Rgba {
         match self {
-            CornerColours::Vertex(c) => tri.map(|i| c.get(i)),
-            CornerColours::Face(c) => [c.get(t); 3],
+            CornerColours::Vertex(v) => crossing_colour(local, corners.get_or_insert_with(|| tri.map(|i| v.get(i))), c),
+            CornerColours::Face(f) => *corners.get_or_insert_with(|| [f.get(t); 3]).first().unwrap(),
+            CornerColours::Texture(tex, images) => tex.colour(images, t, barycentric(local, c)),
         }
     }
 }
@@ -316,8 +343,7 @@ pub(crate) fn discretize_direct_coloured(
             let mut corners = None;
             discretize_triangle(&local, |c| {
                 recs.push(c.intercept(nb));
-                let corners = corners.get_or_insert_with(|| colours.corners(k, tri));
-                tints.push(crossing_colour(&local, corners, &c));
+                tints.push(colours.crossing(k, tri, &local, &c, &mut corners));
             });
         })?;
         progress.advance(b - a);

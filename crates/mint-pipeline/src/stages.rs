@@ -881,7 +881,8 @@ fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u
     // stream through the reader.
     // A coloured file in a coloured run: its crossings take its colours
     // (read by vertex index; never by the sort, which carries positions only).
-    let colours = if writer.coloured() { CornerColours::of(&reader) } else { None };
+    // Textures may take half the task's budget.
+    let colours = if writer.coloured() { CornerColours::of(&reader, ctx.budget.total() / 2)? } else { None };
     let mut direct = match split_faces {
         Some(_) => reader.triangle_records()?,
         None => None,
@@ -934,7 +935,7 @@ fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u
                 (n, v)
             } else {
                 let first = if !whole && split_faces.is_some() { range.0 } else { 0 };
-                discretize_all(&mut reader, grid, writer, ctx.threads, ctx.progress, ctx.transform(j), expected, first)?
+                discretize_all(&mut reader, grid, writer, ctx.threads, ctx.progress, ctx.transform(j), expected, first, colours.as_ref())?
             };
             warnings = reader.warnings();
             r

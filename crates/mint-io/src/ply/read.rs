@@ -161,7 +161,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     if body.pending.is_empty() && !body.roles[body.next_elem..].iter().any(|r| matches!(r, Role::Faces { .. })) {
         body.walk_to_end()?;
     }
-    Ok(Opened { info, positions, body: Box::new(body), range_grid: grid, spilled_vertices: spilled, colours, face_colours })
+    Ok(Opened { info, positions, body: Box::new(body), range_grid: grid, spilled_vertices: spilled, colours, face_colours, texturing: None })
 }
 
 /// Checks that property `i` of `el` may hold a colour channel.
