@@ -35,6 +35,7 @@ use crate::error::Error;
 use crate::format::{is_glb, Format};
 use crate::coords::origin_for;
 use crate::mapped::{Mapped, SpillFile};
+use crate::textures::{ImageSource, Material, TextureInfo, TexturingBuilder, Wrap, NONE};
 use crate::positions::{not_finite, Emit, Layout, Positions, Reject, Scalar};
 
 const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -418,6 +419,7 @@ impl<'d> Accessor<'d> {
             return Err(bad(path, &at, format!("type {ty:?}, {want_type:?} expected")));
         }
         let comps = match ty {
+            "VEC2" => 2,
             "VEC3" => 3,
             "VEC4" => 4,
             _ => 1,
@@ -522,10 +524,125 @@ pub(crate) struct Counts {
 
 /// Walks every drawn primitive; with spills, writes world positions and
 /// triangles (0-based over all primitives).
-fn walk(doc: &Doc, spill: Option<(&mut SpillFile, &mut SpillFile)>, colours: Option<&mut SpillFile>) -> Result<Counts, Error> {
+fn walk(doc: &Doc, spill: Option<(&mut SpillFile, &mut SpillFile)>, colours: Option<&mut SpillFile>, uvs: Option<&mut TexturingBuilder>) -> Result<Counts, Error> {
     let mut c = Counts::default();
-    walk_into(doc, &IDENTITY, &mut c, spill, colours)?;
+    walk_into(doc, &IDENTITY, &mut c, spill, colours, uvs)?;
     Ok(c)
+}
+
+/// True when some primitive names a material (its base colour, its
+/// texture).
+fn has_material(doc: &Doc) -> bool {
+    arr(&doc.json, "meshes").iter().any(|m| arr(m, "primitives").iter().any(|p| p.get("material").is_some()))
+}
+
+/// A `TEXCOORD_0` element: FLOAT, or normalized UNSIGNED_BYTE or
+/// UNSIGNED_SHORT.
+fn read_uv(b: &[u8], comp: u32) -> [f32; 2] {
+    match comp {
+        5121 => [b[0] as f32 / 255.0, b[1] as f32 / 255.0],
+        5123 => [u16::from_le_bytes([b[0], b[1]]) as f32 / 65535.0, u16::from_le_bytes([b[2], b[3]]) as f32 / 65535.0],
+        _ => [f32::from_le_bytes([b[0], b[1], b[2], b[3]]), f32::from_le_bytes([b[4], b[5], b[6], b[7]])],
+    }
+}
+
+/// The document's materials (base colour factor and texture, with the
+/// sampler's wrap modes) and the textures' images, sized from their
+/// headers. Images that are neither PNG nor JPEG, or missing, leave their
+/// materials untextured, with a warning.
+fn materials(doc: &Doc, map: &Arc<Mapped>) -> Result<(Vec<Material>, Vec<TextureInfo>, Vec<String>), Error> {
+    let path = doc.path;
+    let mut warnings = Vec::new();
+    let mut textures: Vec<TextureInfo> = Vec::new();
+    let mut by_image: Vec<(usize, usize)> = Vec::new();
+    let mut out = Vec::new();
+    for (i, m) in arr(&doc.json, "materials").iter().enumerate() {
+        let at = format!("materials[{i}]");
+        let name = m.get("name").and_then(Value::as_str).unwrap_or("").to_string();
+        let mut mat = Material { name, colour: [1.0; 4], texture: None, wrap: [Wrap::Repeat; 2], v_up: false };
+        let pbr = m.get("pbrMetallicRoughness").unwrap_or(&Value::Null);
+        if let Some(f) = pbr.get("baseColorFactor").and_then(Value::as_array) {
+            for (k, v) in f.iter().take(4).enumerate() {
+                mat.colour[k] = v.as_f64().unwrap_or(1.0).clamp(0.0, 1.0) as f32;
+            }
+        }
+        if let Some(t) = pbr.get("baseColorTexture") {
+            let tat = format!("{at}.pbrMetallicRoughness.baseColorTexture");
+            let ti = index(path, &tat, t, "index", arr(&doc.json, "textures").len())?.ok_or_else(|| bad(path, &tat, "no index"))?;
+            if uint(path, &tat, t, "texCoord", 0)? != 0 {
+                warnings.push(format!("{}: {tat} uses TEXCOORD_{}: mint reads TEXCOORD_0; the material keeps its base colour", path.display(), uint(path, &tat, t, "texCoord", 0)?));
+            } else {
+                let tex = &arr(&doc.json, "textures")[ti];
+                let xat = format!("textures[{ti}]");
+                if let Some(si) = index(path, &xat, tex, "sampler", arr(&doc.json, "samplers").len())? {
+                    let smp = &arr(&doc.json, "samplers")[si];
+                    let wrap = |k: &str| match smp.get(k).and_then(Value::as_u64) {
+                        Some(33071) => Wrap::Clamp,
+                        Some(33648) => Wrap::Mirror,
+                        _ => Wrap::Repeat,
+                    };
+                    mat.wrap = [wrap("wrapS"), wrap("wrapT")];
+                }
+                match index(path, &xat, tex, "source", arr(&doc.json, "images").len())? {
+                    None => warnings.push(format!("{}: {xat} has no source image (an extension's only?): its material keeps its base colour", path.display())),
+                    Some(ii) => match by_image.iter().find(|(img, _)| *img == ii) {
+                        Some(&(_, t)) => mat.texture = Some(t),
+                        None => {
+                            if let Some(source) = image_source(doc, map, ii, &mut warnings)? {
+                                let (width, height) = crate::textures::image_size(&source, path)?;
+                                textures.push(TextureInfo { source, width, height });
+                                by_image.push((ii, textures.len() - 1));
+                                mat.texture = Some(textures.len() - 1);
+                            }
+                        }
+                    },
+                }
+            }
+        }
+        out.push(mat);
+    }
+    Ok((out, textures, warnings))
+}
+
+/// Where image `i`'s bytes are: a buffer view (in the GLB's map, or a
+/// buffer's decoded bytes), a `data:` URI, or a file beside the glTF.
+fn image_source(doc: &Doc, map: &Arc<Mapped>, i: usize, warnings: &mut Vec<String>) -> Result<Option<ImageSource>, Error> {
+    let path = doc.path;
+    let img = &arr(&doc.json, "images")[i];
+    let at = format!("images[{i}]");
+    if let Some(vi) = index(path, &at, img, "bufferView", arr(&doc.json, "bufferViews").len())? {
+        let v = &arr(&doc.json, "bufferViews")[vi];
+        let vat = format!("bufferViews[{vi}]");
+        let b = index(path, &vat, v, "buffer", doc.buffers.len())?.ok_or_else(|| bad(path, &vat, "no buffer"))?;
+        let (off, len) = (uint(path, &vat, v, "byteOffset", 0)? as usize, uint(path, &vat, v, "byteLength", 0)? as usize);
+        let buf = &doc.buffers[b];
+        let end = off.checked_add(len).filter(|&e| e <= buf.bytes().len()).ok_or_else(|| bad(path, &vat, "past the end of its buffer"))?;
+        let name = format!("{}: {at}", path.display());
+        return Ok(Some(match buf {
+            Buf::Map(m, a, _) if Arc::ptr_eq(m, map) => ImageSource::embedded(m.clone(), (a + off, a + end), name),
+            _ => ImageSource::bytes(buf.bytes()[off..end].to_vec(), name),
+        }));
+    }
+    let Some(uri) = img.get("uri").and_then(Value::as_str) else {
+        return Err(bad(path, &at, "neither a bufferView nor a uri"));
+    };
+    if uri.starts_with("data:") {
+        let comma = uri.find(',').ok_or_else(|| bad(path, &at, "a data URI without a comma"))?;
+        if !uri[..comma].ends_with(";base64") {
+            return Err(bad(path, &at, "a data URI that is not base64"));
+        }
+        return Ok(Some(ImageSource::bytes(base64(path, &at, &uri[comma + 1..])?, format!("{}: {at}", path.display()))));
+    }
+    let rel = percent_decode(uri);
+    if rel.contains("://") {
+        return Err(bad(path, &at, format!("image URI {uri:?}: only files beside the .gltf are read")));
+    }
+    let file = path.parent().unwrap_or(Path::new(".")).join(&rel);
+    if !file.is_file() {
+        warnings.push(format!("{}: texture '{}' ({at}) not found: its materials keep their base colour", path.display(), file.display()));
+        return Ok(None);
+    }
+    Ok(Some(ImageSource::file(file)))
 }
 
 /// True when some primitive of the document has a `COLOR_0` attribute.
@@ -550,7 +667,14 @@ fn read_colour(b: &[u8], comp: u32, comps: usize) -> [u8; 4] {
 /// [`walk`] with `prefix` applied after the node transforms, appending to
 /// the counts (and spills) of earlier documents: vertex ids go on from
 /// `c.vertices`.
-fn walk_into(doc: &Doc, prefix: &Mat, c: &mut Counts, mut spill: Option<(&mut SpillFile, &mut SpillFile)>, mut colours: Option<&mut SpillFile>) -> Result<(), Error> {
+fn walk_into(
+    doc: &Doc,
+    prefix: &Mat,
+    c: &mut Counts,
+    mut spill: Option<(&mut SpillFile, &mut SpillFile)>,
+    mut colours: Option<&mut SpillFile>,
+    mut uvs: Option<&mut TexturingBuilder>,
+) -> Result<(), Error> {
     let path = doc.path;
     let meshes = arr(&doc.json, "meshes");
     let start = *c;
@@ -636,6 +760,42 @@ fn walk_into(doc: &Doc, prefix: &Mat, c: &mut Counts, mut spill: Option<(&mut Sp
                     }
                 }
             }
+            // Texture coordinates, one pair per position (none where a
+            // primitive has none: its triangles take their material's colour).
+            let mut textured = false;
+            if let Some(ub) = uvs.as_mut() {
+                let uv = match index(path, &at, attrs, "TEXCOORD_0", usize::MAX)? {
+                    None => None,
+                    Some(ti) => {
+                        let a = Accessor::new(doc, ti, "VEC2")?;
+                        if !matches!(a.comp, 5121 | 5123 | 5126) {
+                            return Err(bad(path, &a.at, format!("TEXCOORD_0 of componentType {} (FLOAT, UNSIGNED_BYTE or UNSIGNED_SHORT expected)", a.comp)));
+                        }
+                        if a.count != pos.count {
+                            return Err(bad(path, &a.at, format!("TEXCOORD_0 has {} elements, POSITION {}", a.count, pos.count)));
+                        }
+                        Some(a)
+                    }
+                };
+                textured = uv.is_some();
+                let mut sub: Vec<(usize, &[u8])> = uv.as_ref().map_or(Vec::new(), |a| a.sparse.clone());
+                sub.sort_by_key(|s| s.0);
+                let mut next = 0;
+                for i in 0..pos.count {
+                    let mut q = uv.as_ref().and_then(|a| a.raw(i).map(|b| read_uv(b, a.comp))).unwrap_or([0.0; 2]);
+                    while next < sub.len() && sub[next].0 <= i {
+                        if sub[next].0 == i {
+                            q = read_uv(sub[next].1, uv.as_ref().unwrap().comp);
+                        }
+                        next += 1;
+                    }
+                    ub.uv(q)?;
+                }
+            }
+            let material = match index(path, &at, prim, "material", arr(&doc.json, "materials").len())? {
+                Some(m) => m as u32,
+                None => NONE,
+            };
             // Positions, sparse values substituted, in world coordinates.
             let mut sub: Vec<(usize, &[u8])> = pos.sparse.clone();
             sub.sort_by_key(|s| s.0);
@@ -678,6 +838,10 @@ fn walk_into(doc: &Doc, prefix: &Mat, c: &mut Counts, mut spill: Option<(&mut Sp
                     b[4 * k..4 * k + 4].copy_from_slice(&v.to_le_bytes());
                 }
                 fs.write_bytes(&b)?;
+                if let Some(ub) = uvs.as_mut() {
+                    // The pairs are numbered as the vertices are.
+                    ub.triangle(material, if textured { tri } else { [NONE; 3] })?;
+                }
             }
         }
     }
@@ -698,7 +862,7 @@ pub(crate) fn append(
     spill: Option<(&mut SpillFile, &mut SpillFile)>,
 ) -> Result<(), Error> {
     let doc = Doc::parse_range(path, map, range, spill_dir)?;
-    walk_into(&doc, prefix, c, spill, None)
+    walk_into(&doc, prefix, c, spill, None, None)
 }
 
 /// Streams triangles spilled as three little-endian u32 ids each: the body
@@ -732,7 +896,7 @@ pub(crate) fn info(path: &Path, data: &[u8]) -> Result<MeshInfo, Error> {
     // The buffers are mapped again for the check: `info` has only the bytes.
     let map = Arc::new(Mapped::open(path, &std::env::temp_dir())?);
     let doc = Doc::parse(path, &map, &std::env::temp_dir())?;
-    let c = walk(&doc, None, None)?;
+    let c = walk(&doc, None, None, None)?;
     Ok(make_info(&doc, is_glb(data), &c))
 }
 
@@ -887,14 +1051,24 @@ impl FaceStream for InPlaceBody {
 pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Opened, Error> {
     let doc = Doc::parse(path, &map, spill_dir)?;
     let coloured = has_colour(&doc);
-    if !coloured {
+    // Vertex colour wins over materials.
+    let textured = !coloured && has_material(&doc);
+    if !coloured && !textured {
         if let Some(opened) = open_in_place(&doc, &map)? {
             return Ok(opened);
         }
     }
     let (mut vs, mut fs) = (SpillFile::new(spill_dir, path)?, SpillFile::new(spill_dir, path)?);
     let mut cs = if coloured { Some(SpillFile::new(spill_dir, path)?) } else { None };
-    let c = walk(&doc, Some((&mut vs, &mut fs)), cs.as_mut())?;
+    let mut ub = if textured { Some(TexturingBuilder::new(spill_dir, path)?) } else { None };
+    let c = walk(&doc, Some((&mut vs, &mut fs)), cs.as_mut(), ub.as_mut())?;
+    let texturing = match ub {
+        Some(ub) => {
+            let (mats, textures, warnings) = materials(&doc, &map)?;
+            Some(ub.finish(mats, textures, warnings)?)
+        }
+        None => None,
+    };
     let colours = match cs {
         Some(cs) => Some(crate::colours::VertexColours::spilled(Arc::new(cs.into_mapped()?), c.vertices as u32)),
         None => None,
@@ -903,7 +1077,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     let positions = Positions::spilled(Arc::new(vs.into_mapped()?), c.vertices as u32);
     let faces = Arc::new(fs.into_mapped()?);
     let body = GltfBody { path: path.to_path_buf(), faces, tris: c.triangles, next: 0, total: map.bytes().len() as u64 };
-    Ok(Opened { info, positions, body: Box::new(body), range_grid: None, spilled_vertices: c.vertices, colours, face_colours: None, texturing: None })
+    Ok(Opened { info, positions, body: Box::new(body), range_grid: None, spilled_vertices: c.vertices, colours, face_colours: None, texturing })
 }
 
 struct GltfBody {

@@ -67,6 +67,7 @@ pub struct ImageSource(Source);
 enum Source {
     File(PathBuf),
     Embedded { map: Arc<Mapped>, range: (usize, usize), name: String },
+    Bytes(Arc<Vec<u8>>, String),
 }
 
 impl ImageSource {
@@ -80,11 +81,16 @@ impl ImageSource {
         ImageSource(Source::Embedded { map, range, name })
     }
 
+    /// Decoded bytes (a `data:` URI), called `name` in messages.
+    pub(crate) fn bytes(bytes: Vec<u8>, name: String) -> ImageSource {
+        ImageSource(Source::Bytes(Arc::new(bytes), name))
+    }
+
     /// How errors name the image.
     pub fn name(&self) -> String {
         match &self.0 {
             Source::File(p) => p.display().to_string(),
-            Source::Embedded { name, .. } => name.clone(),
+            Source::Embedded { name, .. } | Source::Bytes(_, name) => name.clone(),
         }
     }
 }
@@ -309,6 +315,7 @@ fn read_source<'a>(source: &'a ImageSource, about: &Path) -> Result<std::borrow:
     Ok(match &source.0 {
         Source::File(p) => std::borrow::Cow::Owned(std::fs::read(p).map_err(|e| Error::io(about, &format!("cannot read texture '{}'", p.display()), e))?),
         Source::Embedded { map, range, .. } => std::borrow::Cow::Borrowed(&map.bytes()[range.0..range.1]),
+        Source::Bytes(b, _) => std::borrow::Cow::Borrowed(&b[..]),
     })
 }
 

@@ -201,7 +201,7 @@ fn open_all(paths: &[PathBuf], threads: usize) -> Vec<Result<MeshFile, mint_io::
         }
         let r = MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: Some(std::env::temp_dir()), resolve_positions: false })?;
         let tiles = r.info().elements.iter().find(|e| r.info().format == mint_io::Format::Tiles && e.name == "tiles").map_or(0, |e| e.count);
-        Ok(MeshFile { path: path.clone(), bytes, vertices: Some(r.vertex_count() as u64), split_faces: r.splittable_records(), tiles, colour: r.colours().is_some() || r.face_colours().is_some() })
+        Ok(MeshFile { path: path.clone(), bytes, vertices: Some(r.vertex_count() as u64), split_faces: r.splittable_records(), tiles, colour: r.colours().is_some() || r.face_colours().is_some() || r.texturing().is_some() })
     };
     // Every file is opened (the first error in file order is reported);
     // each worker keeps what it opened, by index.
