@@ -301,3 +301,138 @@ fn face_colours_stay_on_their_side() {
     }
     assert!(seen.iter().all(|&n| n > 20), "{seen:?}");
 }
+
+/// A PNG of `n` x `n` squares of `s` texels each, black and white
+/// (square (0, 0), at the image's top left, white).
+fn checker_png(n: usize, s: usize) -> Vec<u8> {
+    let w = n * s;
+    let mut px = Vec::with_capacity(w * w * 3);
+    for y in 0..w {
+        for x in 0..w {
+            px.extend(if (x / s + y / s) % 2 == 0 { [255u8; 3] } else { [0u8; 3] });
+        }
+    }
+    let mut out = Vec::new();
+    let mut e = png::Encoder::new(&mut out, w as u32, w as u32);
+    e.set_color(png::ColorType::Rgb);
+    e.write_header().unwrap().write_image_data(&px).unwrap();
+    out
+}
+
+/// The unit square z = 0.5 (two triangles, facing +z) with (u, v) = (x, y).
+const PLANE: [[f64; 3]; 4] = [[0.0, 0.0, 0.5], [1.0, 0.0, 0.5], [1.0, 1.0, 0.5], [0.0, 1.0, 0.5]];
+
+/// Output vertices on the plane, away from the checkerboard's square
+/// borders by more than `margin`, must have their square's colour exactly.
+/// OBJ's v runs up (square row from the bottom), glTF's down.
+fn assert_checkerboard(out: &Path, n: usize, v_up: bool, margin: f64) -> usize {
+    let mut checked = 0;
+    for (p, c) in coloured_vertices(out) {
+        if (p[2] - 0.5).abs() > 1e-9 {
+            continue;
+        }
+        let (u, v) = (p[0], if v_up { 1.0 - p[1] } else { p[1] });
+        let (fu, fv) = (u * n as f64, v * n as f64);
+        if (fu - fu.round()).abs() < margin * n as f64 || (fv - fv.round()).abs() < margin * n as f64 {
+            continue;
+        }
+        let white = (fu as usize + fv as usize) % 2 == 0;
+        assert_eq!(c, if white { [255; 4] } else { [0, 0, 0, 255] }, "at {p:?}");
+        checked += 1;
+    }
+    checked
+}
+
+/// A checkerboard texture on a plane comes out as the checkerboard at the
+/// grid's resolution: OBJ + MTL + PNG, and a GLB with the PNG inside.
+#[test]
+fn a_checkerboard_texture_comes_out_as_the_checkerboard() {
+    let d = tempfile::tempdir().unwrap();
+    let n = 4;
+    std::fs::write(d.path().join("checker.png"), checker_png(n, 8)).unwrap();
+    std::fs::write(d.path().join("plane.mtl"), "newmtl board\nKd 0.5 0.5 0.5\nmap_Kd checker.png\n").unwrap();
+    let mut obj = String::from("mtllib plane.mtl\n");
+    for p in PLANE {
+        obj += &format!("v {} {} {}\nvt {} {}\n", p[0], p[1], p[2], p[0], p[1]);
+    }
+    obj += "usemtl board\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
+    let objp = d.path().join("plane.obj");
+    std::fs::write(&objp, obj).unwrap();
+    let cells = "20000";
+    let out = d.path().join("o.ply");
+    let o = mint(&["resample", objp.to_str().unwrap(), out.to_str().unwrap(), "--cells", cells, "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cell = serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["cell_size"].as_f64().unwrap();
+    // Half a texel of bilinear blending, and a cell.
+    let checked = assert_checkerboard(&out, n, true, 0.5 / (8.0 * n as f64) + cell);
+    assert!(checked > 200, "{checked} vertices checked");
+
+    // The same plane as a GLB with the PNG in its buffer (glTF's v runs down).
+    let png = checker_png(n, 8);
+    let mut bin: Vec<u8> = Vec::new();
+    PLANE.iter().for_each(|p| p.iter().for_each(|c| bin.extend((*c as f32).to_le_bytes())));
+    PLANE.iter().for_each(|p| [p[0], p[1]].iter().for_each(|c| bin.extend((*c as f32).to_le_bytes())));
+    [0u16, 1, 2, 0, 2, 3].iter().for_each(|i| bin.extend(i.to_le_bytes()));
+    let img_off = bin.len();
+    bin.extend(&png);
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+        "textures": [{"source": 0, "sampler": 0}], "samplers": [{"wrapS": 33071, "wrapT": 33071}],
+        "images": [{"bufferView": 3, "mimeType": "image/png"}],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 12},
+            {"buffer": 0, "byteOffset": img_off, "byteLength": png.len()}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0.5], "max": [1, 1, 0.5]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}
+        ]
+    });
+    let mut j = serde_json::to_vec(&json).unwrap();
+    while j.len() % 4 != 0 {
+        j.push(b' ');
+    }
+    let mut glb = Vec::new();
+    glb.extend(b"glTF");
+    glb.extend(2u32.to_le_bytes());
+    glb.extend(((12 + 8 + j.len() + 8 + bin.len()) as u32).to_le_bytes());
+    glb.extend((j.len() as u32).to_le_bytes());
+    glb.extend(b"JSON");
+    glb.extend(&j);
+    glb.extend((bin.len() as u32).to_le_bytes());
+    glb.extend(b"BIN\0");
+    glb.extend(&bin);
+    let glbp = d.path().join("plane.glb");
+    std::fs::write(&glbp, glb).unwrap();
+    let out2 = d.path().join("o2.ply");
+    let o = mint(&["resample", glbp.to_str().unwrap(), out2.to_str().unwrap(), "--cells", cells]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let checked = assert_checkerboard(&out2, n, false, 0.5 / (8.0 * n as f64) + cell);
+    assert!(checked > 200, "{checked} vertices checked");
+
+    // Broken textures: a missing one warns and keeps the material's colour;
+    // a damaged one is one line naming it; more than the budget is refused.
+    std::fs::remove_file(d.path().join("checker.png")).unwrap();
+    let o = mint(&["resample", objp.to_str().unwrap(), out.to_str().unwrap(), "--cells", cells]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && err.contains("checker.png") && err.contains("not found"), "{err}");
+    assert!(coloured_vertices(&out).iter().all(|(_, c)| *c == [128, 128, 128, 255]), "Kd 0.5 without its texture");
+    std::fs::write(d.path().join("checker.png"), &checker_png(n, 8)[..60]).unwrap();
+    let o = mint(&["resample", objp.to_str().unwrap(), out.to_str().unwrap(), "--cells", cells]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.trim_end().lines().count() == 1 && err.contains("checker.png"), "{err}");
+    std::fs::write(d.path().join("checker.png"), checker_png(512, 8)).unwrap();
+    let o = mint(&["resample", objp.to_str().unwrap(), out.to_str().unwrap(), "--cells", cells, "--mem", "48M"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.trim_end().lines().count() == 1 && err.contains("MiB decoded") && err.contains("--mem"), "{err}");
+}

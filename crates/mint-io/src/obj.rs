@@ -333,6 +333,12 @@ impl ObjTexturing {
                     None => warnings.push(format!("{}: texture '{}' of material '{name}' not found: its faces take the material's colour", path.display(), file.display())),
                 }
             }
+            // A texture replaces Kd (exporters write Kd 0.6 or 0.8 beside
+            // map_Kd, and viewers show the texture as it is); without its
+            // texture the material shows Kd.
+            if m.texture.is_some() {
+                m.colour = [1.0; 4];
+            }
             materials.push(m);
         }
         Ok(Some(b.finish(materials, textures, warnings)?))
@@ -361,7 +367,7 @@ fn parse_mtl(text: &[u8], dir: &Path) -> Vec<(Material, Option<PathBuf>)> {
         match key {
             "newmtl" => out.push((Material::white(rest), None)),
             "Kd" => {
-                if let Some((m, None)) = out.last_mut() {
+                if let Some((m, _)) = out.last_mut() {
                     let c: Vec<f32> = rest.split_whitespace().filter_map(|t| t.parse().ok()).collect();
                     if c.len() >= 3 {
                         m.colour = [c[0].clamp(0.0, 1.0), c[1].clamp(0.0, 1.0), c[2].clamp(0.0, 1.0), 1.0];
@@ -385,9 +391,6 @@ fn parse_mtl(text: &[u8], dir: &Path) -> Vec<(Material, Option<PathBuf>)> {
                         i += 1 + n;
                     }
                     if i < words.len() {
-                        // The Kd colour multiplies the texture only when
-                        // given; a texture alone is its own colour.
-                        m.colour = [1.0; 4];
                         *file = Some(dir.join(words[i..].join(" ").replace('\\', "/")));
                     }
                 }

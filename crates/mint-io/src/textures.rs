@@ -181,10 +181,10 @@ impl Texturing {
         self.tris.bytes().len() as u64 / 16
     }
 
-    /// Triangle `t`'s material and (u, v) indices. Panics past the end.
+    /// Triangle `t`'s material and (u, v) indices ([`NONE`] past the end).
     #[inline]
     pub fn triangle(&self, t: u64) -> (u32, [u32; 3]) {
-        let b = &self.tris.bytes()[t as usize * 16..t as usize * 16 + 16];
+        let Some(b) = self.tris.bytes().get(t as usize * 16..t as usize * 16 + 16) else { return (NONE, [NONE; 3]) };
         let w = |k: usize| u32::from_le_bytes(b[4 * k..4 * k + 4].try_into().unwrap());
         (w(0), [w(1), w(2), w(3)])
     }

@@ -161,6 +161,24 @@ fn mesh_reader_at(path: &Path) {
                     let _ = fc.get(t);
                 }
             }
+            // Textures: one record per triangle; decoded (when small) or
+            // refused in one line; any triangle's colour is defined.
+            if let Some(t) = r.texturing() {
+                assert!(r.colours().is_none() && r.face_colours().is_none(), "texturing beside other colours");
+                if stream_ok {
+                    assert_eq!(t.triangles(), total, "texture records for {} of {total} triangles", t.triangles());
+                }
+                if t.decoded_bytes() <= 64 << 20 {
+                    match t.decode(&path) {
+                        Err(e) => one_line_naming(&e, &path),
+                        Ok(images) => {
+                            for k in 0..t.triangles().min(64) + 1 {
+                                let _ = t.colour(&images, k, [0.2, 0.3, 0.5]);
+                            }
+                        }
+                    }
+                }
+            }
             match records {
                 Err(e) => one_line_naming(&e, &path),
                 Ok(None) => {}
