@@ -436,3 +436,38 @@ fn a_checkerboard_texture_comes_out_as_the_checkerboard() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.trim_end().lines().count() == 1 && err.contains("MiB decoded") && err.contains("--mem"), "{err}");
 }
+
+/// Decimation (to 1%) and simplification keep colour: every output vertex
+/// takes the colour of the mesh before the collapse at its nearest point,
+/// so vertices away from the border have exactly the input's colours, and
+/// the border stays where it was to within the output's error and the
+/// resampling's cell.
+#[test]
+fn a_two_colour_sphere_keeps_its_colours_after_decimation() {
+    let d = tempfile::tempdir().unwrap();
+    let sphere = two_colour_sphere(d.path());
+    for (cmd, name) in [("decimate", "d.ply"), ("simplify", "s.ply")] {
+        let out = d.path().join(name);
+        let o = mint(&[cmd, sphere.to_str().unwrap(), out.to_str().unwrap(), "--faces", "200", "--json"]);
+        assert!(o.status.success(), "{cmd}: {}", String::from_utf8_lossy(&o.stderr));
+        let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(s["colour"], true, "{s}");
+        let err = s["simplify_error"].as_f64().unwrap() * 2.0;
+        let cell = s["cell_size"].as_f64().unwrap_or(0.0);
+        let vs = coloured_vertices(&out);
+        let mut pure = 0;
+        for (p, c) in &vs {
+            if p[2].abs() > err + cell + 0.05 {
+                assert_eq!(*c, if p[2] > 0.0 { RED } else { BLUE }, "{cmd}: vertex at z = {}", p[2]);
+                pure += 1;
+            } else {
+                assert!(c[1] == 30 && (248..=252).contains(&(c[0] as u32 + c[2] as u32)), "{cmd}: {c:?} at z = {}", p[2]);
+            }
+        }
+        assert!(pure * 2 > vs.len(), "{cmd}: {pure} of {} vertices away from the border", vs.len());
+        // And --no-color writes geometry only.
+        let o = mint(&[cmd, sphere.to_str().unwrap(), out.to_str().unwrap(), "--faces", "200", "--no-color", "--quiet"]);
+        assert!(o.status.success());
+        assert!(mint_io::MeshReader::open(&out, mint_io::ReadOptions::default()).unwrap().colours().is_none());
+    }
+}

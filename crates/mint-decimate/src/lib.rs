@@ -90,6 +90,9 @@ pub struct DecimateOptions {
 pub struct DecimateSummary {
     pub input: String,
     pub output: String,
+    /// The output carries per-vertex colour: the intermediate's, at each
+    /// output vertex's nearest point (`mint_mesh::transfer`).
+    pub colour: bool,
     /// The output's coordinates: "f32", or "f64" and why.
     pub output_precision: String,
     pub input_faces: u64,
@@ -173,8 +176,8 @@ pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress
     };
     let mut spec = RunSpec::new(mint_pipeline::Job::Resample { inputs: inputs.to_vec() }, &mid_path, GridSize::CellSize(h));
     spec.write.double = true;
-    // The quadric stage keeps no colour (yet): the intermediate needs none.
-    spec.write.no_colour = true;
+    // The intermediate carries colour when the output can hold it.
+    spec.write.no_colour = o.write.no_colour || !MeshWriter::holds_colour(format);
     let rs = run(&spec, &o.tuning, progress)?;
     let seconds_resample = t.elapsed().as_secs_f64();
     if let Some(why) = rs.empty_reason() {
@@ -183,10 +186,12 @@ pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress
     // 3. In core: simplify and judge; 4. write.
     let t = Instant::now();
     let (positions, tris) = mint_io::read_mesh(&mid_path)?;
+    let colours = vertex_colours(&mid_path)?;
     drop((owner, mid));
     let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
     let tolerance = h * mint_pipeline::spec::defaults::F32_TOLERANCE_CELLS;
-    let (sr, output_precision, _, seconds_write) = simplify_and_write(input, output, format, &o.write.options(None, false), tolerance, positions, tris, &so, progress)?;
+    let colour = colours.is_some();
+    let (sr, output_precision, _, seconds_write) = simplify_and_write(input, output, format, &o.write.options(None, colour), tolerance, positions, tris, colours, &so, progress)?;
     // Reading the intermediate counts as simplifying.
     let seconds_simplify = t.elapsed().as_secs_f64() - seconds_write;
     Ok(DecimateSummary {
@@ -202,6 +207,7 @@ pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress
         intermediate_faces: rs.output_faces,
         output_faces: sr.output_faces,
         output_vertices: sr.output_vertices,
+        colour,
         target_faces: o.target_faces,
         simplify_error: sr.error,
         intermediate_watertight: sr.input_watertight,
@@ -232,6 +238,7 @@ fn simplify_and_write(
     tolerance: f64,
     positions: Vec<[f64; 3]>,
     tris: Vec<[u32; 3]>,
+    colours: Option<Vec<[u8; 4]>>,
     so: &mint_mesh::SimplifyOptions,
     progress: &dyn Progress,
 ) -> Result<(mint_mesh::SimplifyReport, String, f64, f64), PipelineError> {
@@ -240,21 +247,52 @@ fn simplify_and_write(
         mint_mesh::MeshError::Cancelled => PipelineError::Cancelled,
         e => PipelineError::stage(input, format!("simplifying: {e}")),
     })?;
-    drop((positions, tris));
+    // Colour: the mesh before the collapse, at each vertex's nearest point.
+    let out_colours = match &colours {
+        Some(c) => Some(mint_mesh::transfer::colours_at_nearest(&positions, &tris, c, &p).map_err(|e| PipelineError::stage(input, format!("colouring: {e}")))?),
+        None => None,
+    };
+    drop((positions, tris, colours));
     let seconds_simplify = t.elapsed().as_secs_f64();
     check_cancel(progress)?;
     let t = Instant::now();
     let (lo, hi) = bbox(&p);
     let (double, precision) = mint_io::precision::choose(output, format, write.double, lo, hi, tolerance)?;
     let mut w = MeshWriter::create(output, format, WriteOptions { double, ..write.clone() })?;
-    for v in &p {
-        w.write_vertex(*v)?;
+    match &out_colours {
+        Some(c) => {
+            for (v, c) in p.iter().zip(c) {
+                w.write_vertex_rgba(*v, *c)?;
+            }
+        }
+        None => {
+            for v in &p {
+                w.write_vertex(*v)?;
+            }
+        }
     }
     for t in &f {
         w.write_face(*t)?;
     }
     w.finish()?;
     Ok((sr, precision, seconds_simplify, t.elapsed().as_secs_f64()))
+}
+
+/// A mesh file's per-vertex colours, if it has them.
+fn vertex_colours(path: &Path) -> Result<Option<Vec<[u8; 4]>>, PipelineError> {
+    let r = mint_io::MeshReader::open(path, mint_io::ReadOptions { chunk_triangles: 1, spill_dir: None, resolve_positions: false })?;
+    Ok(r.colours().map(|c| (0..c.count()).map(|i| c.get(i)).collect()))
+}
+
+/// The colours of welded vertices: `after[i]` takes the colour of the
+/// first vertex of `before` at its exact position.
+fn rekey_colours(before: &[[f64; 3]], after: &[[f64; 3]], colours: &[[u8; 4]]) -> Vec<[u8; 4]> {
+    use mint_mesh::weld::position_key;
+    let mut first: std::collections::HashMap<[u64; 3], usize> = std::collections::HashMap::with_capacity(before.len());
+    for (i, p) in before.iter().enumerate() {
+        first.entry(position_key(p)).or_insert(i);
+    }
+    after.iter().map(|p| first.get(&position_key(p)).map_or([255; 4], |&i| colours[i])).collect()
 }
 
 /// The box of `p` (a zero box at the origin when empty).
@@ -298,6 +336,9 @@ pub struct SimplifyFileOptions {
 pub struct SimplifySummary {
     pub input: String,
     pub output: String,
+    /// The output carries per-vertex colour (the input's, at each output
+    /// vertex's nearest point).
+    pub colour: bool,
     /// The output's coordinates: "f32", or "f64" and why.
     pub output_precision: String,
     pub input_faces: u64,
@@ -332,15 +373,31 @@ pub fn simplify_file(input: &Path, output: &Path, o: &SimplifyFileOptions, progr
         return Err(PipelineError::Empty { path: input.to_path_buf() });
     }
     let (input_faces, input_vertices) = (tris.len() as u64, positions.len() as u64);
-    let welded = if o.weld { mint_mesh::weld(&mut positions, &mut tris) } else { 0 };
+    // Per-vertex colour, when kept: welding merges vertices, so the colours
+    // come from the mesh as read (each welded vertex keeps one of its
+    // copies' colour; the output's from the nearest point anyway).
+    let mut colours = if o.write.colours && MeshWriter::holds_colour(format) { vertex_colours(input)? } else { None };
+    let welded = if o.weld {
+        let before = positions.clone();
+        let n = mint_mesh::weld(&mut positions, &mut tris);
+        if let Some(c) = colours.as_mut() {
+            *c = rekey_colours(&before, &positions, c);
+        }
+        n
+    } else {
+        0
+    };
     let seconds_read = t0.elapsed().as_secs_f64();
     check_cancel(progress)?;
     let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
     let tolerance = tolerance_of(&positions);
-    let (sr, output_precision, seconds_simplify, seconds_write) = simplify_and_write(input, output, format, &o.write, tolerance, positions, tris, &so, progress)?;
+    let colour = colours.is_some();
+    let write = WriteOptions { colours: colour, ..o.write.clone() };
+    let (sr, output_precision, seconds_simplify, seconds_write) = simplify_and_write(input, output, format, &write, tolerance, positions, tris, colours, &so, progress)?;
     Ok(SimplifySummary {
         input: input.display().to_string(),
         output: output.display().to_string(),
+        colour,
         output_precision,
         input_faces,
         input_vertices,

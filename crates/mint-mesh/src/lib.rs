@@ -16,6 +16,8 @@
 //! - [`distance`](mod@distance): [`distance()`] and [`symmetric_distance()`],
 //!   Metro-style sampled surface distances ([`DistanceReport`]) that are
 //!   deterministic for a seed whatever the thread count.
+//! - [`transfer`]: each vertex of one mesh coloured from another at its
+//!   nearest point (`mint decimate` and `mint simplify` keep colour so).
 //! - [`rng`]: [`SplitMix64`], the tiny seeded generator the sampler uses.
 //! - [`error`]: [`MeshError`], the typed errors for bad input.
 //!
@@ -31,6 +33,7 @@ pub mod qem;
 pub mod rng;
 pub mod selfx;
 pub mod simplify;
+pub mod transfer;
 pub mod weld;
 
 pub use bvh::{closest_point_on_triangle, TriangleBvh};

@@ -42,6 +42,12 @@ pub struct DecimateArgs {
     /// Directory for temporary files [default: the output's directory].
     #[arg(long)]
     pub tmp: Option<PathBuf>,
+    /// Write geometry only. By default a PLY, OBJ or glTF output carries
+    /// the input's colour (per vertex, per face or textures): resampling
+    /// carries it to the intermediate, and each output vertex takes the
+    /// intermediate's colour at its nearest point.
+    #[arg(long)]
+    pub no_color: bool,
     /// Also write OUT.png beside the output: input and output side by side.
     #[arg(long)]
     pub preview: bool,
@@ -65,7 +71,7 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         target_faces: a.faces,
         intermediate_faces: a.intermediate,
         max_error: a.error,
-        write: Default::default(),
+        write: mint_pipeline::WriteSpec { no_colour: a.no_color, ..Default::default() },
         tuning: mint_pipeline::Tuning { mem_bytes: mem, threads: a.threads, tmp_dir: a.tmp.clone(), work_dir: a.work.clone(), ..Default::default() },
     };
     let bars = Bars::new(a.quiet.quiet || a.json.json);
@@ -76,8 +82,8 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
     }
     // The resampling's warnings (an open input read as a sheet, …).
     let mut warnings = crate::summary::summary_warnings_with(&s.resample, "`mint resample --signs union`");
-    if s.resample.input_coloured_files > 0 {
-        warnings.insert(0, format!("{}: {} of the input files have per-vertex colour, which decimation does not carry yet: the output is geometry only (`mint resample` carries it)", s.resample.input, s.resample.input_coloured_files));
+    if s.resample.input_coloured_files > 0 && !s.colour && !a.no_color {
+        warnings.insert(0, format!("{}: {} of the input files have colour, which {} cannot hold: the output is geometry only (write .ply, .obj, .gltf or .glb to keep it)", s.resample.input, s.resample.input_coloured_files, s.output));
     }
     for w in &warnings {
         eprintln!("mint: warning: {w}");
@@ -105,7 +111,15 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         } else {
             "NOT watertight"
         });
-        eprintln!("  simplified   {} faces (target {}), {} vertices, error {:.2e} of the extent; coordinates {}", s.output_faces, s.target_faces, s.output_vertices, s.simplify_error, s.output_precision);
+        eprintln!(
+            "  simplified   {} faces (target {}), {} vertices, error {:.2e} of the extent; coordinates {}{}",
+            s.output_faces,
+            s.target_faces,
+            s.output_vertices,
+            s.simplify_error,
+            s.output_precision,
+            if s.colour { "; colour from the resampling's nearest points" } else { "" }
+        );
         eprintln!(
             "  output       {}{}",
             if s.output_watertight { "watertight (closed, 2-manifold, consistently oriented)" } else { "NOT watertight" },

@@ -34,6 +34,11 @@ pub struct SimplifyArgs {
     /// Write vertex coordinates as f64 instead of f32.
     #[arg(long)]
     pub double: bool,
+    /// Write geometry only. By default a PLY, OBJ or glTF output carries
+    /// the input's per-vertex colour, taken at each output vertex's
+    /// nearest point of the input.
+    #[arg(long)]
+    pub no_color: bool,
     #[command(flatten)]
     pub quiet: QuietArg,
     #[command(flatten)]
@@ -46,7 +51,7 @@ pub(crate) fn cmd_simplify(a: SimplifyArgs) -> Result<()> {
         target_faces: a.faces,
         max_error: a.error,
         weld: !a.no_weld,
-        write: WriteOptions { ascii: a.ascii, double: a.double, ..Default::default() },
+        write: WriteOptions { ascii: a.ascii, double: a.double, colours: !a.no_color, ..Default::default() },
     };
     let bars = Bars::new(a.quiet.quiet || a.json.json);
     let s = mint_decimate::simplify_file(&a.input, &a.output, &o, &bars)?;
@@ -57,7 +62,15 @@ pub(crate) fn cmd_simplify(a: SimplifyArgs) -> Result<()> {
     } else if !a.quiet.quiet {
         eprintln!("simplified {} -> {}", s.input, s.output);
         eprintln!("  input        {} faces, {} vertices ({} welded), {}", s.input_faces, s.input_vertices, s.welded_vertices, if s.input_watertight { "watertight" } else { "not watertight" });
-        eprintln!("  output       {} faces (target {}), {} vertices, error {:.2e} of the extent; coordinates {}", s.output_faces, s.target_faces, s.output_vertices, s.simplify_error, s.output_precision);
+        eprintln!(
+            "  output       {} faces (target {}), {} vertices, error {:.2e} of the extent; coordinates {}{}",
+            s.output_faces,
+            s.target_faces,
+            s.output_vertices,
+            s.simplify_error,
+            s.output_precision,
+            if s.colour { "; colour from the input's nearest points" } else { "" }
+        );
         eprintln!(
             "  judged       {}{}",
             if s.output_watertight { "watertight (closed, 2-manifold, consistently oriented)" } else { "NOT watertight" },
