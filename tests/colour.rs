@@ -344,7 +344,8 @@ fn assert_checkerboard(out: &Path, n: usize, v_up: bool, margin: f64) -> usize {
 }
 
 /// A checkerboard texture on a plane comes out as the checkerboard at the
-/// grid's resolution: OBJ + MTL + PNG, and a GLB with the PNG inside.
+/// grid's resolution: OBJ + MTL + PNG, a GLB with the PNG inside, and a PLY
+/// in MeshLab's texture convention.
 #[test]
 fn a_checkerboard_texture_comes_out_as_the_checkerboard() {
     let d = tempfile::tempdir().unwrap();
@@ -418,6 +419,24 @@ fn a_checkerboard_texture_comes_out_as_the_checkerboard() {
     let o = mint(&["resample", glbp.to_str().unwrap(), out2.to_str().unwrap(), "--cells", cells]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let checked = assert_checkerboard(&out2, n, false, 0.5 / (8.0 * n as f64) + cell);
+    assert!(checked > 200, "{checked} vertices checked");
+
+    // The same plane as a PLY in MeshLab's convention: `comment
+    // TextureFile` and a `texcoord` list per face (v up, as in OBJ).
+    let mut ply = String::from("ply\nformat ascii 1.0\ncomment TextureFile checker.png\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 2\nproperty list uchar int vertex_indices\nproperty list uchar float texcoord\nend_header\n");
+    for p in PLANE {
+        ply += &format!("{} {} {}\n", p[0], p[1], p[2]);
+    }
+    for f in [[0, 1, 2], [0, 2, 3]] {
+        let uv: Vec<String> = f.iter().map(|&v| format!("{} {}", PLANE[v][0], PLANE[v][1])).collect();
+        ply += &format!("3 {} {} {} 6 {}\n", f[0], f[1], f[2], uv.join(" "));
+    }
+    let plyp = d.path().join("plane-tex.ply");
+    std::fs::write(&plyp, ply).unwrap();
+    let out3 = d.path().join("o3.ply");
+    let o = mint(&["resample", plyp.to_str().unwrap(), out3.to_str().unwrap(), "--cells", cells]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let checked = assert_checkerboard(&out3, n, true, 0.5 / (8.0 * n as f64) + cell);
     assert!(checked > 200, "{checked} vertices checked");
 
     // Broken textures: a missing one warns and keeps the material's colour;

@@ -33,6 +33,7 @@ use super::header::{parse, Element, Encoding, PlyHeader, PropType, Property};
 use crate::error::{show_token, Error, ErrorKind};
 use crate::mapped::{Mapped, SpillFile};
 use crate::colours::{FaceColours, VertexColours};
+use crate::textures::{ImageSource, Material, TextureInfo, Texturing, TexturingBuilder, NONE};
 use crate::positions::{check_finite, not_finite, Emit, Layout, PosKind, Positions, Reject, Scalar};
 use crate::backend::{ElementInfo, FaceStream, MeshInfo, Opened, RangeGrid, ReadStats};
 use crate::text::{line_of, parse_f64, parse_int, Tokens};
@@ -46,7 +47,7 @@ enum Role {
     Vertex { xyz: [usize; 3], rgb: Option<[usize; 3]>, alpha: Option<usize> },
     /// Faces (or triangle strips), with their colour properties when the
     /// element has them (faces only).
-    Faces { list: usize, strip: bool, rgb: Option<[usize; 3]>, alpha: Option<usize> },
+    Faces { list: usize, strip: bool, rgb: Option<[usize; 3]>, alpha: Option<usize>, texcoord: Option<usize>, texnumber: Option<usize> },
     RangeGrid { list: usize },
     Other,
 }
@@ -135,15 +136,18 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     }
     // Per-face colour, when the vertices have none: one pass over the
     // first face element (pending, or next) spills a colour per triangle.
+    // Else textures (MeshLab's `comment TextureFile NAME` and face
+    // `texcoord` lists), by the same kind of pass.
     let mut face_colours = None;
+    let mut texturing = None;
     if colours.is_none() {
         let first_faces = body.roles.iter().position(|r| matches!(r, Role::Faces { .. }));
         if let Some(e) = first_faces {
-            if let Role::Faces { list, rgb: Some(rgb), alpha, .. } = body.roles[e] {
-                let start = body.pending.iter().find(|p| p.0 == e).map(|p| p.1).or((e == body.next_elem).then_some(body.next_offset));
-                if let Some(start) = start {
-                    face_colours = Some(body.read_face_colours(e, list, rgb, alpha, start, spill_dir)?);
-                }
+            let start = body.pending.iter().find(|p| p.0 == e).map(|p| p.1).or((e == body.next_elem).then_some(body.next_offset));
+            match (body.roles[e], start) {
+                (Role::Faces { list, rgb: Some(rgb), alpha, .. }, Some(start)) => face_colours = Some(body.read_face_colours(e, list, rgb, alpha, start, spill_dir)?),
+                (Role::Faces { list, texcoord: Some(tc), texnumber, .. }, Some(start)) => texturing = body.read_texcoords(e, list, tc, texnumber, start, spill_dir)?,
+                _ => {}
             }
         }
     }
@@ -161,7 +165,7 @@ pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Op
     if body.pending.is_empty() && !body.roles[body.next_elem..].iter().any(|r| matches!(r, Role::Faces { .. })) {
         body.walk_to_end()?;
     }
-    Ok(Opened { info, positions, body: Box::new(body), range_grid: grid, spilled_vertices: spilled, colours, face_colours, texturing: None })
+    Ok(Opened { info, positions, body: Box::new(body), range_grid: grid, spilled_vertices: spilled, colours, face_colours, texturing })
 }
 
 /// Checks that property `i` of `el` may hold a colour channel.
@@ -214,9 +218,12 @@ fn roles(h: &PlyHeader, path: &Path) -> Result<Vec<Role>, Error> {
                     "range_grid" => Role::RangeGrid { list },
                     "face" => {
                         let (rgb, alpha) = colour_props(el).map_err(|m| err(ErrorKind::Unsupported, m))?;
-                        Role::Faces { list, strip: false, rgb, alpha }
+                        // MeshLab's per-corner texture coordinates.
+                        let texcoord = el.props.iter().position(|p| p.name == "texcoord" && matches!(p.ty, PropType::List { .. }));
+                        let texnumber = el.props.iter().position(|p| p.name == "texnumber" && matches!(p.ty, PropType::Scalar(_)));
+                        Role::Faces { list, strip: false, rgb, alpha, texcoord, texnumber }
                     }
-                    _ => Role::Faces { list, strip: true, rgb: None, alpha: None },
+                    _ => Role::Faces { list, strip: true, rgb: None, alpha: None, texcoord: None, texnumber: None },
                 }
             }
             _ => Role::Other,
@@ -752,6 +759,86 @@ impl PlyBody {
             }
         });
         Ok(FaceColours::spilled(Arc::new(spill.into_mapped()?)))
+    }
+
+    /// One pass over face element `e` (from `start`) for MeshLab's texture
+    /// convention: per face a `texcoord` list of (u, v) per corner and
+    /// optionally a `texnumber` (which `comment TextureFile NAME` of the
+    /// header, in order; 0 without). Triangles are fanned as the faces are;
+    /// a face whose list is not two numbers per corner has none. `None`
+    /// when the header names no texture file.
+    #[allow(clippy::too_many_arguments)]
+    fn read_texcoords(&self, e: usize, list: usize, tc: usize, texnumber: Option<usize>, start: usize, spill_dir: &Path) -> Result<Option<Texturing>, Error> {
+        let files: Vec<String> = self.header.comments.iter().filter_map(|c| c.strip_prefix("TextureFile").map(|f| f.trim().to_string())).filter(|f| !f.is_empty()).collect();
+        if files.is_empty() {
+            return Ok(None);
+        }
+        let data = self.map.bytes();
+        let el = &self.header.elements[e];
+        let ctx = self.ctx(data, e);
+        let mut b = TexturingBuilder::new(spill_dir, &self.path)?;
+        let mut uv: Vec<f32> = Vec::new();
+        with_src!(self.header.encoding, data, start, |s| {
+            for r in 0..el.count {
+                let at = s.mark();
+                let mut corners = 0u64;
+                let mut tex = 0u32;
+                uv.clear();
+                for (i, prop) in el.props.iter().enumerate() {
+                    let res = match prop.ty {
+                        PropType::Scalar(t) if Some(i) == texnumber => s.float(t).map(|v| tex = if v >= 0.0 && v < NONE as f64 { v as u32 } else { NONE }),
+                        PropType::Scalar(t) => s.skip_n(t, 1),
+                        PropType::List { count, item } if i == tc => s.list_len(count).and_then(|n| {
+                            for _ in 0..n {
+                                let v = s.float(item)?;
+                                if uv.len() < 1 << 16 {
+                                    uv.push(v as f32);
+                                }
+                            }
+                            Ok(())
+                        }),
+                        PropType::List { count, item } => s.list_len(count).and_then(|n| {
+                            if i == list {
+                                corners = n;
+                            }
+                            s.skip_n(item, n)
+                        }),
+                    };
+                    res.map_err(|err| ctx.src(err, r, at))?;
+                }
+                s.end_record();
+                let ids: Vec<u32> = if uv.len() as u64 == 2 * corners {
+                    let mut ids = Vec::with_capacity(corners as usize);
+                    for k in 0..corners as usize {
+                        ids.push(b.uv([uv[2 * k], uv[2 * k + 1]])?);
+                    }
+                    ids
+                } else {
+                    vec![NONE; corners as usize]
+                };
+                for k in 1..ids.len().saturating_sub(1) {
+                    b.triangle(tex, [ids[0], ids[k], ids[k + 1]])?;
+                }
+            }
+        });
+        let dir = self.path.parent().unwrap_or(Path::new("."));
+        let mut warnings = Vec::new();
+        let mut materials = Vec::new();
+        let mut textures = Vec::new();
+        for f in &files {
+            let file = dir.join(f.replace('\\', "/"));
+            let mut m = Material::white(f);
+            if file.is_file() {
+                let source = ImageSource::file(file);
+                let (width, height) = crate::textures::image_size(&source, &self.path)?;
+                textures.push(TextureInfo { source, width, height });
+                m.texture = Some(textures.len() - 1);
+            } else {
+                warnings.push(format!("{}: texture '{}' not found: its faces are white", self.path.display(), file.display()));
+            }
+            materials.push(m);
+        }
+        Ok(Some(b.finish(materials, textures, warnings)?))
     }
 
     /// Parses a `range_grid` element; `nv` is the vertex count.
