@@ -316,6 +316,14 @@ trait Src {
         Ok(n as u64)
     }
 
+    /// Skips a list; returns its length.
+    #[inline]
+    fn skip_list(&mut self, count: Scalar, item: Scalar) -> Result<u64, SrcErr> {
+        let n = self.list_len(count)?;
+        self.skip_n(item, n)?;
+        Ok(n)
+    }
+
     /// Skips the given properties of one record.
     #[inline]
     fn skip_props(&mut self, props: &[Property]) -> Result<(), SrcErr> {
@@ -743,11 +751,10 @@ impl PlyBody {
                             }),
                             None => s.skip_n(t, 1),
                         },
-                        PropType::List { count, item } => s.list_len(count).and_then(|n| {
+                        PropType::List { count, item } => s.skip_list(count, item).map(|n| {
                             if i == list {
                                 corners = n;
                             }
-                            s.skip_n(item, n)
                         }),
                     };
                     res.map_err(|err| ctx.src(err, r, at))?;
@@ -797,11 +804,10 @@ impl PlyBody {
                             }
                             Ok(())
                         }),
-                        PropType::List { count, item } => s.list_len(count).and_then(|n| {
+                        PropType::List { count, item } => s.skip_list(count, item).map(|n| {
                             if i == list {
                                 corners = n;
                             }
-                            s.skip_n(item, n)
                         }),
                     };
                     res.map_err(|err| ctx.src(err, r, at))?;
