@@ -16,8 +16,6 @@
 //! - [`distance`](mod@distance): [`distance()`] and [`symmetric_distance()`],
 //!   Metro-style sampled surface distances ([`DistanceReport`]) that are
 //!   deterministic for a seed whatever the thread count.
-//! - [`transfer`]: each vertex of one mesh coloured from another at its
-//!   nearest point (`mint decimate` and `mint simplify` keep colour so).
 //! - [`rng`]: [`SplitMix64`], the tiny seeded generator the sampler uses.
 //! - [`error`]: [`MeshError`], the typed errors for bad input.
 //!
@@ -33,7 +31,6 @@ pub mod qem;
 pub mod rng;
 pub mod selfx;
 pub mod simplify;
-pub mod transfer;
 pub mod weld;
 
 pub use bvh::{closest_point_on_triangle, TriangleBvh};
@@ -44,6 +41,6 @@ pub use distance::{
 };
 pub use error::MeshError;
 pub use rng::SplitMix64;
-pub use simplify::{simplify, simplify_with, SimplifyOptions, SimplifyReport};
+pub use simplify::{simplify, simplify_coloured, simplify_with, SimplifyOptions, SimplifyReport};
 pub use selfx::{faces_intersect, self_intersections, SelfIntersections};
 pub use weld::weld;

@@ -24,6 +24,12 @@
 //! noise leave an uneven surface (docs/PERFORMANCE.md). In f64 the floor is
 //! about 1e-8 of the extent.
 //!
+//! With a colour per vertex ([`collapse_coloured`]) each vertex's quadric
+//! also prices its colour (Hoppe 1999's attribute quadric, see
+//! `ColourQuadric`): a collapse across a colour border costs what a
+//! geometric error does, so borders stay sharp, and each kept vertex's
+//! colour is the quadric's best at its position, clamped to the gamut.
+//!
 //! Deterministic: one thread, a heap ordered by (cost, edge), no hashing.
 
 use glam::DVec3;
@@ -104,6 +110,190 @@ impl Quadric {
     }
 }
 
+/// What the collapse needs of a vertex's quadric: sums, differences, and
+/// the quadric in position alone that prices a position.
+trait VertexQuadric: Copy + Default + Send + Sync {
+    fn add(&mut self, o: &Self);
+    fn subtract(&mut self, o: &Self);
+    fn sum(&self, o: &Self) -> Self {
+        let mut q = *self;
+        q.add(o);
+        q
+    }
+    /// The quadric in position that prices a position (for a coloured one,
+    /// with the best colour at each position substituted).
+    fn reduced(&self) -> Quadric;
+    /// The geometric part alone (errors are reported as distances).
+    fn geometric(&self) -> &Quadric;
+}
+
+impl VertexQuadric for Quadric {
+    fn add(&mut self, o: &Self) {
+        Quadric::add(self, o)
+    }
+    fn subtract(&mut self, o: &Self) {
+        Quadric::subtract(self, o)
+    }
+    fn reduced(&self) -> Quadric {
+        *self
+    }
+    fn geometric(&self) -> &Quadric {
+        self
+    }
+}
+
+/// A geometric quadric with a colour attribute quadric (H. Hoppe, "New
+/// quadric metric for simplifying meshes with appearance attributes",
+/// IEEE Visualization 1999): over each face, each colour channel is the
+/// linear function `g·p + d` that takes the corners' values; a vertex at
+/// `p` with colour `s` costs `Σ area·λ·(g·p + d − s)²` more. Only the sums
+/// over the faces are kept (per channel the area-weighted `g`, `d`, and
+/// summed over the channels `g gᵀ`, `d g`, `d²`), so quadrics add as plain
+/// ones do. For a position the best colour is `s = (S·p + t) / α` per
+/// channel; substituted, the colour part is again a quadric in `p`
+/// ([`VertexQuadric::reduced`]), whose minimum gives the position, and `s`
+/// there the vertex's colour, clamped to [0, 1].
+#[derive(Debug, Clone, Copy, Default)]
+struct ColourQuadric {
+    geo: Quadric,
+    /// Σ over faces and channels of λ·area·g gᵀ (xx, xy, xz, yy, yz, zz).
+    gg: [f64; 6],
+    /// Σ λ·area·d·g, and Σ λ·area·d².
+    dg: [f64; 3],
+    dd: f64,
+    /// Per channel Σ λ·area·g and Σ λ·area·d.
+    s: [[f64; 3]; 3],
+    t: [f64; 3],
+    /// Σ λ·area.
+    alpha: f64,
+    /// The range of the colours merged into the vertex (the best colour is
+    /// clamped to it: no overshoot beyond what the input holds there).
+    lo: [f32; 3],
+    hi: [f32; 3],
+}
+
+impl ColourQuadric {
+    /// The colour (channels in [0, 1]) best at `p`.
+    fn colour_at(&self, p: DVec3) -> [f64; 3] {
+        if !(self.alpha > 0.0) {
+            return [1.0; 3];
+        }
+        std::array::from_fn(|j| {
+            let c = (self.s[j][0] * p.x + self.s[j][1] * p.y + self.s[j][2] * p.z + self.t[j]) / self.alpha;
+            let (lo, hi) = if self.lo[j] <= self.hi[j] { (self.lo[j] as f64, self.hi[j] as f64) } else { (0.0, 1.0) };
+            if c.is_finite() {
+                c.clamp(lo, hi)
+            } else {
+                0.5 * (lo + hi)
+            }
+        })
+    }
+}
+
+impl VertexQuadric for ColourQuadric {
+    fn add(&mut self, o: &Self) {
+        self.geo.add(&o.geo);
+        for k in 0..6 {
+            self.gg[k] += o.gg[k];
+        }
+        for k in 0..3 {
+            self.dg[k] += o.dg[k];
+            self.t[k] += o.t[k];
+            for m in 0..3 {
+                self.s[k][m] += o.s[k][m];
+            }
+        }
+        self.dd += o.dd;
+        self.alpha += o.alpha;
+        for k in 0..3 {
+            self.lo[k] = self.lo[k].min(o.lo[k]);
+            self.hi[k] = self.hi[k].max(o.hi[k]);
+        }
+    }
+    /// (The colour range is not taken back: what was merged stays merged.)
+    fn subtract(&mut self, o: &Self) {
+        self.geo.subtract(&o.geo);
+        for k in 0..6 {
+            self.gg[k] -= o.gg[k];
+        }
+        for k in 0..3 {
+            self.dg[k] -= o.dg[k];
+            self.t[k] -= o.t[k];
+            for m in 0..3 {
+                self.s[k][m] -= o.s[k][m];
+            }
+        }
+        self.dd -= o.dd;
+        self.alpha -= o.alpha;
+    }
+    fn reduced(&self) -> Quadric {
+        let mut q = self.geo;
+        if !(self.alpha > 0.0) {
+            return q;
+        }
+        let inv = 1.0 / self.alpha;
+        let idx = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+        for (k, &(i, j)) in idx.iter().enumerate() {
+            q.a[k] += self.gg[k] - inv * (0..3).map(|c| self.s[c][i] * self.s[c][j]).sum::<f64>();
+        }
+        for i in 0..3 {
+            q.b[i] += self.dg[i] - inv * (0..3).map(|c| self.s[c][i] * self.t[c]).sum::<f64>();
+        }
+        q.c += self.dd - inv * (0..3).map(|c| self.t[c] * self.t[c]).sum::<f64>();
+        q
+    }
+    fn geometric(&self) -> &Quadric {
+        &self.geo
+    }
+}
+
+/// The colour quadrics of a mesh: the geometric ones `geo` with, per face,
+/// its colour channels' linear functions weighted by `lambda` × area.
+fn colour_quadrics(pos: &[DVec3], tri: &[[u32; 3]], colours: &[[u8; 4]], lambda: f64, geo: Vec<Quadric>) -> Vec<ColourQuadric> {
+    let mut quad: Vec<ColourQuadric> = geo.into_iter().map(|g| ColourQuadric { geo: g, lo: [f32::INFINITY; 3], hi: [f32::NEG_INFINITY; 3], ..Default::default() }).collect();
+    for (q, c) in quad.iter_mut().zip(colours) {
+        for k in 0..3 {
+            q.lo[k] = c[k] as f32 / 255.0;
+            q.hi[k] = q.lo[k];
+        }
+    }
+    for t in tri {
+        let [a, b, c] = t.map(|v| pos[v as usize]);
+        let (e1, e2) = (b - a, c - a);
+        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+        let det = d11 * d22 - d12 * d12;
+        let area = 0.5 * e1.cross(e2).length();
+        if !(det > 0.0) || !(area > 0.0) {
+            continue;
+        }
+        let w = lambda * area;
+        let mut add = ColourQuadric { alpha: w, lo: [f32::INFINITY; 3], hi: [f32::NEG_INFINITY; 3], ..Default::default() };
+        for j in 0..3 {
+            let sv = t.map(|v| colours[v as usize][j] as f64 / 255.0);
+            let (r1, r2) = (sv[1] - sv[0], sv[2] - sv[0]);
+            // g = x e1 + y e2 with g·e1 = r1, g·e2 = r2.
+            let x = (r1 * d22 - r2 * d12) / det;
+            let y = (r2 * d11 - r1 * d12) / det;
+            let g = e1 * x + e2 * y;
+            let d = sv[0] - g.dot(a);
+            let gg = [g.x * g.x, g.x * g.y, g.x * g.z, g.y * g.y, g.y * g.z, g.z * g.z];
+            for k in 0..6 {
+                add.gg[k] += w * gg[k];
+            }
+            for (k, gk) in g.to_array().into_iter().enumerate() {
+                add.dg[k] += w * d * gk;
+                add.s[j][k] = w * gk;
+            }
+            add.dd += w * d * d;
+            add.t[j] = w * d;
+        }
+        for &v in t {
+            quad[v as usize].add(&add);
+        }
+    }
+    quad
+}
+
 /// What [`collapse`] did.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct CollapseStats {
@@ -176,9 +366,19 @@ pub fn collapse_in_blocks(
     threads: usize,
     stop: &(dyn Fn() -> bool + Sync),
 ) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, CollapseStats) {
+    let (pos, centre, extent) = centred(positions);
+    let max_distance = max_error * extent;
+    let quad = initial_quadrics(&pos, faces);
+    let stats = CollapseStats { extent, ..Default::default() };
+    let (out_pos, out_faces, _, stats) = collapse_with(pos, quad, faces, target_faces, max_distance, blocks, threads, stop, stats);
+    let out_pos: Vec<[f64; 3]> = out_pos.iter().map(|p| (*p + centre).to_array()).collect();
+    (out_pos, out_faces, stats)
+}
+
+/// Positions relative to the bounding box's centre (smaller terms, less
+/// cancellation in the quadrics), the centre, and the box's largest side.
+fn centred(positions: &[[f64; 3]]) -> (Vec<DVec3>, DVec3, f64) {
     let nv = positions.len();
-    // Work relative to the bounding box's centre (smaller terms, less
-    // cancellation in the quadrics).
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     for p in positions {
         lo = lo.min(DVec3::from(*p));
@@ -186,10 +386,55 @@ pub fn collapse_in_blocks(
     }
     let centre = if nv > 0 { (lo + hi) * 0.5 } else { DVec3::ZERO };
     let extent = if nv > 0 { (hi - lo).max_element() } else { 0.0 };
-    let max_distance = max_error * extent;
-    let mut pos: Vec<DVec3> = positions.iter().map(|p| DVec3::from(*p) - centre).collect();
-    let mut quad = initial_quadrics(&pos, faces);
-    let mut stats = CollapseStats { extent, ..Default::default() };
+    (positions.iter().map(|p| DVec3::from(*p) - centre).collect(), centre, extent)
+}
+
+/// [`collapse_in_blocks`] of a mesh with a colour per vertex, by colour
+/// quadrics ([`ColourQuadric`]): a full-range difference of colour across
+/// a face costs what a distance of `colour_weight` × the extent does.
+/// Returns also each vertex's colour (same indexing; the kept vertices'
+/// from their quadrics, alpha 255).
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+pub fn collapse_coloured(
+    positions: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    colours: &[[u8; 4]],
+    colour_weight: f64,
+    target_faces: u64,
+    max_error: f64,
+    blocks: usize,
+    threads: usize,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, Vec<[u8; 4]>, CollapseStats) {
+    let (pos, centre, extent) = centred(positions);
+    let lambda = (colour_weight * extent).powi(2);
+    let quad = colour_quadrics(&pos, faces, colours, lambda, initial_quadrics(&pos, faces));
+    let stats = CollapseStats { extent, ..Default::default() };
+    let (out_pos, out_faces, quad, stats) = collapse_with(pos, quad, faces, target_faces, max_error * extent, blocks, threads, stop, stats);
+    let out_colours = out_pos.iter().zip(&quad).map(|(p, q)| {
+        let c = q.colour_at(*p).map(|x| (x * 255.0).round() as u8);
+        [c[0], c[1], c[2], 255]
+    });
+    let out_colours: Vec<[u8; 4]> = out_colours.collect();
+    let out_pos: Vec<[f64; 3]> = out_pos.iter().map(|p| (*p + centre).to_array()).collect();
+    (out_pos, out_faces, out_colours, stats)
+}
+
+/// The block phase, then the whole: [`collapse_in_blocks`]'s work for any
+/// kind of vertex quadric (positions relative to the box's centre).
+#[allow(clippy::too_many_arguments)]
+fn collapse_with<Q: VertexQuadric>(
+    mut pos: Vec<DVec3>,
+    mut quad: Vec<Q>,
+    faces: &[[u32; 3]],
+    target_faces: u64,
+    max_distance: f64,
+    blocks: usize,
+    threads: usize,
+    stop: &(dyn Fn() -> bool + Sync),
+    mut stats: CollapseStats,
+) -> (Vec<DVec3>, Vec<[u32; 3]>, Vec<Q>, CollapseStats) {
+    let nv = pos.len();
     let mut tri = faces.to_vec();
     let blocks = blocks.clamp(1, 255);
     if blocks > 1 && !faces.is_empty() && target_faces < faces.len() as u64 {
@@ -199,17 +444,16 @@ pub fn collapse_in_blocks(
         eprintln!("qem: blocks done: {} faces, {stats:?}", tri.len());
     }
     let pinned = vec![false; nv];
-    let (out_pos, out_faces, _) = run(pos, tri, quad, &pinned, target_faces, max_distance, stop, &mut stats);
-    let out_pos: Vec<[f64; 3]> = out_pos.iter().map(|p| (*p + centre).to_array()).collect();
-    (out_pos, out_faces, stats)
+    let (out_pos, out_faces, quad) = run(pos, tri, quad, &pinned, target_faces, max_distance, stop, &mut stats);
+    (out_pos, out_faces, quad, stats)
 }
 
 /// The block phase of [`collapse_in_blocks`]: returns the faces after it
 /// (global ids, blocks in order), with `pos` and `quad` updated.
 #[allow(clippy::too_many_arguments)]
-fn collapse_blocks(
+fn collapse_blocks<Q: VertexQuadric>(
     pos: &mut [DVec3],
-    quad: &mut [Quadric],
+    quad: &mut [Q],
     faces: &[[u32; 3]],
     target_faces: u64,
     max_distance: f64,
@@ -275,7 +519,7 @@ fn collapse_blocks(
     drop(local);
     let total = faces.len() as f64;
     let next = std::sync::atomic::AtomicUsize::new(0);
-    let results: Vec<std::sync::Mutex<Option<BlockResult>>> = (0..blocks).map(|_| std::sync::Mutex::new(None)).collect();
+    let results: Vec<std::sync::Mutex<Option<BlockResult<Q>>>> = (0..blocks).map(|_| std::sync::Mutex::new(None)).collect();
     let (pos_r, quad_r, vblock_r) = (&*pos, &*quad, &vblock);
     let work = || loop {
         let b = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -284,7 +528,7 @@ fn collapse_blocks(
         }
         let part = &parts[b];
         let p: Vec<DVec3> = part.global.iter().map(|&v| pos_r[v as usize]).collect();
-        let q: Vec<Quadric> = part.global.iter().map(|&v| quad_r[v as usize]).collect();
+        let q: Vec<Q> = part.global.iter().map(|&v| quad_r[v as usize]).collect();
         let pinned: Vec<bool> = part.global.iter().map(|&v| vblock_r[v as usize] == SHARED).collect();
         // Its share of the target and a little more: the whole pass then
         // spends the rest where it costs least, first on the fine faces
@@ -305,7 +549,7 @@ fn collapse_blocks(
     }
     // Merge: moved positions and quadrics back; a shared vertex gathers
     // what each block added to its quadric.
-    let original: Vec<(u32, Quadric)> = (0..nv as u32).filter(|&v| vblock[v as usize] == SHARED).map(|v| (v, quad[v as usize])).collect();
+    let original: Vec<(u32, Q)> = (0..nv as u32).filter(|&v| vblock[v as usize] == SHARED).map(|v| (v, quad[v as usize])).collect();
     let mut out = Vec::new();
     for (part, r) in parts.iter().zip(results) {
         let r = r.into_inner().unwrap().expect("every block ran");
@@ -340,10 +584,10 @@ struct Block {
     shared: std::collections::BTreeMap<u32, u32>,
 }
 
-struct BlockResult {
+struct BlockResult<Q> {
     pos: Vec<DVec3>,
     faces: Vec<[u32; 3]>,
-    quad: Vec<Quadric>,
+    quad: Vec<Q>,
     stats: CollapseStats,
 }
 
@@ -472,16 +716,16 @@ impl EdgeClasses {
 /// The greedy collapse of one mesh (centred positions, quadrics given;
 /// `pinned` vertices never move, and no edge of theirs collapses): returns the positions, the remaining
 /// faces in order, and the quadrics.
-fn run(
+fn run<Q: VertexQuadric>(
     mut pos: Vec<DVec3>,
     mut tri: Vec<[u32; 3]>,
-    mut quad: Vec<Quadric>,
+    mut quad: Vec<Q>,
     pinned: &[bool],
     target_faces: u64,
     max_distance: f64,
     stop: &(dyn Fn() -> bool + Sync),
     stats: &mut CollapseStats,
-) -> (Vec<DVec3>, Vec<[u32; 3]>, Vec<Quadric>) {
+) -> (Vec<DVec3>, Vec<[u32; 3]>, Vec<Q>) {
     let nv = pos.len();
     let mut alive = vec![true; tri.len()];
     let mut live = tri.len() as u64;
@@ -502,7 +746,7 @@ fn run(
     // The cost and position of collapsing edge (u, v): border and locked
     // vertices stay where they are, except that two border vertices may
     // merge along their boundary edge.
-    let cost = |pos: &[DVec3], quad: &[Quadric], vf: &[Vec<u32>], tri: &[[u32; 3]], u: u32, v: u32| -> Option<(f64, DVec3)> {
+    let cost = |pos: &[DVec3], quad: &[Q], vf: &[Vec<u32>], tri: &[[u32; 3]], u: u32, v: u32| -> Option<(f64, DVec3)> {
         if pinned[u as usize] || pinned[v as usize] {
             return None;
         }
@@ -511,7 +755,7 @@ fn run(
         if bu && bv && !along_border {
             return None;
         }
-        let q = quad[u as usize].sum(&quad[v as usize]);
+        let q = quad[u as usize].sum(&quad[v as usize]).reduced();
         let (pu, pv) = (pos[u as usize], pos[v as usize]);
         let p = if along_border || !(bu || bv) {
             let mid = (pu + pv) * 0.5;
@@ -578,8 +822,9 @@ fn run(
         if c.to_bits() != cand.cost_bits {
             continue;
         }
-        let w = quad[u as usize].w + quad[v as usize].w;
-        let distance = if w > 0.0 { (c / w).sqrt() } else { 0.0 };
+        // The geometric error alone, as a distance.
+        let g = quad[u as usize].geometric().sum(quad[v as usize].geometric());
+        let distance = if g.w > 0.0 { (g.eval(p) / g.w).sqrt() } else { 0.0 };
         if distance > max_cost_distance {
             break;
         }

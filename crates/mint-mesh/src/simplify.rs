@@ -9,8 +9,11 @@
 //! than the input is never handed over silently.
 //!
 //! Memory: the input, the collapse's tables (per vertex a quadric of 88
-//! bytes, a position and a face list; per face 12 bytes; a heap of at most
-//! two candidates of 16 bytes per face), and the result.
+//! bytes, 288 with colour, a position and a face list; per face 12 bytes;
+//! a heap of at most two candidates of 16 bytes per face), and the result.
+//!
+//! [`simplify_coloured`] does the same for a mesh with a colour per vertex,
+//! by colour-aware quadrics ([`crate::qem::collapse_coloured`]).
 
 use crate::check::{try_check, CheckReport};
 use crate::error::MeshError;
@@ -65,6 +68,34 @@ pub fn simplify_with(
     o: &SimplifyOptions,
     stop: &(dyn Fn() -> bool + Sync),
 ) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>, SimplifyReport), MeshError> {
+    simplify_impl(positions, faces, None, o, stop).map(|(p, f, _, r)| (p, f, r))
+}
+
+/// [`simplify_with`] for a mesh with a colour per vertex, by colour-aware
+/// quadrics ([`crate::qem::collapse_coloured`]; `colour_weight`: the
+/// distance, as a fraction of the extent, that a full-range colour
+/// difference costs as much as). Returns the colours of the output's
+/// vertices too.
+#[allow(clippy::type_complexity)]
+pub fn simplify_coloured(
+    positions: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    colours: &[[u8; 4]],
+    colour_weight: f64,
+    o: &SimplifyOptions,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>, Vec<[u8; 4]>, SimplifyReport), MeshError> {
+    simplify_impl(positions, faces, Some((colours, colour_weight)), o, stop).map(|(p, f, c, r)| (p, f, c.unwrap_or_default(), r))
+}
+
+#[allow(clippy::type_complexity)]
+fn simplify_impl(
+    positions: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    colours: Option<(&[[u8; 4]], f64)>,
+    o: &SimplifyOptions,
+    stop: &(dyn Fn() -> bool + Sync),
+) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>, Option<Vec<[u8; 4]>>, SimplifyReport), MeshError> {
     let trace = std::env::var_os("MINT_QEM_TRACE").is_some();
     let t = std::time::Instant::now();
     let before = try_check(positions, faces)?;
@@ -74,7 +105,16 @@ pub fn simplify_with(
     loop {
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
         let blocks = if faces.len() > crate::qem::BLOCK_MIN_FACES { crate::qem::BLOCKS } else { 1 };
-        let (moved, out, collapse) = crate::qem::collapse_in_blocks(positions, faces, target, o.max_error as f64, blocks, threads, stop);
+        let (moved, out, moved_colours, collapse) = match colours {
+            Some((c, w)) => {
+                let (p, f, c, st) = crate::qem::collapse_coloured(positions, faces, c, w, target, o.max_error as f64, blocks, threads, stop);
+                (p, f, Some(c), st)
+            }
+            None => {
+                let (p, f, st) = crate::qem::collapse_in_blocks(positions, faces, target, o.max_error as f64, blocks, threads, stop);
+                (p, f, None, st)
+            }
+        };
         if collapse.stopped {
             return Err(MeshError::Cancelled);
         }
@@ -88,7 +128,8 @@ pub fn simplify_with(
         if input_watertight {
             removed = drop_folded_pairs(&mut out);
         }
-        let (p, f) = compact(positions, &out);
+        let (p, f, kept) = compact(positions, &out);
+        let out_colours = moved_colours.map(|c| kept.iter().map(|&v| c[v as usize]).collect::<Vec<[u8; 4]>>());
         let after: CheckReport = try_check(&p, &f)?;
         if trace {
             eprintln!("qem: checked at {:.2}s", t.elapsed().as_secs_f64());
@@ -105,7 +146,7 @@ pub fn simplify_with(
                 output_watertight: after.watertight,
                 relaxed,
             };
-            return Ok((p, f, report));
+            return Ok((p, f, out_colours, report));
         }
         // Less clean than the input: another collapse sequence. First
         // targets within ±1.5% of the asked one (the defect usually comes
@@ -166,10 +207,12 @@ fn drop_folded_pairs(indices: &mut Vec<u32>) -> u64 {
     pairs
 }
 
-/// The faces of `indices` with only their vertices, renumbered in order.
-fn compact(positions: &[[f64; 3]], indices: &[u32]) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+/// The faces of `indices` with only their vertices, renumbered in order;
+/// and the old id of each new vertex.
+fn compact(positions: &[[f64; 3]], indices: &[u32]) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, Vec<u32>) {
     let mut map = vec![u32::MAX; positions.len()];
     let mut p = Vec::new();
+    let mut kept = Vec::new();
     let f = indices
         .chunks_exact(3)
         .map(|t| {
@@ -178,12 +221,13 @@ fn compact(positions: &[[f64; 3]], indices: &[u32]) -> (Vec<[f64; 3]>, Vec<[u32;
                 if map[v] == u32::MAX {
                     map[v] = p.len() as u32;
                     p.push(positions[v]);
+                    kept.push(v as u32);
                 }
                 map[v]
             })
         })
         .collect();
-    (p, f)
+    (p, f, kept)
 }
 
 #[cfg(test)]

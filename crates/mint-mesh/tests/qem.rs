@@ -193,3 +193,43 @@ fn a_soup_of_separate_triangles_ends_at_once_with_nothing_to_collapse() {
     let (_, g, stats) = collapse(&p, &f, 10, f64::INFINITY, 1);
     assert_eq!((g.len(), stats.collapses), (3000, 0));
 }
+
+/// A sharp colour border on a flat plane stays sharp: colour quadrics make
+/// a collapse across it cost, so the vertices left on either side keep
+/// their side's colour, and only the border's own column blends.
+#[test]
+fn a_sharp_colour_border_stays_sharp() {
+    let n = 40usize;
+    let mut p = Vec::new();
+    let mut c = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let x = i as f64 / n as f64;
+            p.push([x, j as f64 / n as f64, 0.0]);
+            c.push(if i <= n / 2 { [255u8, 0, 0, 255] } else { [0, 0, 255, 255] });
+        }
+    }
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let mut f = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    let (q, g, colours, _) = mint_mesh::qem::collapse_coloured(&p, &f, &c, 0.01, 120, f64::INFINITY, 1, 1, &|| false);
+    assert!(g.len() <= 120, "{} faces", g.len());
+    let used: std::collections::BTreeSet<u32> = g.iter().flatten().copied().collect();
+    let mut pure = 0;
+    for &v in &used {
+        let (x, col) = (q[v as usize][0], colours[v as usize]);
+        if (x - 0.5).abs() > 1.5 / n as f64 {
+            assert_eq!(col, if x < 0.5 { [255, 0, 0, 255] } else { [0, 0, 255, 255] }, "vertex at x = {x}");
+            pure += 1;
+        }
+        assert!(col[1] == 0 && (254..=256).contains(&(col[0] as u32 + col[2] as u32)), "{col:?} at x = {x}");
+    }
+    assert!(pure * 2 > used.len(), "{pure} of {} vertices away from the border", used.len());
+    // The border's column of vertices is kept: some vertex lies on it.
+    assert!(used.iter().filter(|&&v| (q[v as usize][0] - 0.5).abs() < 1e-9).count() >= 2);
+}
