@@ -5,8 +5,9 @@ vertex attribute transfer on the same output geometry.
 
     colour_metrics.py INPUT.ply OUTPUT.ply [SAMPLES]
 
-Both files are binary little-endian PLY with uchar red, green, blue per
-vertex (convert others with `mint convert`). The output surface is sampled
+OUTPUT is a binary little-endian PLY with uchar red, green, blue per
+vertex; INPUT too, or a textured OBJ (`mtllib`, `usemtl`, `vt`, one
+`map_Kd` image per material, decoded by Pillow; v up, repeat). The output surface is sampled
 (SAMPLES points, area-weighted, fixed seed; default 200000); at each sample
 the output's colour (its vertex colours interpolated) is compared with the
 input's colour at the nearest input point (the corner colours interpolated
@@ -69,6 +70,94 @@ def read_ply(path):
             faces = arr["v"].astype(np.int64)
             pos += dt.itemsize * count
     return verts, cols, faces
+
+
+def read_obj_textured(path):
+    """An OBJ with `mtllib`/`usemtl`/`vt` and one `map_Kd` texture per
+    material (Pillow decodes it): positions, faces (fanned), and per face
+    corner (u, v) and its material's image (None: the material's Kd)."""
+    import os
+    from PIL import Image
+    base = os.path.dirname(path)
+    v, vt, faces, fuv, fmat = [], [], [], [], []
+    mats, cur, libs = {}, None, []
+    with open(path, "r", errors="replace") as f:
+        for line in f:
+            w = line.split()
+            if not w:
+                continue
+            if w[0] == "v":
+                v.append([float(x) for x in w[1:4]])
+            elif w[0] == "vt":
+                vt.append([float(w[1]), float(w[2]) if len(w) > 2 else 0.0])
+            elif w[0] == "mtllib":
+                libs.append(line.split(None, 1)[1].strip())
+            elif w[0] == "usemtl":
+                cur = line.split(None, 1)[1].strip()
+            elif w[0] == "f":
+                c = [x.split("/") for x in w[1:]]
+                vi = [int(x[0]) - 1 if int(x[0]) > 0 else len(v) + int(x[0]) for x in c]
+                ti = [(int(x[1]) - 1 if int(x[1]) > 0 else len(vt) + int(x[1])) if len(x) > 1 and x[1] else -1 for x in c]
+                for k in range(1, len(c) - 1):
+                    faces.append([vi[0], vi[k], vi[k + 1]])
+                    fuv.append([ti[0], ti[k], ti[k + 1]])
+                    fmat.append(cur)
+    for lib in libs:
+        name = None
+        for line in open(os.path.join(base, lib), errors="replace"):
+            w = line.split()
+            if not w:
+                continue
+            if w[0] == "newmtl":
+                name = line.split(None, 1)[1].strip()
+                mats[name] = {"kd": np.array([255.0, 255.0, 255.0]), "img": None}
+            elif w[0] == "Kd" and name:
+                mats[name]["kd"] = np.clip(np.array([float(x) for x in w[1:4]]) * 255, 0, 255)
+            elif w[0] == "map_Kd" and name:
+                img = Image.open(os.path.join(base, w[-1])).convert("RGB")
+                mats[name]["img"] = np.asarray(img, dtype=np.float64)
+    return np.array(v), np.array(faces, dtype=np.int64), np.array(fuv, dtype=np.int64), np.array(vt), fmat, mats
+
+
+def textured_colour(points, verts, faces, fuv, vt, fmat, mats, tree, k=16, batch=20000):
+    """The texture's colour at the input's nearest point to each point
+    (bilinear, texel centres, v up, repeat)."""
+    out = np.empty((len(points), 3))
+    for s in range(0, len(points), batch):
+        p = points[s:s + batch]
+        _, idx = tree.query(p, k=k)
+        best = np.full(len(p), np.inf)
+        bary_best = np.zeros((len(p), 3))
+        face_best = np.zeros(len(p), dtype=np.int64)
+        for j in range(k):
+            f = faces[idx[:, j]]
+            a, b, c = verts[f[:, 0]], verts[f[:, 1]], verts[f[:, 2]]
+            bary = closest_on_triangles(p, a, b, c)
+            q = bary[:, 0:1] * a + bary[:, 1:2] * b + bary[:, 2:3] * c
+            d = ((q - p) ** 2).sum(1)
+            better = d < best
+            best[better] = d[better]
+            bary_best[better] = bary[better]
+            face_best[better] = idx[better, j]
+        for i in range(len(p)):
+            fi = face_best[i]
+            m = mats.get(fmat[fi], {"kd": np.array([255.0] * 3), "img": None})
+            t = fuv[fi]
+            if m["img"] is None or (t < 0).any():
+                out[s + i] = m["kd"]
+                continue
+            uv = bary_best[i] @ vt[t]
+            img = m["img"]
+            h, w = img.shape[:2]
+            x, y = uv[0] * w - 0.5, (1.0 - uv[1]) * h - 0.5
+            x0, y0 = np.floor(x), np.floor(y)
+            fx, fy = x - x0, y - y0
+            xa, xb = int(x0) % w, int(x0 + 1) % w
+            ya, yb = int(y0) % h, int(y0 + 1) % h
+            top = img[ya, xa] * (1 - fx) + img[ya, xb] * fx
+            bot = img[yb, xa] * (1 - fx) + img[yb, xb] * fx
+            out[s + i] = top * (1 - fy) + bot * fy
+    return out
 
 
 def srgb_to_lab(rgb):
@@ -134,9 +223,15 @@ def colour_at_nearest(points, verts, cols, faces, tree, k=16, batch=20000):
 def main():
     inp, outp = sys.argv[1], sys.argv[2]
     n = int(sys.argv[3]) if len(sys.argv) > 3 else 200000
-    iv, ic, if_ = read_ply(inp)
     ov, oc, of = read_ply(outp)
-    tree = cKDTree(iv[if_].mean(1))
+    if inp.lower().endswith(".obj"):
+        iv, if_, fuv, vt, fmat, mats = read_obj_textured(inp)
+        tree = cKDTree(iv[if_].mean(1))
+        colour_at = lambda pts: textured_colour(pts, iv, if_, fuv, vt, fmat, mats, tree)  # noqa: E731
+    else:
+        iv, ic, if_ = read_ply(inp)
+        tree = cKDTree(iv[if_].mean(1))
+        colour_at = lambda pts: colour_at_nearest(pts, iv, ic, if_, tree)  # noqa: E731
     rng = np.random.default_rng(1)
     a, b, c = ov[of[:, 0]], ov[of[:, 1]], ov[of[:, 2]]
     area = np.linalg.norm(np.cross(b - a, c - a), axis=1)
@@ -146,9 +241,9 @@ def main():
     bary = np.stack([1 - s, s * (1 - r2), s * r2], 1)
     f = of[pick]
     pts = bary[:, 0:1] * ov[f[:, 0]] + bary[:, 1:2] * ov[f[:, 1]] + bary[:, 2:3] * ov[f[:, 2]]
-    truth = srgb_to_lab(colour_at_nearest(pts, iv, ic, if_, tree))
+    truth = srgb_to_lab(colour_at(pts))
     # Stored as bytes, as any output file stores them.
-    ideal_vertex = np.clip(np.round(colour_at_nearest(ov, iv, ic, if_, tree)), 0, 255)
+    ideal_vertex = np.clip(np.round(colour_at(ov)), 0, 255)
 
     def at_samples(vc):
         return srgb_to_lab(bary[:, 0:1] * vc[f[:, 0]] + bary[:, 1:2] * vc[f[:, 1]] + bary[:, 2:3] * vc[f[:, 2]])

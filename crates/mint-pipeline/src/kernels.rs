@@ -263,7 +263,7 @@ impl LocalMap {
     }
 
     #[inline(always)]
-    fn map(&self, p: [f64; 3]) -> [f64; 3] {
+    pub(crate) fn map(&self, p: [f64; 3]) -> [f64; 3] {
         [(p[self.ax[0]] - self.origin[0]) * self.inv, (p[self.ax[1]] - self.origin[1]) * self.inv, (p[self.ax[2]] - self.origin[2]) * self.inv]
     }
 }
