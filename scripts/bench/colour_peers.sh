@@ -9,13 +9,14 @@
 # edge collapse (tools/peers/meshlab_decimate.py, colour kept per vertex) to
 # 10% and 1% of the faces, with the time and the mean ΔE of
 # tools/colour_metrics.py (the input's colour at the nearest point as
-# truth), and `mint resample` at two grid sizes against the ideal transfer.
+# truth), and `mint resample` at two grid sizes against the ideal transfer,
+# also of the two textured OBJ scans (Pillow decodes their textures).
 source "$(dirname "$0")/common.sh"
 FACES=${1:-2000000}
 build
 VENV="$ROOT/scripts/bench/.venv-tiles"
 [ -x "$VENV/bin/python" ] || python3 -m venv "$VENV"
-"$VENV/bin/python" -c "import numpy, scipy, pymeshlab" 2> /dev/null || "$VENV/bin/pip" install -q numpy scipy pymeshlab
+"$VENV/bin/python" -c "import numpy, scipy, pymeshlab, PIL" 2> /dev/null || "$VENV/bin/pip" install -q numpy scipy pymeshlab pillow
 PY="$VENV/bin/python"
 DATA="$ROOT/../shared/data/colour_scans"
 sphere="$WORK/sphere-$FACES-colour.ply"
@@ -36,6 +37,13 @@ for IN in "$DATA/rgbd_object_iory/obj.ply" "$DATA/laurana_meshlab/Laurana50k.ply
   [ "$IN" = "$sphere" ] && continue
   for cells in 200000 2000000; do
     "$MINT" resample "$IN" "$WORK/cp-res.ply" --cells "$cells" --quiet
+    echo "  resample --cells $cells  $(de "$IN" "$WORK/cp-res.ply")"
+  done
+done
+for IN in "$DATA/meshroom_esp32cam/texturedMesh.obj" "$DATA/copyroom_planeopt/copyroom_c2000_opt.obj"; do
+  echo "== $(basename "$(dirname "$IN")")/$(basename "$IN") (textured)"
+  for cells in 200000 2000000; do
+    "$MINT" resample "$IN" "$WORK/cp-res.ply" --cells "$cells" --quiet 2> /dev/null
     echo "  resample --cells $cells  $(de "$IN" "$WORK/cp-res.ply")"
   done
 done
