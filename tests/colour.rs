@@ -319,56 +319,9 @@ fn checker_png(n: usize, s: usize) -> Vec<u8> {
     out
 }
 
-/// The unit square z = 0.5 (two triangles, facing +z) with (u, v) = (x, y).
-const PLANE: [[f64; 3]; 4] = [[0.0, 0.0, 0.5], [1.0, 0.0, 0.5], [1.0, 1.0, 0.5], [0.0, 1.0, 0.5]];
-
-/// Output vertices on the plane, away from the checkerboard's square
-/// borders by more than `margin`, must have their square's colour exactly.
-/// OBJ's v runs up (square row from the bottom), glTF's down.
-fn assert_checkerboard(out: &Path, n: usize, v_up: bool, margin: f64) -> usize {
-    let mut checked = 0;
-    for (p, c) in coloured_vertices(out) {
-        if (p[2] - 0.5).abs() > 1e-9 {
-            continue;
-        }
-        let (u, v) = (p[0], if v_up { 1.0 - p[1] } else { p[1] });
-        let (fu, fv) = (u * n as f64, v * n as f64);
-        if (fu - fu.round()).abs() < margin * n as f64 || (fv - fv.round()).abs() < margin * n as f64 {
-            continue;
-        }
-        let white = (fu as usize + fv as usize) % 2 == 0;
-        assert_eq!(c, if white { [255; 4] } else { [0, 0, 0, 255] }, "at {p:?}");
-        checked += 1;
-    }
-    checked
-}
-
-/// A checkerboard texture on a plane comes out as the checkerboard at the
-/// grid's resolution: OBJ + MTL + PNG, a GLB with the PNG inside, and a PLY
-/// in MeshLab's texture convention.
-#[test]
-fn a_checkerboard_texture_comes_out_as_the_checkerboard() {
-    let d = tempfile::tempdir().unwrap();
-    let n = 4;
-    std::fs::write(d.path().join("checker.png"), checker_png(n, 8)).unwrap();
-    std::fs::write(d.path().join("plane.mtl"), "newmtl board\nKd 0.5 0.5 0.5\nmap_Kd checker.png\n").unwrap();
-    let mut obj = String::from("mtllib plane.mtl\n");
-    for p in PLANE {
-        obj += &format!("v {} {} {}\nvt {} {}\n", p[0], p[1], p[2], p[0], p[1]);
-    }
-    obj += "usemtl board\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
-    let objp = d.path().join("plane.obj");
-    std::fs::write(&objp, obj).unwrap();
-    let cells = "20000";
-    let out = d.path().join("o.ply");
-    let o = mint(&["resample", objp.to_str().unwrap(), out.to_str().unwrap(), "--cells", cells, "--json"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let cell = serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["cell_size"].as_f64().unwrap();
-    // Half a texel of bilinear blending, and a cell.
-    let checked = assert_checkerboard(&out, n, true, 0.5 / (8.0 * n as f64) + cell);
-    assert!(checked > 200, "{checked} vertices checked");
-
-    // The same plane as a GLB with the PNG in its buffer (glTF's v runs down).
+/// The unit plane z = 0.5 as a GLB whose material's texture is the
+/// checkerboard of `n` x `n` squares, a PNG in its buffer (clamped).
+fn checker_glb(n: usize) -> Vec<u8> {
     let png = checker_png(n, 8);
     let mut bin: Vec<u8> = Vec::new();
     PLANE.iter().for_each(|p| p.iter().for_each(|c| bin.extend((*c as f32).to_le_bytes())));
@@ -413,6 +366,61 @@ fn a_checkerboard_texture_comes_out_as_the_checkerboard() {
     glb.extend((bin.len() as u32).to_le_bytes());
     glb.extend(b"BIN\0");
     glb.extend(&bin);
+    glb
+}
+
+/// The unit square z = 0.5 (two triangles, facing +z) with (u, v) = (x, y).
+const PLANE: [[f64; 3]; 4] = [[0.0, 0.0, 0.5], [1.0, 0.0, 0.5], [1.0, 1.0, 0.5], [0.0, 1.0, 0.5]];
+
+/// Output vertices on the plane, away from the checkerboard's square
+/// borders by more than `margin`, must have their square's colour exactly.
+/// OBJ's v runs up (square row from the bottom), glTF's down.
+fn assert_checkerboard(out: &Path, n: usize, v_up: bool, margin: f64) -> usize {
+    let mut checked = 0;
+    for (p, c) in coloured_vertices(out) {
+        if (p[2] - 0.5).abs() > 1e-9 {
+            continue;
+        }
+        // (A second copy of the plane two units along x reads the same.)
+        let (u, v) = (p[0].rem_euclid(2.0), if v_up { 1.0 - p[1] } else { p[1] });
+        let (fu, fv) = (u * n as f64, v * n as f64);
+        if (fu - fu.round()).abs() < margin * n as f64 || (fv - fv.round()).abs() < margin * n as f64 {
+            continue;
+        }
+        let white = (fu as usize + fv as usize) % 2 == 0;
+        assert_eq!(c, if white { [255; 4] } else { [0, 0, 0, 255] }, "at {p:?}");
+        checked += 1;
+    }
+    checked
+}
+
+/// A checkerboard texture on a plane comes out as the checkerboard at the
+/// grid's resolution: OBJ + MTL + PNG, a GLB with the PNG inside, and a PLY
+/// in MeshLab's texture convention.
+#[test]
+fn a_checkerboard_texture_comes_out_as_the_checkerboard() {
+    let d = tempfile::tempdir().unwrap();
+    let n = 4;
+    std::fs::write(d.path().join("checker.png"), checker_png(n, 8)).unwrap();
+    std::fs::write(d.path().join("plane.mtl"), "newmtl board\nKd 0.5 0.5 0.5\nmap_Kd checker.png\n").unwrap();
+    let mut obj = String::from("mtllib plane.mtl\n");
+    for p in PLANE {
+        obj += &format!("v {} {} {}\nvt {} {}\n", p[0], p[1], p[2], p[0], p[1]);
+    }
+    obj += "usemtl board\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
+    let objp = d.path().join("plane.obj");
+    std::fs::write(&objp, obj).unwrap();
+    let cells = "20000";
+    let out = d.path().join("o.ply");
+    let o = mint(&["resample", objp.to_str().unwrap(), out.to_str().unwrap(), "--cells", cells, "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cell = serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["cell_size"].as_f64().unwrap();
+    // Half a texel of bilinear blending, and a cell.
+    let checked = assert_checkerboard(&out, n, true, 0.5 / (8.0 * n as f64) + cell);
+    assert!(checked > 200, "{checked} vertices checked");
+
+    // The same plane as a GLB with the PNG in its buffer (glTF's v runs down).
+    let glb = checker_glb(n);
     let glbp = d.path().join("plane.glb");
     std::fs::write(&glbp, glb).unwrap();
     let out2 = d.path().join("o2.ply");
@@ -420,6 +428,29 @@ fn a_checkerboard_texture_comes_out_as_the_checkerboard() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let checked = assert_checkerboard(&out2, n, false, 0.5 / (8.0 * n as f64) + cell);
     assert!(checked > 200, "{checked} vertices checked");
+
+    // Two copies of the GLB as the tiles of a 3D Tiles tileset (z up, the
+    // second two units along x): the textures of every tile.
+    std::fs::write(d.path().join("tile.glb"), checker_glb(n)).unwrap();
+    let tileset = serde_json::json!({
+        "asset": {"version": "1.0", "gltfUpAxis": "Z"},
+        "geometricError": 1,
+        "root": {"boundingVolume": {"box": [1.5, 0.5, 0.5, 1.5, 0, 0, 0, 0.5, 0, 0, 0, 0.5]}, "geometricError": 1, "refine": "ADD",
+            "children": [
+                {"boundingVolume": {"box": [0.5, 0.5, 0.5, 0.5, 0, 0, 0, 0.5, 0, 0, 0, 0.5]}, "geometricError": 0, "content": {"uri": "tile.glb"}},
+                {"boundingVolume": {"box": [2.5, 0.5, 0.5, 0.5, 0, 0, 0, 0.5, 0, 0, 0, 0.5]}, "geometricError": 0, "content": {"uri": "tile.glb"},
+                 "transform": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 2, 0, 0, 1]}
+            ]}
+    });
+    let tsp = d.path().join("tileset.json");
+    std::fs::write(&tsp, serde_json::to_vec(&tileset).unwrap()).unwrap();
+    let out4 = d.path().join("o4.ply");
+    let o = mint(&["resample", tsp.to_str().unwrap(), out4.to_str().unwrap(), "--cells", "40000", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cell4 = serde_json::from_slice::<serde_json::Value>(&o.stdout).unwrap()["cell_size"].as_f64().unwrap();
+    let checked = assert_checkerboard(&out4, n, false, 0.5 / (8.0 * n as f64) + cell4);
+    let far = coloured_vertices(&out4).iter().filter(|(p, _)| p[0] > 1.5).count();
+    assert!(checked > 300 && far > 100, "{checked} vertices checked, {far} on the second tile");
 
     // The same plane as a PLY in MeshLab's convention: `comment
     // TextureFile` and a `texcoord` list per face (v up, as in OBJ).

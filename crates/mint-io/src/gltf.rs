@@ -35,7 +35,7 @@ use crate::error::Error;
 use crate::format::{is_glb, Format};
 use crate::coords::origin_for;
 use crate::mapped::{Mapped, SpillFile};
-use crate::textures::{ImageSource, Material, TextureInfo, TexturingBuilder, Wrap, NONE};
+use crate::textures::{ImageSource, Material, TextureInfo, Texturing, TexturingBuilder, Wrap, NONE};
 use crate::positions::{not_finite, Emit, Layout, Positions, Reject, Scalar};
 
 const GLB_MAGIC: &[u8; 4] = b"glTF";
@@ -526,7 +526,7 @@ pub(crate) struct Counts {
 /// triangles (0-based over all primitives).
 fn walk(doc: &Doc, spill: Option<(&mut SpillFile, &mut SpillFile)>, colours: Option<&mut SpillFile>, uvs: Option<&mut TexturingBuilder>) -> Result<Counts, Error> {
     let mut c = Counts::default();
-    walk_into(doc, &IDENTITY, &mut c, spill, colours, uvs)?;
+    walk_into(doc, &IDENTITY, &mut c, spill, colours, uvs.map(|u| (u, 0)))?;
     Ok(c)
 }
 
@@ -673,7 +673,7 @@ fn walk_into(
     c: &mut Counts,
     mut spill: Option<(&mut SpillFile, &mut SpillFile)>,
     mut colours: Option<&mut SpillFile>,
-    mut uvs: Option<&mut TexturingBuilder>,
+    mut uvs: Option<(&mut TexturingBuilder, u32)>,
 ) -> Result<(), Error> {
     let path = doc.path;
     let meshes = arr(&doc.json, "meshes");
@@ -763,7 +763,7 @@ fn walk_into(
             // Texture coordinates, one pair per position (none where a
             // primitive has none: its triangles take their material's colour).
             let mut textured = false;
-            if let Some(ub) = uvs.as_mut() {
+            if let Some((ub, _)) = uvs.as_mut() {
                 let uv = match index(path, &at, attrs, "TEXCOORD_0", usize::MAX)? {
                     None => None,
                     Some(ti) => {
@@ -792,9 +792,10 @@ fn walk_into(
                     ub.uv(q)?;
                 }
             }
-            let material = match index(path, &at, prim, "material", arr(&doc.json, "materials").len())? {
-                Some(m) => m as u32,
-                None => NONE,
+            // Materials are numbered after those of earlier documents.
+            let material = match (index(path, &at, prim, "material", arr(&doc.json, "materials").len())?, uvs.as_ref()) {
+                (Some(m), Some((_, base))) => base + m as u32,
+                _ => NONE,
             };
             // Positions, sparse values substituted, in world coordinates.
             let mut sub: Vec<(usize, &[u8])> = pos.sparse.clone();
@@ -838,7 +839,7 @@ fn walk_into(
                     b[4 * k..4 * k + 4].copy_from_slice(&v.to_le_bytes());
                 }
                 fs.write_bytes(&b)?;
-                if let Some(ub) = uvs.as_mut() {
+                if let Some((ub, _)) = uvs.as_mut() {
                     // The pairs are numbered as the vertices are.
                     ub.triangle(material, if textured { tri } else { [NONE; 3] })?;
                 }
@@ -852,6 +853,7 @@ fn walk_into(
 /// drawn with `prefix` (row-major, translation in the last column) after
 /// its node transforms, to the counts and, when given, the spills: for
 /// readers of containers of glTF (3D Tiles).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn append(
     path: &Path,
     map: &Arc<Mapped>,
@@ -860,9 +862,60 @@ pub(crate) fn append(
     spill_dir: &Path,
     c: &mut Counts,
     spill: Option<(&mut SpillFile, &mut SpillFile)>,
+    textures: Option<&mut Textures>,
 ) -> Result<(), Error> {
     let doc = Doc::parse_range(path, map, range, spill_dir)?;
-    walk_into(&doc, prefix, c, spill, None, None)
+    let Some(t) = textures else { return walk_into(&doc, prefix, c, spill, None, None) };
+    // The first document with a material starts the texture records; the
+    // triangles and vertices before it have none.
+    if t.builder.is_none() && has_material(&doc) {
+        let mut b = TexturingBuilder::new(spill_dir, &t.about)?;
+        for _ in 0..c.vertices {
+            b.uv([0.0; 2])?;
+        }
+        for _ in 0..c.triangles {
+            b.triangle(NONE, [NONE; 3])?;
+        }
+        t.builder = Some(b);
+    }
+    let base = t.materials.len() as u32;
+    walk_into(&doc, prefix, c, spill, None, t.builder.as_mut().map(|b| (b, base)))?;
+    if t.builder.is_some() {
+        let (mats, texs, warnings) = materials(&doc, map)?;
+        let first = t.textures.len();
+        t.materials.extend(mats.into_iter().map(|mut m| {
+            m.texture = m.texture.map(|i| i + first);
+            m
+        }));
+        t.textures.extend(texs);
+        t.warnings.extend(warnings);
+    }
+    Ok(())
+}
+
+/// The materials and texture records of several glTF documents read as one
+/// surface (the tiles of a tileset).
+pub(crate) struct Textures {
+    about: PathBuf,
+    builder: Option<TexturingBuilder>,
+    materials: Vec<Material>,
+    textures: Vec<TextureInfo>,
+    warnings: Vec<String>,
+}
+
+impl Textures {
+    /// None yet, for the surface read from `about`.
+    pub(crate) fn new(about: &Path) -> Textures {
+        Textures { about: about.to_path_buf(), builder: None, materials: Vec::new(), textures: Vec::new(), warnings: Vec::new() }
+    }
+
+    /// The texturing, if some document had a material.
+    pub(crate) fn finish(self) -> Result<Option<Texturing>, Error> {
+        match self.builder {
+            Some(b) => Ok(Some(b.finish(self.materials, self.textures, self.warnings)?)),
+            None => Ok(None),
+        }
+    }
 }
 
 /// Streams triangles spilled as three little-endian u32 ids each: the body

@@ -31,7 +31,7 @@ use serde_json::Value;
 use crate::backend::{ElementInfo, MeshInfo, Opened};
 use crate::error::Error;
 use crate::format::Format;
-use crate::gltf::{append, mul, percent_decode, spilled_body, Counts, Mat, IDENTITY};
+use crate::gltf::{append, mul, percent_decode, spilled_body, Counts, Mat, Textures, IDENTITY};
 use crate::mapped::{Mapped, SpillFile};
 use crate::positions::Positions;
 
@@ -79,6 +79,8 @@ struct Walk {
 struct Reader<'s> {
     spill_dir: PathBuf,
     spill: Option<(&'s mut SpillFile, &'s mut SpillFile)>,
+    /// The tiles' materials and texture records, when reading for real.
+    textures: Option<Textures>,
     walk: Walk,
 }
 
@@ -203,7 +205,7 @@ impl Reader<'_> {
         let (range, rtc) = if is_b3dm(data) { b3dm(file, data)? } else { ((0, data.len()), [0.0; 3]) };
         let prefix = mul(&mul(world, &translation(rtc)), up);
         let spill = self.spill.as_mut().map(|(v, f)| (&mut **v, &mut **f));
-        append(file, map, range, &prefix, &self.spill_dir, &mut self.walk.counts, spill)
+        append(file, map, range, &prefix, &self.spill_dir, &mut self.walk.counts, spill, self.textures.as_mut())
     }
 }
 
@@ -273,8 +275,9 @@ fn b3dm(path: &Path, data: &[u8]) -> Result<((usize, usize), [f64; 3]), Error> {
     Ok(((glb, total), rtc))
 }
 
-fn read(path: &Path, b3dm_file: bool, spill_dir: &Path, spill: Option<(&mut SpillFile, &mut SpillFile)>) -> Result<Walk, Error> {
-    let mut r = Reader { spill_dir: spill_dir.to_path_buf(), spill, walk: Walk::default() };
+fn read(path: &Path, b3dm_file: bool, spill_dir: &Path, spill: Option<(&mut SpillFile, &mut SpillFile)>) -> Result<(Walk, Option<Textures>), Error> {
+    let textures = spill.is_some().then(|| Textures::new(path));
+    let mut r = Reader { spill_dir: spill_dir.to_path_buf(), spill, textures, walk: Walk::default() };
     if b3dm_file {
         // A lone b3dm: one tile, z-up, its RTC_CENTER applied.
         let map = Arc::new(Mapped::open(path, spill_dir)?);
@@ -283,7 +286,7 @@ fn read(path: &Path, b3dm_file: bool, spill_dir: &Path, spill: Option<(&mut Spil
     } else {
         r.tileset(path, &IDENTITY, Refine::Replace, 0)?;
     }
-    Ok(r.walk)
+    Ok((r.walk, r.textures))
 }
 
 fn make_info(w: &Walk) -> MeshInfo {
@@ -304,16 +307,22 @@ fn make_info(w: &Walk) -> MeshInfo {
 }
 
 pub(crate) fn info(path: &Path, data: &[u8]) -> Result<MeshInfo, Error> {
-    Ok(make_info(&read(path, is_b3dm(data), &std::env::temp_dir(), None)?))
+    Ok(make_info(&read(path, is_b3dm(data), &std::env::temp_dir(), None)?.0))
 }
 
 pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Opened, Error> {
     let (mut vs, mut fs) = (SpillFile::new(spill_dir, path)?, SpillFile::new(spill_dir, path)?);
-    let w = read(path, is_b3dm(map.bytes()), spill_dir, Some((&mut vs, &mut fs)))?;
+    let (w, textures) = read(path, is_b3dm(map.bytes()), spill_dir, Some((&mut vs, &mut fs)))?;
+    // The tiles' materials and textures (photogrammetry tiles are
+    // textured), numbered over all tiles.
+    let texturing = match textures {
+        Some(t) => t.finish()?,
+        None => None,
+    };
     let c = w.counts;
     let info = make_info(&w);
     let positions = Positions::spilled(Arc::new(vs.into_mapped()?), c.vertices as u32);
     let faces = Arc::new(fs.into_mapped()?);
     let body = spilled_body(path, faces, c.triangles, map.bytes().len() as u64);
-    Ok(Opened { info, positions, body, range_grid: None, spilled_vertices: c.vertices, colours: None, face_colours: None, texturing: None })
+    Ok(Opened { info, positions, body, range_grid: None, spilled_vertices: c.vertices, colours: None, face_colours: None, texturing })
 }
