@@ -63,7 +63,7 @@ fn a_two_colour_sphere_renders_in_its_colours() {
     let o = mint(&["render", sphere.to_str().unwrap(), png.to_str().unwrap(), "--view", "front", "--up", "z", "--size", "300x300"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
-    assert!(err.contains("per-vertex colours: 1 of the files"), "{err}");
+    assert!(err.contains("drawn in their colours (per vertex, per face or textures): 1 of the files"), "{err}");
     let [top, bottom] = halves(&png);
     assert!(top.0 > 10_000 && top.1 < 200, "upper half red: {top:?}");
     assert!(bottom.1 > 10_000 && bottom.0 < 200, "lower half blue: {bottom:?}");
@@ -419,6 +419,16 @@ fn a_checkerboard_texture_comes_out_as_the_checkerboard() {
     let checked = assert_checkerboard(&out, n, true, 0.5 / (8.0 * n as f64) + cell);
     assert!(checked > 200, "{checked} vertices checked");
 
+    // Drawn in its texture: dark and light squares seen from above.
+    let png = d.path().join("plane.png");
+    let o = mint(&["render", objp.to_str().unwrap(), png.to_str().unwrap(), "--view", "top", "--up", "z", "--size", "200x200"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (w, h, px) = crate::common::png_rgb(&png);
+    // The middle of the picture, inside the plane.
+    let mid: Vec<&[u8; 3]> = px.iter().enumerate().filter(|(i, _)| (i % w).abs_diff(w / 2) < w / 5 && (i / w).abs_diff(h / 2) < h / 5).map(|(_, p)| p).collect();
+    let dark = mid.iter().filter(|p| p.iter().all(|&c| c < 60)).count();
+    let light = mid.iter().filter(|p| p.iter().all(|&c| c > 150)).count();
+    assert!(dark > 500 && light > 500, "{dark} dark and {light} light pixels of {}", mid.len());
     // The same plane as a GLB with the PNG in its buffer (glTF's v runs down).
     let glb = checker_glb(n);
     let glbp = d.path().join("plane.glb");

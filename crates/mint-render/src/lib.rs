@@ -13,8 +13,9 @@
 //! - Shading: flat Lambert from each face's normal and a fixed light above
 //!   and to the left of the viewer; faces seen from behind (inside-out parts,
 //!   the inside seen through holes) in a distinct orange. A file with
-//!   per-vertex colour is drawn in its colours, interpolated across each
-//!   front face and lit more gently ([`Canvas::triangle_coloured`]).
+//!   colour is drawn in its colours (per vertex, interpolated; per face;
+//!   textures sampled per pixel) on front faces, lit more gently
+//!   ([`Canvas::triangle_painted`]).
 //! - [`render_files`]: several meshes side by side under one camera
 //!   (`--preview`: input and output), each view a tile; `View::All` tiles
 //!   the six axis views and the iso view. Encoded as PNG (the `png` crate).
@@ -275,6 +276,15 @@ impl Canvas {
     /// the colours stay recognisable), its back in the back colour.
     #[inline]
     pub fn triangle_coloured(&mut self, cam: &Camera, p: &[[f64; 3]; 3], rgba: [[u8; 4]; 3]) {
+        let col = rgba.map(|c| c.map(|x| x as f64));
+        self.triangle_painted(cam, p, |w| std::array::from_fn(|ch| w[0] * col[0][ch] + w[1] * col[1][ch] + w[2] * col[2][ch]));
+    }
+
+    /// [`Canvas::triangle_coloured`] with each pixel's colour (channels in
+    /// [0, 255]) from `paint` at its barycentric weights on the triangle:
+    /// textures are sampled per pixel.
+    #[inline]
+    pub fn triangle_painted(&mut self, cam: &Camera, p: &[[f64; 3]; 3], paint: impl Fn([f64; 3]) -> [f64; 4]) {
         let (a, b, c) = (DVec3::from(p[0]), DVec3::from(p[1]), DVec3::from(p[2]));
         let n = (b - a).cross(c - a);
         let nn = n.length();
@@ -288,9 +298,9 @@ impl Canvas {
         }
         let light = (-cam.dir + 0.5 * cam.up - 0.4 * cam.right).normalize();
         let k = 0.55 + 0.45 * n.dot(light).max(0.0);
-        let col = rgba.map(|c| [c[0] as f64 * k, c[1] as f64 * k, c[2] as f64 * k]);
         self.fill_by(cam, p, k as f32, |w| {
-            let v = |ch: usize| (w[0] * col[0][ch] + w[1] * col[1][ch] + w[2] * col[2][ch]).round().clamp(0.0, 255.0) as u8;
+            let c = paint(w);
+            let v = |ch: usize| (c[ch] * k).round().clamp(0.0, 255.0) as u8;
             [v(0), v(1), v(2)]
         });
     }
@@ -575,9 +585,50 @@ pub struct RenderSummary {
     /// covered pixels (the colour bar spans 0 to the largest).
     pub distance_max: Option<f64>,
     pub distance_mean: Option<f64>,
-    /// Files drawn in their per-vertex colours.
+    /// Files drawn in their colours (per vertex, per face, or textures).
     pub coloured_files: u64,
     pub seconds: f64,
+}
+
+/// Where a file's colours come from: its vertices, its faces (by the
+/// triangle's place in the file), or its textures, sampled per pixel
+/// (decoded when they take at most [`MAX_TEXTURE_BYTES`]; larger ones are
+/// drawn in their materials' colours).
+enum Paint {
+    Vertex(mint_io::VertexColours),
+    Face(mint_io::FaceColours),
+    Texture(mint_io::textures::Texturing, Vec<mint_io::textures::Image>),
+}
+
+/// The decoded textures a picture may hold in memory.
+pub const MAX_TEXTURE_BYTES: u64 = 1 << 30;
+
+impl Paint {
+    fn of(r: &MeshReader) -> Result<Option<Paint>, RenderError> {
+        if let Some(c) = r.colours() {
+            return Ok(Some(Paint::Vertex(c)));
+        }
+        if let Some(c) = r.face_colours() {
+            return Ok(Some(Paint::Face(c)));
+        }
+        let Some(t) = r.texturing() else { return Ok(None) };
+        let images = if t.decoded_bytes() <= MAX_TEXTURE_BYTES { t.decode(r.path())? } else { Vec::new() };
+        Ok(Some(Paint::Texture(t, images)))
+    }
+
+    /// The colour of triangle `t` (vertex indices `tri`) at barycentric
+    /// weights `w`.
+    #[inline]
+    fn at(&self, t: u64, tri: [u32; 3], w: [f64; 3]) -> [f64; 4] {
+        match self {
+            Paint::Vertex(c) => {
+                let col = tri.map(|i| c.get(i));
+                std::array::from_fn(|ch| w[0] * col[0][ch] as f64 + w[1] * col[1][ch] as f64 + w[2] * col[2][ch] as f64)
+            }
+            Paint::Face(c) => c.get(t).map(|x| x as f64),
+            Paint::Texture(tex, images) => tex.colour(images, t, w).map(|x| x as f64),
+        }
+    }
 }
 
 /// Renders `inputs` side by side (one column each, one row per view), all
@@ -653,8 +704,9 @@ pub fn render_surfaces(inputs: &[Vec<PathBuf>], output: &Path, o: &RenderOptions
         let mut first = 0u64;
         for path in paths {
         let mut r = MeshReader::open(path, read.clone())?;
-        let colours = if o.vertex_colours && reference.is_none() { r.colours() } else { None };
+        let colours = if o.vertex_colours && reference.is_none() { Paint::of(&r)? } else { None };
         summary.coloured_files += colours.is_some() as u64;
+        let file_first = first;
         progress.start(RENDER_PHASE, r.info().face_count.unwrap_or(0));
         // Workers draw whole chunks into tiles of their own; the tiles are
         // merged pixel by pixel keeping the nearest depth, and among equal
@@ -671,11 +723,12 @@ pub fn render_surfaces(inputs: &[Vec<PathBuf>], output: &Path, o: &RenderOptions
                         let mut tiles: Vec<Canvas> = views.iter().map(|_| Canvas::new(o.width, o.height)).collect();
                         for (base, chunk) in rx {
                             for (k, p) in chunk.positions.iter().enumerate() {
-                                let rgba = colours.as_ref().map(|c| chunk.indices[k].map(|i| c.get(i)));
+                                let t = base + k as u64 - file_first;
+                                let tri = chunk.indices[k];
                                 for (tile, cam) in tiles.iter_mut().zip(cams) {
                                     tile.order = base + k as u64;
-                                    match rgba {
-                                        Some(rgba) => tile.triangle_coloured(cam, p, rgba),
+                                    match colours {
+                                        Some(c) => tile.triangle_painted(cam, p, |w| c.at(t, tri, w)),
                                         None => tile.triangle(cam, p),
                                     }
                                     if o.wireframe {

@@ -63,7 +63,8 @@ pub struct RenderArgs {
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ColorArg {
-    /// Per-vertex colours where a file has them, else shading.
+    /// The files' colours where they have them (per vertex, per face, or
+    /// textures sampled per pixel), else shading.
     Vertex,
     /// Shading only, whatever colours the files have.
     Shading,
@@ -157,7 +158,7 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
     } else if !a.quiet.quiet {
         eprintln!("rendered {} triangles -> {} ({}x{}, {} pixels covered) in {:.2}s", s.triangles, s.output, s.width, s.height, s.covered_pixels, s.seconds);
         if s.coloured_files > 0 {
-            eprintln!("  drawn in their per-vertex colours: {} of the files (--color shading to ignore them)", s.coloured_files);
+            eprintln!("  drawn in their colours (per vertex, per face or textures): {} of the files (--color shading to ignore them)", s.coloured_files);
         }
         if a.show_boundary {
             let list: Vec<String> = boundary_edges.iter().map(u64::to_string).collect();
