@@ -60,6 +60,18 @@ pub fn crossing_colour(local: &[[f64; 3]; 3], corners: &[Rgba; 3], c: &Crossing)
     })
 }
 
+/// The line of a record as a crossing (family and lattice coordinates,
+/// what [`barycentric`] needs; the inverse of [`Crossing::intercept`] on a
+/// grid with `nb` cells along local axis b).
+pub fn crossing_of(r: &Intercept, nb: u32) -> Crossing {
+    let (family, u, v) = match r.family() {
+        FAMILY_A => (0, r.index(), r.plane),
+        FAMILY_B => (1, r.plane, r.index()),
+        _ => (2, r.index() / (nb + 1), r.index() % (nb + 1)),
+    };
+    Crossing { family, u: u as i64, v: v as i64, cell: r.cell() as i64, value: r.value(), entering: r.entering() }
+}
+
 /// Barycentric weights of crossing `c`'s line in triangle `local`'s
 /// projection along the line (clamped to the triangle: the line is inside
 /// by the exact test, rounding may put it a hair outside).
@@ -292,6 +304,20 @@ mod tests {
             assert_eq!(crossing_colour(&t, &cols, &c), want, "at ({x}, {y})");
         });
         assert!(n >= 25, "{n} crossings");
+    }
+
+    #[test]
+    fn a_record_gives_back_its_crossing() {
+        let t = [[0.2, 0.1, 0.3], [8.7, 0.4, 5.3], [0.5, 7.9, 2.3]];
+        let nb = 11;
+        let mut n = 0;
+        discretize_triangle(&t, |c| {
+            let back = crossing_of(&c.intercept(nb), nb);
+            assert_eq!((back.family, back.u, back.v), (c.family, c.u, c.v));
+            assert_eq!(barycentric(&t, &back), barycentric(&t, &c));
+            n += 1;
+        });
+        assert!(n > 20);
     }
 
     #[test]

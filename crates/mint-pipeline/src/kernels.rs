@@ -22,16 +22,24 @@ use mint_io::{TriangleRecords, TriangleVisitor};
 /// that a test can compare the two.
 #[inline(never)]
 pub(crate) fn visit_chunk<const S: usize>(job: &ChunkJob, recs: &mut Vec<Intercept>, volume: &mut f64) -> Result<bool, mint_io::Error> {
+    visit_chunk_marked::<S, false>(job, recs, volume, &mut Vec::new())
+}
+
+/// [`visit_chunk`] that also notes, with `MARK`, each triangle that crossed
+/// a line: `(record, index of its first record in recs)`, in order (for
+/// the colours of a coloured file). The records and volume are the same.
+#[inline(never)]
+pub(crate) fn visit_chunk_marked<const S: usize, const MARK: bool>(job: &ChunkJob, recs: &mut Vec<Intercept>, volume: &mut f64, marks: &mut Vec<(u64, u32)>) -> Result<bool, mint_io::Error> {
     #[cfg(target_arch = "x86_64")]
     if mint_io::use_avx2() {
         #[target_feature(enable = "avx2")]
-        unsafe fn with_avx2<const S: usize>(job: &ChunkJob, recs: &mut Vec<Intercept>, volume: &mut f64) -> Result<bool, mint_io::Error> {
-            visit_chunk_body::<S, true>(job, recs, volume)
+        unsafe fn with_avx2<const S: usize, const MARK: bool>(job: &ChunkJob, recs: &mut Vec<Intercept>, volume: &mut f64, marks: &mut Vec<(u64, u32)>) -> Result<bool, mint_io::Error> {
+            visit_chunk_body::<S, true, MARK>(job, recs, volume, marks)
         }
         // SAFETY: the CPU has AVX2 (checked by `use_avx2`).
-        return unsafe { with_avx2::<S>(job, recs, volume) };
+        return unsafe { with_avx2::<S, MARK>(job, recs, volume, marks) };
     }
-    visit_chunk_body::<S, false>(job, recs, volume)
+    visit_chunk_body::<S, false, MARK>(job, recs, volume, marks)
 }
 
 /// What one call of [`visit_chunk`] works on: records `a .. b`.
@@ -48,13 +56,13 @@ pub(crate) struct ChunkJob<'a> {
 /// [`visit_chunk`]'s work, inlined into each of its two compilations
 /// (`AVX`: the AVX2 one, which takes [`triangle_avx`] for the common case).
 #[inline(always)]
-fn visit_chunk_body<const S: usize, const AVX: bool>(job: &ChunkJob, recs: &mut Vec<Intercept>, volume: &mut f64) -> Result<bool, mint_io::Error> {
+fn visit_chunk_body<const S: usize, const AVX: bool, const MARK: bool>(job: &ChunkJob, recs: &mut Vec<Intercept>, volume: &mut f64, marks: &mut Vec<(u64, u32)>) -> Result<bool, mint_io::Error> {
     let ChunkJob { records, a, b, local, xf, nb, progress } = *job;
     // One visitor for the whole chunk (one running volume sum, so the same
     // bits), walked in steps so that a cancellation is seen within a step
     // even when every corner is a page fault.
     const STEP: u64 = 4096;
-    let mut visitor = Chunk::<S, AVX> { local, xf, nb, recs, volume: 0.0 };
+    let mut visitor = Chunk::<S, AVX, MARK> { local, xf, nb, recs, volume: 0.0, k: a, marks };
     let mut at = a;
     while at < b {
         if at > a && progress.cancelled() {
@@ -69,33 +77,54 @@ fn visit_chunk_body<const S: usize, const AVX: bool>(job: &ChunkJob, recs: &mut 
 }
 
 /// What [`visit_chunk`] does with each triangle.
-struct Chunk<'a, const S: usize, const AVX: bool> {
+struct Chunk<'a, const S: usize, const AVX: bool, const MARK: bool> {
     local: &'a LocalMap,
     xf: Option<&'a Transform>,
     nb: u32,
     recs: &'a mut Vec<Intercept>,
     volume: f64,
+    /// With `MARK`: the record being visited, and the marks.
+    k: u64,
+    marks: &'a mut Vec<(u64, u32)>,
 }
 
-impl<const S: usize, const AVX: bool> TriangleVisitor for Chunk<'_, S, AVX> {
+impl<const S: usize, const AVX: bool, const MARK: bool> Chunk<'_, S, AVX, MARK> {
+    /// Notes record `k` when it added records from `before` on.
+    #[inline(always)]
+    fn mark(&mut self, before: usize) {
+        if MARK {
+            if self.recs.len() != before {
+                self.marks.push((self.k, before as u32));
+            }
+            self.k += 1;
+        }
+    }
+}
+
+impl<const S: usize, const AVX: bool, const MARK: bool> TriangleVisitor for Chunk<'_, S, AVX, MARK> {
     #[inline(always)]
     fn triangle(&mut self, p: &[[f64; 3]; 3]) {
+        let before = self.recs.len();
         #[cfg(target_arch = "x86_64")]
         if AVX && S < 3 {
             // SAFETY: `AVX` is true only in `visit_chunk`'s AVX2
             // compilation, entered after checking that the CPU has AVX2.
             unsafe { triangle_avx::<S>(p, self.local, self.nb, self.recs, &mut self.volume) };
+            self.mark(before);
             return;
         }
-        triangle::<S>(p, self.local, self.xf, self.nb, self.recs, &mut self.volume)
+        triangle::<S>(p, self.local, self.xf, self.nb, self.recs, &mut self.volume);
+        self.mark(before);
     }
 
     #[inline(always)]
     fn triangle_f32le(&mut self, raw: &[[u8; 16]; 3]) {
         #[cfg(target_arch = "x86_64")]
         if AVX && S < 3 {
+            let before = self.recs.len();
             // SAFETY: as in `triangle`.
             unsafe { triangle_avx_f32::<S>(raw, self.local, self.nb, self.recs, &mut self.volume) };
+            self.mark(before);
             return;
         }
         self.triangle(&mint_io::f32le_corners(raw))

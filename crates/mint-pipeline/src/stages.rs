@@ -905,7 +905,7 @@ fn discretize_piece(ctx: &Ctx, j: usize, file: &MeshFile, k: u32, range: (u64, u
     if let Some(records) = &direct {
         let checkpoint = writer.checkpoint();
         let run = if let Some(cs) = &colours {
-            discretize_direct_coloured(records, cs, range, grid, writer, ctx.threads, ctx.progress, ctx.transform(j))
+            discretize_direct_coloured(records, &positions, cs, range, grid, writer, ctx.threads, ctx.progress, ctx.transform(j))
         } else if choice.sort {
             let faces = Faces::Records { records, first: range.0, end: range.1 };
             discretize_sorted(faces, &positions, grid, writer, ctx.threads, ctx.progress, ctx.transform(j), &ctx.dir, &ctx.budget).map(|(n, v, st)| {
