@@ -911,7 +911,9 @@ pub fn discretize(data: &[u8]) {
 /// The same bytes come out with dereferencing by sort, and from the same
 /// mesh written as binary PLY (the direct path over fixed-size records, on
 /// an AVX2 CPU its vector compilation, against the text file's streamed
-/// path).
+/// path). With bit 5 of byte 0 every vertex has a colour (its three bytes):
+/// the output then carries colour, and the streamed and direct coloured
+/// reads must agree byte for byte too.
 pub fn resample(data: &[u8]) {
     use mint_core::signs::SignRule;
     if data.len() < 2 {
@@ -919,6 +921,8 @@ pub fn resample(data: &[u8]) {
     }
     let rule = [SignRule::Auto, SignRule::Union, SignRule::Parity, SignRule::Orient][(data[0] & 3) as usize];
     let cells = 64 + 64 * u64::from(data[0] >> 2 & 7);
+    let coloured = data[0] & 0x20 != 0;
+    let colour_props = if coloured { "property uchar red\nproperty uchar green\nproperty uchar blue\n" } else { "" };
     let nv = (data[1] % 16) as usize + 3;
     let rest = &data[2..];
     if rest.len() < 3 * nv + 3 {
@@ -926,9 +930,13 @@ pub fn resample(data: &[u8]) {
     }
     let (vb, fb) = rest.split_at(3 * nv);
     let faces: Vec<[usize; 3]> = fb.chunks_exact(3).take(64).map(|c| [c[0] as usize % nv, c[1] as usize % nv, c[2] as usize % nv]).collect();
-    let mut ply = format!("ply\nformat ascii 1.0\nelement vertex {nv}\nproperty double x\nproperty double y\nproperty double z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n", faces.len());
+    let mut ply = format!("ply\nformat ascii 1.0\nelement vertex {nv}\nproperty double x\nproperty double y\nproperty double z\n{colour_props}element face {}\nproperty list uchar int vertex_indices\nend_header\n", faces.len());
     for c in vb.chunks_exact(3) {
-        ply += &format!("{} {} {}\n", lattice(c[0]), lattice(c[1]), lattice(c[2]));
+        ply += &format!("{} {} {}", lattice(c[0]), lattice(c[1]), lattice(c[2]));
+        if coloured {
+            ply += &format!(" {} {} {}", c[0], c[1], c[2]);
+        }
+        ply += "\n";
     }
     for f in &faces {
         ply += &format!("3 {} {} {}\n", f[0], f[1], f[2]);
@@ -959,10 +967,13 @@ pub fn resample(data: &[u8]) {
             // The same mesh as binary PLY: its fixed-size records take the
             // direct path (on this CPU perhaps its AVX2 compilation), the
             // text file the streamed one; the bytes must not differ.
-            let mut bin = format!("ply\nformat binary_little_endian 1.0\nelement vertex {nv}\nproperty double x\nproperty double y\nproperty double z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n", faces.len()).into_bytes();
+            let mut bin = format!("ply\nformat binary_little_endian 1.0\nelement vertex {nv}\nproperty double x\nproperty double y\nproperty double z\n{colour_props}element face {}\nproperty list uchar int vertex_indices\nend_header\n", faces.len()).into_bytes();
             for c in vb.chunks_exact(3) {
                 for &b in c {
                     bin.extend_from_slice(&lattice(b).to_le_bytes());
+                }
+                if coloured {
+                    bin.extend_from_slice(c);
                 }
             }
             for f in &faces {
@@ -976,6 +987,11 @@ pub fn resample(data: &[u8]) {
             mint_pipeline::run(&spec_of(&binary, &direct), &opts, &mint_pipeline::NoProgress).unwrap_or_else(|e| panic!("the binary copy failed where the text file did not: {e}"));
             assert!(std::fs::read(&direct).unwrap() == want, "the binary copy (direct path) gives other bytes than the text file");
             let (pos, faces) = mint_io::read_mesh(&output).unwrap_or_else(|e| panic!("the output does not read back: {e}"));
+            let out_colours = mint_io::MeshReader::open(&output, mint_io::ReadOptions::default()).unwrap().colours();
+            // (An empty output has no colour to read back.)
+            if !pos.is_empty() {
+                assert_eq!(out_colours.is_some(), coloured, "coloured input {coloured}, coloured output {}", out_colours.is_some());
+            }
             let rep = mint_mesh::try_check(&pos, &faces).unwrap_or_else(|e| panic!("output fails the index check: {e}"));
             assert_eq!(rep.collapsed_faces, 0, "output faces repeat a vertex");
             assert_eq!(rep.non_finite_vertices, 0, "non-finite output vertices");
