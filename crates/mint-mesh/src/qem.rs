@@ -174,14 +174,13 @@ struct ColourQuadric {
 
 impl ColourQuadric {
     /// The colour (channels in [0, 1]) best at `p`.
+    /// (A vertex on faces without area has no colour function: it keeps
+    /// the middle of its range, its own colour when it merged nothing.)
     fn colour_at(&self, p: DVec3) -> [f64; 3] {
-        if !(self.alpha > 0.0) {
-            return [1.0; 3];
-        }
         std::array::from_fn(|j| {
-            let c = (self.s[j][0] * p.x + self.s[j][1] * p.y + self.s[j][2] * p.z + self.t[j]) / self.alpha;
             let (lo, hi) = if self.lo[j] <= self.hi[j] { (self.lo[j] as f64, self.hi[j] as f64) } else { (0.0, 1.0) };
-            if c.is_finite() {
+            let c = (self.s[j][0] * p.x + self.s[j][1] * p.y + self.s[j][2] * p.z + self.t[j]) / self.alpha;
+            if self.alpha > 0.0 && c.is_finite() {
                 c.clamp(lo, hi)
             } else {
                 0.5 * (lo + hi)

@@ -1054,4 +1054,18 @@ pub fn simplify(data: &[u8]) {
             assert!(!r.input_watertight || r.output_watertight, "simplify handed over a worse mesh: {r:?}");
         }
     }
+    // The colour-aware collapse (each vertex coloured by its bytes): the
+    // same checks, and every kept colour within the range of the input's.
+    let colours: Vec<[u8; 4]> = vb.chunks_exact(3).map(|c| [c[0], c[1], c[2], 255]).collect();
+    let (p, f, c, _) = mint_mesh::qem::collapse_coloured(&positions, &faces, &colours, 0.01, target, f64::INFINITY, blocks, 1, &|| false);
+    assert!(f.len() <= faces.len() && c.len() == p.len(), "faces grew, or colours for other vertices");
+    assert!(f.iter().flatten().all(|&v| (v as usize) < p.len() && p[v as usize].iter().all(|x| x.is_finite())), "an index out of range or a non-finite position");
+    for k in 0..3 {
+        let (lo, hi) = (colours.iter().map(|x| x[k]).min().unwrap(), colours.iter().map(|x| x[k]).max().unwrap());
+        assert!(f.iter().flatten().all(|&v| (lo..=hi).contains(&c[v as usize][k])), "a colour outside the input's range");
+    }
+    if before.watertight {
+        let after = mint_mesh::check(&p, &f);
+        assert!(after.watertight, "coloured, {blocks} blocks, target {target}: a watertight input lost it: {after:?}");
+    }
 }
