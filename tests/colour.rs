@@ -352,7 +352,30 @@ fn checker_glb(n: usize) -> Vec<u8> {
             {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}
         ]
     });
-    let mut j = serde_json::to_vec(&json).unwrap();
+    pack_glb(&json, &bin)
+}
+
+/// `dir/tileset.json`: two tiles (z up), `first` at the origin and
+/// `second` two units along x.
+fn two_tile_tileset(dir: &Path, first: &str, second: &str) -> PathBuf {
+    let tileset = serde_json::json!({
+        "asset": {"version": "1.0", "gltfUpAxis": "Z"},
+        "geometricError": 1,
+        "root": {"boundingVolume": {"box": [1.5, 0.5, 0.5, 1.5, 0, 0, 0, 0.5, 0, 0, 0, 0.5]}, "geometricError": 1, "refine": "ADD",
+            "children": [
+                {"boundingVolume": {"box": [0.5, 0.5, 0.5, 0.5, 0, 0, 0, 0.5, 0, 0, 0, 0.5]}, "geometricError": 0, "content": {"uri": first}},
+                {"boundingVolume": {"box": [2.5, 0.5, 0.5, 0.5, 0, 0, 0, 0.5, 0, 0, 0, 0.5]}, "geometricError": 0, "content": {"uri": second},
+                 "transform": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 2, 0, 0, 1]}
+            ]}
+    });
+    let tsp = dir.join("tileset.json");
+    std::fs::write(&tsp, serde_json::to_vec(&tileset).unwrap()).unwrap();
+    tsp
+}
+
+/// A GLB of a glTF document and its binary buffer (padded to 4 bytes).
+fn pack_glb(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut j = serde_json::to_vec(json).unwrap();
     while j.len() % 4 != 0 {
         j.push(b' ');
     }
@@ -365,7 +388,7 @@ fn checker_glb(n: usize) -> Vec<u8> {
     glb.extend(&j);
     glb.extend((bin.len() as u32).to_le_bytes());
     glb.extend(b"BIN\0");
-    glb.extend(&bin);
+    glb.extend(bin);
     glb
 }
 
@@ -442,18 +465,7 @@ fn a_checkerboard_texture_comes_out_as_the_checkerboard() {
     // Two copies of the GLB as the tiles of a 3D Tiles tileset (z up, the
     // second two units along x): the textures of every tile.
     std::fs::write(d.path().join("tile.glb"), checker_glb(n)).unwrap();
-    let tileset = serde_json::json!({
-        "asset": {"version": "1.0", "gltfUpAxis": "Z"},
-        "geometricError": 1,
-        "root": {"boundingVolume": {"box": [1.5, 0.5, 0.5, 1.5, 0, 0, 0, 0.5, 0, 0, 0, 0.5]}, "geometricError": 1, "refine": "ADD",
-            "children": [
-                {"boundingVolume": {"box": [0.5, 0.5, 0.5, 0.5, 0, 0, 0, 0.5, 0, 0, 0, 0.5]}, "geometricError": 0, "content": {"uri": "tile.glb"}},
-                {"boundingVolume": {"box": [2.5, 0.5, 0.5, 0.5, 0, 0, 0, 0.5, 0, 0, 0, 0.5]}, "geometricError": 0, "content": {"uri": "tile.glb"},
-                 "transform": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 2, 0, 0, 1]}
-            ]}
-    });
-    let tsp = d.path().join("tileset.json");
-    std::fs::write(&tsp, serde_json::to_vec(&tileset).unwrap()).unwrap();
+    let tsp = two_tile_tileset(d.path(), "tile.glb", "tile.glb");
     let out4 = d.path().join("o4.ply");
     let o = mint(&["resample", tsp.to_str().unwrap(), out4.to_str().unwrap(), "--cells", "40000", "--json"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -535,4 +547,66 @@ fn a_two_colour_sphere_keeps_its_colours_after_decimation() {
         assert!(o.status.success());
         assert!(mint_io::MeshReader::open(&out, mint_io::ReadOptions::default()).unwrap().colours().is_none());
     }
+}
+
+/// A GLB of the unit plane z = 0.5 whose vertices carry `COLOR_0` (u8
+/// RGBA, normalized), or no colour.
+fn coloured_plane_glb(colour: Option<[u8; 4]>) -> Vec<u8> {
+    let rgba = colour.unwrap_or([0; 4]);
+    let mut bin: Vec<u8> = Vec::new();
+    PLANE.iter().for_each(|p| p.iter().for_each(|c| bin.extend((*c as f32).to_le_bytes())));
+    (0..4).for_each(|_| bin.extend(rgba));
+    [0u16, 1, 2, 0, 2, 3].iter().for_each(|i| bin.extend(i.to_le_bytes()));
+    bin.extend([0, 0]);
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [if colour.is_some() {
+            serde_json::json!({"attributes": {"POSITION": 0, "COLOR_0": 1}, "indices": 2})
+        } else {
+            serde_json::json!({"attributes": {"POSITION": 0}, "indices": 2})
+        }]}],
+        "buffers": [{"byteLength": bin.len()}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 16},
+            {"buffer": 0, "byteOffset": 64, "byteLength": 12}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, 0.5], "max": [1, 1, 0.5]},
+            {"bufferView": 1, "componentType": 5121, "normalized": true, "count": 4, "type": "VEC4"},
+            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}
+        ]
+    });
+    pack_glb(&json, &bin)
+}
+
+/// The tiles of a tileset bring their vertex colours (`COLOR_0`); a tile
+/// without any is white beside them, as a glTF primitive without
+/// `COLOR_0` is.
+#[test]
+fn tiles_bring_their_vertex_colours() {
+    let d = tempfile::tempdir().unwrap();
+    std::fs::write(d.path().join("red.glb"), coloured_plane_glb(Some([200, 10, 10, 255]))).unwrap();
+    // The first tile: the same plane with no colour at all.
+    std::fs::write(d.path().join("plain.glb"), coloured_plane_glb(None)).unwrap();
+    let tsp = two_tile_tileset(d.path(), "plain.glb", "red.glb");
+    let out = d.path().join("o.ply");
+    let o = mint(&["resample", tsp.to_str().unwrap(), out.to_str().unwrap(), "--cells", "20000"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let vs = coloured_vertices(&out);
+    let (mut white, mut red) = (0, 0);
+    for (p, c) in &vs {
+        if (p[2] - 0.5).abs() > 1e-9 {
+            continue;
+        }
+        if p[0] < 1.0 {
+            assert_eq!(*c, [255; 4], "the plain tile at {p:?}");
+            white += 1;
+        } else if p[0] > 2.0 {
+            assert_eq!(*c, [200, 10, 10, 255], "the red tile at {p:?}");
+            red += 1;
+        }
+    }
+    assert!(white > 100 && red > 100, "{white} white, {red} red");
 }

@@ -866,6 +866,15 @@ pub(crate) fn append(
 ) -> Result<(), Error> {
     let doc = Doc::parse_range(path, map, range, spill_dir)?;
     let Some(t) = textures else { return walk_into(&doc, prefix, c, spill, None, None) };
+    // The first document with `COLOR_0` starts the colour spill: the
+    // vertices before it are white.
+    if t.colours.is_none() && has_colour(&doc) {
+        let mut cs = SpillFile::new(spill_dir, &t.about)?;
+        for _ in 0..c.vertices {
+            cs.write_bytes(&[255; 4])?;
+        }
+        t.colours = Some(cs);
+    }
     // The first document with a material starts the texture records; the
     // triangles and vertices before it have none.
     if t.builder.is_none() && has_material(&doc) {
@@ -879,7 +888,7 @@ pub(crate) fn append(
         t.builder = Some(b);
     }
     let base = t.materials.len() as u32;
-    walk_into(&doc, prefix, c, spill, None, t.builder.as_mut().map(|b| (b, base)))?;
+    walk_into(&doc, prefix, c, spill, t.colours.as_mut(), t.builder.as_mut().map(|b| (b, base)))?;
     if t.builder.is_some() {
         let (mats, texs, warnings) = materials(&doc, map)?;
         let first = t.textures.len();
@@ -897,6 +906,8 @@ pub(crate) fn append(
 /// surface (the tiles of a tileset).
 pub(crate) struct Textures {
     about: PathBuf,
+    /// `COLOR_0` of every vertex, once a document has it.
+    colours: Option<SpillFile>,
     builder: Option<TexturingBuilder>,
     materials: Vec<Material>,
     textures: Vec<TextureInfo>,
@@ -906,14 +917,19 @@ pub(crate) struct Textures {
 impl Textures {
     /// None yet, for the surface read from `about`.
     pub(crate) fn new(about: &Path) -> Textures {
-        Textures { about: about.to_path_buf(), builder: None, materials: Vec::new(), textures: Vec::new(), warnings: Vec::new() }
+        Textures { about: about.to_path_buf(), colours: None, builder: None, materials: Vec::new(), textures: Vec::new(), warnings: Vec::new() }
     }
 
-    /// The texturing, if some document had a material.
-    pub(crate) fn finish(self) -> Result<Option<Texturing>, Error> {
+    /// The vertex colours of all `vertices`, if some document had
+    /// `COLOR_0` (they win, as in one glTF file); else the texturing, if
+    /// some document had a material.
+    pub(crate) fn finish(self, vertices: u64) -> Result<(Option<crate::colours::VertexColours>, Option<Texturing>), Error> {
+        if let Some(cs) = self.colours {
+            return Ok((Some(crate::colours::VertexColours::spilled(Arc::new(cs.into_mapped()?), vertices as u32)), None));
+        }
         match self.builder {
-            Some(b) => Ok(Some(b.finish(self.materials, self.textures, self.warnings)?)),
-            None => Ok(None),
+            Some(b) => Ok((None, Some(b.finish(self.materials, self.textures, self.warnings)?))),
+            None => Ok((None, None)),
         }
     }
 }

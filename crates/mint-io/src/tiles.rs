@@ -313,16 +313,16 @@ pub(crate) fn info(path: &Path, data: &[u8]) -> Result<MeshInfo, Error> {
 pub(crate) fn open(path: &Path, map: Arc<Mapped>, spill_dir: &Path) -> Result<Opened, Error> {
     let (mut vs, mut fs) = (SpillFile::new(spill_dir, path)?, SpillFile::new(spill_dir, path)?);
     let (w, textures) = read(path, is_b3dm(map.bytes()), spill_dir, Some((&mut vs, &mut fs)))?;
-    // The tiles' materials and textures (photogrammetry tiles are
-    // textured), numbered over all tiles.
-    let texturing = match textures {
-        Some(t) => t.finish()?,
-        None => None,
+    // The tiles' vertex colours, or their materials and textures
+    // (photogrammetry tiles are textured), numbered over all tiles.
+    let (colours, texturing) = match textures {
+        Some(t) => t.finish(w.counts.vertices)?,
+        None => (None, None),
     };
     let c = w.counts;
     let info = make_info(&w);
     let positions = Positions::spilled(Arc::new(vs.into_mapped()?), c.vertices as u32);
     let faces = Arc::new(fs.into_mapped()?);
     let body = spilled_body(path, faces, c.triangles, map.bytes().len() as u64);
-    Ok(Opened { info, positions, body, range_grid: None, spilled_vertices: c.vertices, colours: None, face_colours: None, texturing })
+    Ok(Opened { info, positions, body, range_grid: None, spilled_vertices: c.vertices, colours, face_colours: None, texturing })
 }
