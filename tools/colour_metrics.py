@@ -119,44 +119,29 @@ def read_obj_textured(path):
     return np.array(v), np.array(faces, dtype=np.int64), np.array(fuv, dtype=np.int64), np.array(vt), fmat, mats
 
 
-def textured_colour(points, verts, faces, fuv, vt, fmat, mats, tree, k=16, batch=20000):
+def textured_colour(points, verts, faces, fuv, vt, fmat, mats, tree):
     """The texture's colour at the input's nearest point to each point
     (bilinear, texel centres, v up, repeat)."""
     out = np.empty((len(points), 3))
-    for s in range(0, len(points), batch):
-        p = points[s:s + batch]
-        _, idx = tree.query(p, k=k)
-        best = np.full(len(p), np.inf)
-        bary_best = np.zeros((len(p), 3))
-        face_best = np.zeros(len(p), dtype=np.int64)
-        for j in range(k):
-            f = faces[idx[:, j]]
-            a, b, c = verts[f[:, 0]], verts[f[:, 1]], verts[f[:, 2]]
-            bary = closest_on_triangles(p, a, b, c)
-            q = bary[:, 0:1] * a + bary[:, 1:2] * b + bary[:, 2:3] * c
-            d = ((q - p) ** 2).sum(1)
-            better = d < best
-            best[better] = d[better]
-            bary_best[better] = bary[better]
-            face_best[better] = idx[better, j]
-        for i in range(len(p)):
-            fi = face_best[i]
-            m = mats.get(fmat[fi], {"kd": np.array([255.0] * 3), "img": None})
-            t = fuv[fi]
-            if m["img"] is None or (t < 0).any():
-                out[s + i] = m["kd"]
-                continue
-            uv = bary_best[i] @ vt[t]
-            img = m["img"]
-            h, w = img.shape[:2]
-            x, y = uv[0] * w - 0.5, (1.0 - uv[1]) * h - 0.5
-            x0, y0 = np.floor(x), np.floor(y)
-            fx, fy = x - x0, y - y0
-            xa, xb = int(x0) % w, int(x0 + 1) % w
-            ya, yb = int(y0) % h, int(y0 + 1) % h
-            top = img[ya, xa] * (1 - fx) + img[ya, xb] * fx
-            bot = img[yb, xa] * (1 - fx) + img[yb, xb] * fx
-            out[s + i] = top * (1 - fy) + bot * fy
+    face_best, bary_best = nearest_points(points, verts, faces, tree)
+    for i in range(len(points)):
+        fi = face_best[i]
+        m = mats.get(fmat[fi], {"kd": np.array([255.0] * 3), "img": None})
+        t = fuv[fi]
+        if m["img"] is None or (t < 0).any():
+            out[i] = m["kd"]
+            continue
+        uv = bary_best[i] @ vt[t]
+        img = m["img"]
+        h, w = img.shape[:2]
+        x, y = uv[0] * w - 0.5, (1.0 - uv[1]) * h - 0.5
+        x0, y0 = np.floor(x), np.floor(y)
+        fx, fy = x - x0, y - y0
+        xa, xb = int(x0) % w, int(x0 + 1) % w
+        ya, yb = int(y0) % h, int(y0 + 1) % h
+        top = img[ya, xa] * (1 - fx) + img[ya, xb] * fx
+        bot = img[yb, xa] * (1 - fx) + img[yb, xb] * fx
+        out[i] = top * (1 - fy) + bot * fy
     return out
 
 
@@ -201,8 +186,11 @@ def closest_on_triangles(p, a, b, c):
     return np.nan_to_num(out, nan=1 / 3)
 
 
-def colour_at_nearest(points, verts, cols, faces, tree, k=16, batch=20000):
-    out = np.empty((len(points), 3))
+def nearest_points(points, verts, faces, tree, k=16, batch=20000):
+    """For each point, the input face nearest to it (among those of the k
+    nearest centroids) and the barycentric weights of the closest point."""
+    face_best = np.zeros(len(points), dtype=np.int64)
+    bary_best = np.zeros((len(points), 3))
     for s in range(0, len(points), batch):
         p = points[s:s + batch]
         _, idx = tree.query(p, k=k)
@@ -213,11 +201,18 @@ def colour_at_nearest(points, verts, cols, faces, tree, k=16, batch=20000):
             bary = closest_on_triangles(p, a, b, c)
             q = bary[:, 0:1] * a + bary[:, 1:2] * b + bary[:, 2:3] * c
             d = ((q - p) ** 2).sum(1)
-            col = bary[:, 0:1] * cols[f[:, 0]] + bary[:, 1:2] * cols[f[:, 1]] + bary[:, 2:3] * cols[f[:, 2]]
             better = d < best
             best[better] = d[better]
-            out[s:s + batch][better] = col[better]
-    return out
+            bary_best[s:s + batch][better] = bary[better]
+            face_best[s:s + batch][better] = idx[better, j]
+    return face_best, bary_best
+
+
+def colour_at_nearest(points, verts, cols, faces, tree):
+    """The per-vertex colour at the input's nearest point to each point."""
+    fi, w = nearest_points(points, verts, faces, tree)
+    f = faces[fi]
+    return w[:, 0:1] * cols[f[:, 0]] + w[:, 1:2] * cols[f[:, 1]] + w[:, 2:3] * cols[f[:, 2]]
 
 
 def main():
