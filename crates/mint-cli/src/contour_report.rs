@@ -33,7 +33,7 @@ pub(crate) fn report(s: &RunStats, stats: &Option<PathBuf>, quiet: bool, json: b
         write_stats(p, &v)?;
     }
     if json {
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::out::json(&v)?;
     } else if !quiet {
         eprintln!("{line}");
         eprintln!("  time {:.3}s, peak heap {}", s.seconds, human_bytes(alloc::peak_heap()));

@@ -303,7 +303,7 @@ pub fn load_mesh(path: &std::path::Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>
         bail!("interrupted");
     }
     for w in &whole.warnings {
-        eprintln!("mint: warning: {w}");
+        crate::out::warn(w);
     }
     Ok((whole.positions, whole.faces))
 }

@@ -10,20 +10,22 @@
 //! resampling, grid-job and check reports), `preview` (the `--preview`
 //! pictures), `contour_report` (the contour commands' summary and status
 //! file), `paths` (output checks), `progress` (bars and Ctrl-C), `units`
-//! (sizes) and `alloc` (the counting allocator).
+//! (sizes), `alloc` (the counting allocator) and `out` (where summaries
+//! and warnings go: the terminal, or an embedding such as the Python
+//! package, through [`out::run_embedded`]).
 
 pub mod alloc;
 mod cli;
 mod cmd;
 mod contour_report;
 mod jobs;
+pub mod out;
 mod paths;
 mod preview;
 pub mod progress;
 mod summary;
 pub mod units;
 
-use clap::Parser;
 use std::process::ExitCode;
 
 #[global_allocator]
@@ -31,26 +33,34 @@ static GLOBAL: alloc::CountingAllocator = alloc::CountingAllocator;
 
 /// Runs the command line and returns the process exit code.
 pub fn main() -> ExitCode {
-    let cli = cli::Cli::parse();
-    progress::install_ctrlc();
-    match cli::run(cli) {
-        Ok(()) => ExitCode::SUCCESS,
+    ExitCode::from(out::exit_status(std::env::args_os().collect()))
+}
+
+/// The exit status of a command's result, printing the error as one line.
+fn exit_status(result: anyhow::Result<()>) -> u8 {
+    match result {
+        Ok(()) => 0,
         Err(e) => {
-            // One line: the error and its causes.
-            let mut msg = e.to_string();
-            for cause in e.chain().skip(1) {
-                let c = cause.to_string();
-                if !msg.contains(&c) {
-                    msg.push_str(": ");
-                    msg.push_str(&c);
-                }
-            }
-            eprintln!("mint: error: {}", msg.replace('\n', " "));
+            eprintln!("mint: error: {}", one_line(&e));
             if progress::interrupted() {
-                ExitCode::from(130)
+                130
             } else {
-                ExitCode::FAILURE
+                1
             }
         }
     }
+}
+
+/// An error and its causes on one line (a cause already quoted is not
+/// repeated).
+pub(crate) fn one_line(e: &anyhow::Error) -> String {
+    let mut msg = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !msg.contains(&c) {
+            msg.push_str(": ");
+            msg.push_str(&c);
+        }
+    }
+    msg.replace('\n', " ")
 }

@@ -6,6 +6,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use mint_pipeline::{Phase, Progress};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
+use std::time::Instant;
 
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 
@@ -35,25 +36,51 @@ pub fn install_ctrlc() {
     });
 }
 
-/// True once the user pressed Ctrl-C.
+/// True once the user pressed Ctrl-C, or an embedding asked this thread's
+/// run to stop.
 pub fn interrupted() -> bool {
-    INTERRUPTED.load(Ordering::SeqCst)
+    INTERRUPTED.load(Ordering::SeqCst) || crate::out::cancelled()
 }
 
-/// Progress bars on stderr, one per phase.
+/// Progress bars on stderr, one per phase; embedded (see `crate::out`),
+/// reports to the embedding's callback instead, and stops when it asks.
 pub struct Bars {
     quiet: bool,
     bar: Mutex<Option<ProgressBar>>,
+    hooks: Option<crate::out::Hooks>,
+    /// The embedding's view of the current phase: name, done, total, and
+    /// when it was last told.
+    phase: Mutex<(&'static str, u64, u64, Option<Instant>)>,
 }
 
 impl Bars {
     pub fn new(quiet: bool) -> Bars {
-        Bars { quiet, bar: Mutex::new(None) }
+        Bars { quiet, bar: Mutex::new(None), hooks: crate::out::hooks(), phase: Mutex::new(("", 0, 0, None)) }
+    }
+
+    /// Tells the embedding's callback, at most every 50 ms unless `force`.
+    fn tell(&self, force: bool) {
+        let Some(report) = self.hooks.as_ref().and_then(|h| h.progress.as_ref()) else { return };
+        let mut p = self.phase.lock().unwrap();
+        let now = Instant::now();
+        if force || p.3.is_none_or(|t| now.duration_since(t).as_millis() >= 50) {
+            p.3 = Some(now);
+            let (name, done, total) = (p.0, p.1, p.2);
+            drop(p);
+            report(name, done, total);
+        }
     }
 }
 
 impl Progress for Bars {
     fn start(&self, phase: Phase, total: u64) {
+        if let Some(h) = &self.hooks {
+            if h.progress.is_some() {
+                *self.phase.lock().unwrap() = (phase.name(), 0, total, None);
+                self.tell(true);
+            }
+            return;
+        }
         if self.quiet {
             return;
         }
@@ -69,16 +96,30 @@ impl Progress for Bars {
         *self.bar.lock().unwrap() = Some(bar);
     }
     fn advance(&self, n: u64) {
+        if self.hooks.is_some() {
+            self.phase.lock().unwrap().1 += n;
+            self.tell(false);
+            return;
+        }
         if let Some(b) = self.bar.lock().unwrap().as_ref() {
             b.inc(n);
         }
     }
     fn finish(&self) {
+        if self.hooks.is_some() {
+            let mut p = self.phase.lock().unwrap();
+            if p.2 > 0 {
+                p.1 = p.2;
+            }
+            drop(p);
+            self.tell(true);
+            return;
+        }
         if let Some(b) = self.bar.lock().unwrap().take() {
             b.finish_and_clear();
         }
     }
     fn cancelled(&self) -> bool {
-        interrupted()
+        INTERRUPTED.load(Ordering::SeqCst) || self.hooks.as_ref().is_some_and(|h| h.cancel.load(Ordering::Relaxed))
     }
 }

@@ -20,7 +20,7 @@ pub(crate) fn print_resample_summary(summary: &mint_pipeline::ResampleSummary, j
         v["mem_budget_bytes"] = mem.into();
         v["peak_heap_bytes"] = peak_heap.into();
         v["peak_rss_bytes"] = peak_rss.into();
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::out::json(&v)?;
     } else if !quiet {
         let s = summary;
         eprintln!("resampled {} -> {}", s.input, s.output);
@@ -131,7 +131,7 @@ pub(crate) fn print_removed(removed: &[String]) {
 /// Prints the warnings on stderr, one line each (also with --quiet and --json).
 fn print_warnings(warnings: &[String]) {
     for w in warnings {
-        eprintln!("mint: warning: {w}");
+        crate::out::warn(w);
     }
 }
 
@@ -144,7 +144,7 @@ pub(crate) fn report(g: &ReportArgs, s: &mint_pipeline::ResampleSummary) -> Resu
         v["warnings"] = warnings.into();
         v["peak_heap_bytes"] = alloc::peak_heap().into();
         v["peak_rss_bytes"] = alloc::peak_rss().into();
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::out::json(&v)?;
     } else if !g.quiet() {
         eprintln!("{} -> {}", s.input, s.output);
         eprintln!("  grid         {}x{}x{} cells of {:.6} ({} slabs)", s.grid_cells[0], s.grid_cells[1], s.grid_cells[2], s.cell_size, s.slabs);

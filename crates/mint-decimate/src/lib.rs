@@ -301,8 +301,7 @@ pub const COLOUR_WEIGHT: f64 = 0.0003;
 
 /// A mesh file's per-vertex colours, if it has them.
 fn vertex_colours(path: &Path) -> Result<Option<Vec<[u8; 4]>>, PipelineError> {
-    let r = mint_io::MeshReader::open(path, mint_io::ReadOptions { chunk_triangles: 1, spill_dir: None, resolve_positions: false })?;
-    Ok(r.colours().map(|c| (0..c.count()).map(|i| c.get(i)).collect()))
+    Ok(mint_io::read_vertex_colours(path)?)
 }
 
 /// The colours of welded vertices: `after[i]` takes the colour of the

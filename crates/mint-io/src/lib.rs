@@ -62,7 +62,7 @@ pub use convert::{concatenate, convert, convert_cancellable, ConvertSummary};
 pub use error::{Error, ErrorKind, Position};
 pub use format::Format;
 pub use inputs::expand_inputs;
-pub use reader::{has_vertex_colour, read_info, read_mesh, read_mesh_with, ElementInfo, MeshInfo, MeshReader, RangeGrid, ReadOptions, ReadStats, TriangleChunk, VertexPositions, WholeMesh};
+pub use reader::{has_vertex_colour, read_info, read_mesh, read_mesh_with, read_vertex_colours, ElementInfo, MeshInfo, MeshReader, RangeGrid, ReadOptions, ReadStats, TriangleChunk, VertexPositions, WholeMesh};
 pub use reader::PREFETCH_PAGES_PER_FACE;
 pub use visit::{f32le_corners, TriangleRecords, TriangleVisitor};
 #[cfg(target_arch = "x86_64")]

@@ -60,6 +60,14 @@ pub fn read_mesh(path: &Path) -> Result<(Vec<[f64; 3]>, Vec<[u32; 3]>), Error> {
     Ok((whole.positions, whole.faces))
 }
 
+/// A mesh file's per-vertex colours as RGBA bytes by vertex index (alpha
+/// 255 when the file has none), or `None` when it has no per-vertex colour.
+/// Reads no face.
+pub fn read_vertex_colours(path: &Path) -> Result<Option<Vec<[u8; 4]>>, Error> {
+    let r = MeshReader::open(path, ReadOptions { chunk_triangles: 1, spill_dir: None, resolve_positions: false })?;
+    Ok(r.colours().map(|c| (0..c.count()).map(|i| c.get(i)).collect()))
+}
+
 /// A whole mesh read by [`read_mesh_with`].
 #[derive(Debug, Clone, Default)]
 pub struct WholeMesh {

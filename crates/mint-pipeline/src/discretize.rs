@@ -267,7 +267,7 @@ impl CornerColours {
         let need = t.decoded_bytes();
         if need > budget {
             let mib = |b: u64| b.div_ceil(1 << 20);
-            return Err(PipelineError::stage(
+            return Err(PipelineError::budget(
                 reader.path(),
                 format!(
                     "its {} textures take {} MiB decoded, more than the {} MiB the memory budget leaves them; give --mem {}M or more (or --no-color)",

@@ -42,6 +42,10 @@ pub enum PipelineError {
     /// what to do.
     #[error("{path}: {message}")]
     Stage { path: PathBuf, message: String },
+    /// The memory budget (`--mem`) is too small for the job; the message
+    /// says how much would do, or which option to change.
+    #[error("{path}: {message}")]
+    Budget { path: PathBuf, message: String },
     /// A scene file could not be read or parsed.
     #[error(transparent)]
     Scene(#[from] crate::scene::SceneError),
@@ -57,6 +61,11 @@ impl PipelineError {
     /// A [`PipelineError::Stage`] error.
     pub fn stage(path: impl Into<PathBuf>, message: impl Into<String>) -> PipelineError {
         PipelineError::Stage { path: path.into(), message: message.into() }
+    }
+
+    /// A [`PipelineError::Budget`] error.
+    pub fn budget(path: impl Into<PathBuf>, message: impl Into<String>) -> PipelineError {
+        PipelineError::Budget { path: path.into(), message: message.into() }
     }
 }
 

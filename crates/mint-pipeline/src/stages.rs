@@ -333,7 +333,7 @@ impl<'a> Ctx<'a> {
         }).sum();
         let need = layers * BYTES_PER_LAYER_ENTRY * (pieces + 1);
         if need > self.budget.layer_tables() {
-            return Err(PipelineError::stage(
+            return Err(PipelineError::budget(
                 self.name(),
                 format!(
                     "the grid has {} layers along its slab axis ({}x{}x{} cells of {:.3e}); its per-layer tables need about {} MiB, more than half the memory budget ({} MiB): use larger cells, or more --mem",

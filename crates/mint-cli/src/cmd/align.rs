@@ -130,7 +130,7 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
     let (r, secs, register_secs) = (&s.result, s.seconds, s.register_seconds);
     if a.json.json {
         let v = serde_json::json!({ "set": a.set.display().to_string(), "out_set": a.out_set.display().to_string(), "global": opts.global, "distance": r.distance, "start_distance": r.start_distance, "seconds": secs, "register_seconds": register_secs, "peak_heap_bytes": crate::alloc::peak_heap(), "rounds": r.rounds, "scans": r.reports, "pairs": r.pairs });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::out::json(&v)?;
     } else {
         let how = if opts.global { format!("multiview, {} rounds", r.rounds) } else { "growing model".to_string() };
         eprintln!("aligned {} scans of {} ({how}; d = {:.4e}, start {:.4e}) in {secs:.2}s -> {}", s.scans, a.set.display(), r.distance, r.start_distance, a.out_set.display());

@@ -77,7 +77,7 @@ pub(crate) fn cmd_check(a: CheckArgs) -> Result<()> {
         if let Some(x) = &sx {
             v["self_intersections"] = serde_json::to_value(x)?;
         }
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::out::json(&v)?;
     } else {
         print_check(&name, &r);
         if let Some(x) = &sx {

@@ -258,7 +258,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
     let (mut runs, mut written, mut failed) = (Vec::new(), Vec::new(), 0usize);
     for (roi, name) in set.rois.iter().zip(&names) {
         if !roi.has_closed_contours() {
-            eprintln!("mint: warning: {}: {} has no closed contours ({} contours in all); skipped", a.input.display(), roi.label(), roi.contours.len());
+            crate::out::warn(&format!("{}: {} has no closed contours ({} contours in all); skipped", a.input.display(), roi.label(), roi.contours.len()));
             continue;
         }
         let output = dir.join(format!("{name}.ply"));
@@ -285,7 +285,7 @@ fn cmd_contours_dicom(a: ContoursArgs) -> Result<()> {
         write_stats(p, &v)?;
     }
     if a.json.json {
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::out::json(&v)?;
     }
     if a.preview && !written.is_empty() {
         let paths: Vec<Vec<std::path::PathBuf>> = written.iter().map(|p| vec![p.clone()]).collect();

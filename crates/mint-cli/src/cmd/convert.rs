@@ -64,11 +64,11 @@ pub(crate) fn cmd_convert(a: ConvertArgs) -> Result<()> {
     .with_context(|| format!("converting {} to {}", input.display(), a.output.display()))?;
     bars.finish();
     if summary.colour_kept == Some(false) {
-        eprintln!(
-            "mint: warning: {}: {} cannot hold per-vertex colour; the input's colours were dropped (PLY, OBJ and glTF keep them)",
+        crate::out::warn(&format!(
+            "{}: {} cannot hold per-vertex colour; the input's colours were dropped (PLY, OBJ and glTF keep them)",
             a.output.display(),
             summary.output_format
-        );
+        ));
     }
     if !a.quiet.quiet {
         eprintln!(

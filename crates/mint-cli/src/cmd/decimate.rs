@@ -93,14 +93,14 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         warnings.insert(0, format!("{}: {} of the input files have colour, which {} cannot hold: the output is geometry only (write .ply, .obj, .gltf or .glb to keep it)", s.resample.input, s.resample.input_coloured_files, s.output));
     }
     for w in &warnings {
-        eprintln!("mint: warning: {w}");
+        crate::out::warn(w);
     }
     if a.json.json {
         let mut v = serde_json::to_value(&s)?;
         v["warnings"] = warnings.into();
         v["mem_budget_bytes"] = mem.into();
         v["peak_heap_bytes"] = alloc::peak_heap().into();
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::out::json(&v)?;
     } else if !a.quiet.quiet {
         eprintln!("decimated {} -> {}", s.input, s.output);
         eprintln!("  input        {} faces, area {:.6}", s.input_faces, s.input_area);
@@ -138,7 +138,7 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         );
     }
     if s.intermediate_watertight && !s.output_watertight {
-        eprintln!("mint: warning: the output is less clean than the resampling (see the summary)");
+        crate::out::warn("the output is less clean than the resampling (see the summary)");
     }
     Ok(())
 }

@@ -30,7 +30,7 @@ pub(crate) fn cmd_distance(a: DistanceArgs) -> Result<()> {
         .with_context(|| format!("distance between {} and {}", a.a.display(), a.b.display()))?;
     if a.json.json {
         let v = serde_json::json!({ "a": a.a.display().to_string(), "b": a.b.display().to_string(), "a_to_b": ab, "b_to_a": ba });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::out::json(&v)?;
     } else {
         for (name, r) in [(format!("{} -> {}", a.a.display(), a.b.display()), &ab), (format!("{} -> {}", a.b.display(), a.a.display()), &ba)] {
             println!("{name} ({} samples)", r.samples);

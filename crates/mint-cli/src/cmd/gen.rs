@@ -124,7 +124,7 @@ pub(crate) fn cmd_gen(a: GenArgs) -> Result<()> {
         std::fs::rename(&tmp, &side).with_context(|| format!("{}: renaming the defect list", side.display()))?;
     }
     if a.json.json {
-        println!("{}", serde_json::to_string_pretty(&generated)?);
+        crate::out::json(&generated)?;
     } else {
         eprintln!(
             "generated {:?}: {} vertices, {} faces -> {} ({})",

@@ -29,7 +29,7 @@ pub(crate) fn cmd_info(a: InfoArgs) -> Result<()> {
             "comments": info.comments,
             "obj_info": info.obj_info,
         });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::out::json(&v)?;
     } else {
         println!("{}: {:?} ({})", a.file.display(), info.format, info.encoding);
         println!("  vertices  {}", info.vertex_count);

@@ -154,7 +154,7 @@ pub(crate) fn cmd_render(a: RenderArgs) -> Result<()> {
         if a.show_boundary {
             v["boundary_edges"] = boundary_edges.clone().into();
         }
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::out::json(&v)?;
     } else if !a.quiet.quiet {
         eprintln!("rendered {} triangles -> {} ({}x{}, {} pixels covered) in {:.2}s", s.triangles, s.output, s.width, s.height, s.covered_pixels, s.seconds);
         if s.coloured_files > 0 {

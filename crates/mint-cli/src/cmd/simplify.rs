@@ -65,7 +65,7 @@ pub(crate) fn cmd_simplify(a: SimplifyArgs) -> Result<()> {
     if a.json.json {
         let mut v = serde_json::to_value(&s)?;
         v["peak_heap_bytes"] = alloc::peak_heap().into();
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::out::json(&v)?;
     } else if !a.quiet.quiet {
         eprintln!("simplified {} -> {}", s.input, s.output);
         eprintln!("  input        {} faces, {} vertices ({} welded), {}", s.input_faces, s.input_vertices, s.welded_vertices, if s.input_watertight { "watertight" } else { "not watertight" });
@@ -89,10 +89,10 @@ pub(crate) fn cmd_simplify(a: SimplifyArgs) -> Result<()> {
         );
     }
     if s.input_watertight && !s.output_watertight {
-        eprintln!("mint: warning: the output is less clean than the input (see the summary)");
+        crate::out::warn("the output is less clean than the input (see the summary)");
     }
     if s.output_faces > s.target_faces + s.target_faces / 50 {
-        eprintln!("mint: warning: {} faces, more than the {} asked: the collapses that remained would have broken the surface", s.output_faces, s.target_faces);
+        crate::out::warn(&format!("{} faces, more than the {} asked: the collapses that remained would have broken the surface", s.output_faces, s.target_faces));
     }
     Ok(())
 }

@@ -56,7 +56,7 @@ pub fn cmd_slurm(a: SlurmArgs) -> Result<()> {
     }
     slurm::submit(&mut jobs, &o)?;
     if json && !a.wait {
-        println!("{}", serde_json::to_string_pretty(&jobs)?);
+        crate::out::json(&jobs)?;
     } else {
         for j in &jobs {
             println!("{} {} ({} tasks)", j.job_id.as_deref().unwrap_or("?"), j.stage, j.tasks);

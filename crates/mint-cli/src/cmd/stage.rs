@@ -91,7 +91,7 @@ pub fn cmd_stage(c: StageCommand) -> Result<()> {
         StageCommand::Status(a) => {
             let st = mint_pipeline::status(&a.dir)?;
             if a.json.json {
-                println!("{}", serde_json::to_string_pretty(&st)?);
+                crate::out::json(&st)?;
             } else {
                 print_status(&st);
             }

@@ -44,7 +44,7 @@ pub(crate) fn cmd_validate(a: ValidateArgs) -> Result<()> {
     }
     bars.finish();
     for w in reader.warnings() {
-        eprintln!("mint: warning: {w}");
+        crate::out::warn(&w);
     }
     let secs = t.elapsed().as_secs_f64();
     let bytes = std::fs::metadata(&a.file).map(|m| m.len()).unwrap_or(0);
@@ -55,7 +55,7 @@ pub(crate) fn cmd_validate(a: ValidateArgs) -> Result<()> {
             "file": a.file.display().to_string(), "vertices": reader.vertex_count(), "triangles": triangles,
             "seconds": secs, "triangles_per_second": tps, "mb_per_second": mbs, "checksum": checksum,
         });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::out::json(&v)?;
     } else {
         println!(
             "{}: ok, {} vertices, {} triangles in {:.3}s ({:.1} M triangles/s, {:.0} MB/s)",

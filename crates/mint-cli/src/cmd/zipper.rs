@@ -90,7 +90,7 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
     if a.json.json {
         let key = report.method();
         let v = serde_json::json!({ "set": a.set.display().to_string(), "output": a.output.display().to_string(), "seconds": secs, key: report, "check": check, "scan_reads": s.scan_reads, "peak_scan_bytes": s.peak_scan_bytes, "peak_heap_bytes": crate::alloc::peak_heap() });
-        println!("{}", serde_json::to_string_pretty(&v)?);
+        crate::out::json(&v)?;
         return Ok(());
     }
     match report {
