@@ -9,7 +9,12 @@ cd "$(dirname "$0")/.."
 PY=${PYTHON:-python3}
 VENV=${MINT_PY_VENV:-target/py-venv}
 rm -rf "$VENV"
-"$PY" -m venv "$VENV"
+if ! "$PY" -m venv "$VENV" 2>/dev/null; then
+    # Debian's python3 without python3-venv: virtualenv from PyPI instead.
+    rm -rf "$VENV"
+    "$PY" -m pip install --quiet --user virtualenv || "$PY" -m pip install --quiet --user --break-system-packages virtualenv
+    "$PY" -m virtualenv --quiet "$VENV"
+fi
 "$VENV/bin/python" -m pip install --quiet --upgrade pip
 "$VENV/bin/python" -m pip install --quiet "./python[test]"
 # From the repository root with importlib imports, so that python/mint_mesh
