@@ -68,6 +68,8 @@ __all__ = [
 PathLike = Union[str, "os.PathLike[str]"]
 Progress = Callable[[str, int, int], Optional[bool]]
 
+# Commands that take --tmp (where their spill files go).
+_TMP = {"resample", "decimate", "bool", "csg", "check", "convert"}
 # Commands whose summary comes as --json; the others run with --quiet.
 _JSON = {"resample", "decimate", "simplify", "bool", "csg", "check", "distance", "render", "gen", "info", "validate"}
 
@@ -270,9 +272,13 @@ class _Scratch:
     and Ctrl-C. ``tmp`` (the option) chooses where it lives."""
 
     def __init__(self, options: dict):
-        where = options.get("tmp")
+        where = options.pop("tmp", None)
         self._dir = tempfile.TemporaryDirectory(prefix="mint-", dir=os.fspath(where) if where else None)
         self.path = self._dir.name
+
+    def opts(self, command: str, options: dict) -> dict:
+        """``options`` with the command's own spill files in here too."""
+        return dict(options, tmp=self.path) if command in _TMP else options
 
     def __enter__(self) -> "_Scratch":
         return self
@@ -302,7 +308,7 @@ def _array_job(command: str, mesh: tuple, extra: Sequence[Any], options: dict, p
     with _Scratch(options) as s:
         inp = s.mesh(mesh, "in")
         out = s.file("out.ply")
-        summary = _command(command, [inp, *extra, out] if command != "bool" else [*extra, out], options, progress)
+        summary = _command(command, [inp, *extra, out], s.opts(command, options), progress)
         return _result(out, mesh[2], summary, not options.get("no_color"))
 
 
@@ -387,7 +393,7 @@ def boolean(a: Any, b: Any, op: str, *, cells: Optional[float] = None,
     with _Scratch(options) as s:
         pa, pb = s.mesh(ma, "a"), s.mesh(mb, "b")
         out = s.file("out.ply")
-        summary = _command("bool", [op, pa, pb, out], dict(options, cells=cells), progress)
+        summary = _command("bool", [op, pa, pb, out], s.opts("bool", dict(options, cells=cells)), progress)
         return _result(out, None, summary, False)
 
 
@@ -433,7 +439,7 @@ def csg(scene: Union[dict, str], *, cells: Optional[float] = None, progress: Opt
         with open(p, "w") as fh:
             json.dump(place(scene), fh)
         out = s.file("out.ply")
-        summary = _command("csg", [p, out], dict(options, cells=cells), progress)
+        summary = _command("csg", [p, out], s.opts("csg", dict(options, cells=cells)), progress)
         return _result(out, None, summary, False)
 
 
@@ -450,7 +456,7 @@ def check(vertices: Any, faces: Any = None, *, progress: Optional[Progress] = No
     """
     mesh = _as_mesh(vertices, faces, "mesh")
     with _Scratch(options) as s:
-        return _command("check", [s.mesh(mesh, "mesh")], options, progress)
+        return _command("check", [s.mesh(mesh, "mesh")], s.opts("check", options), progress)
 
 
 def distance(a: Any, b: Any, *, progress: Optional[Progress] = None, **options: Any) -> dict:
@@ -560,13 +566,28 @@ def decimate_file(inputs: Union[PathLike, Iterable[PathLike]], output: PathLike,
 def simplify_file(input: PathLike, output: PathLike, *, target_faces: int, progress: Optional[Progress] = None,
                   **options: Any) -> dict:
     """``mint simplify``: quadric edge collapse of a mesh file that fits in
-    memory. Returns the ``--json`` summary."""
+    memory. Returns the ``--json`` summary.
+
+    >>> import mint_mesh, tempfile, os
+    >>> d = tempfile.mkdtemp()
+    >>> _ = mint_mesh.gen("sphere", os.path.join(d, "s.ply"), faces=20000)
+    >>> mint_mesh.simplify_file(os.path.join(d, "s.ply"), os.path.join(d, "small.ply"), target_faces=2000)["output_faces"]
+    2000
+    """
     return _command("simplify", [input, output], dict(options, faces=_count(target_faces, "target_faces")), progress)
 
 
 def boolean_file(a: PathLike, b: PathLike, op: str, output: PathLike, *, cells: Optional[float] = None,
                  progress: Optional[Progress] = None, **options: Any) -> dict:
-    """``mint bool OP A B OUT``, out of core. Returns the ``--json`` summary."""
+    """``mint bool OP A B OUT``, out of core. Returns the ``--json`` summary.
+
+    >>> import mint_mesh, tempfile, os
+    >>> d = tempfile.mkdtemp()
+    >>> a, b = os.path.join(d, "a.ply"), os.path.join(d, "b.ply")
+    >>> _ = mint_mesh.gen("sphere", a, faces=20000); _ = mint_mesh.gen("torus", b, faces=20000)
+    >>> mint_mesh.boolean_file(a, b, "difference", os.path.join(d, "out.ply"), cells=100000)["output_faces"] > 0
+    True
+    """
     if op not in _OPS:
         raise ValueError(f"op: expected one of {', '.join(_OPS)}, got {op!r}")
     return _command("bool", [op, a, b, output], dict(options, cells=cells), progress)
@@ -574,38 +595,83 @@ def boolean_file(a: PathLike, b: PathLike, op: str, output: PathLike, *, cells: 
 
 def csg_file(scene: PathLike, output: PathLike, *, cells: Optional[float] = None, progress: Optional[Progress] = None,
              **options: Any) -> dict:
-    """``mint csg SCENE.json OUT``. Returns the ``--json`` summary."""
+    """``mint csg SCENE.json OUT``. Returns the ``--json`` summary.
+
+    >>> import mint_mesh, tempfile, os, json
+    >>> d = tempfile.mkdtemp()
+    >>> with open(os.path.join(d, "scene.json"), "w") as f:
+    ...     json.dump({"union": [{"sphere": {"radius": 1}}, {"box": {"size": [1, 1, 3]}}]}, f)
+    >>> mint_mesh.csg_file(os.path.join(d, "scene.json"), os.path.join(d, "out.ply"), cells=50000)["output_faces"] > 0
+    True
+    """
     return _command("csg", [scene, output], dict(options, cells=cells), progress)
 
 
 def check_file(inputs: Union[PathLike, Iterable[PathLike]], *, progress: Optional[Progress] = None,
                **options: Any) -> dict:
     """``mint check --json`` of a file (or tiles of one surface), within
-    ``mem``: the verdict ``watertight`` and what spoils it."""
+    ``mem``: the verdict ``watertight`` and what spoils it.
+
+    >>> import mint_mesh, tempfile, os
+    >>> p = os.path.join(tempfile.mkdtemp(), "scan.ply")
+    >>> _ = mint_mesh.gen("scan", p, faces=20000)
+    >>> r = mint_mesh.check_file(p, mem="64M")
+    >>> r["watertight"], r["boundary_edges"] > 0
+    (False, True)
+    """
     return _command("check", _paths(inputs, "inputs"), options, progress)
 
 
 def distance_file(a: PathLike, b: PathLike, *, progress: Optional[Progress] = None, **options: Any) -> dict:
-    """``mint distance --json`` between two mesh files."""
+    """``mint distance --json`` between two mesh files.
+
+    >>> import mint_mesh, tempfile, os
+    >>> d = tempfile.mkdtemp()
+    >>> _ = mint_mesh.gen("sphere", os.path.join(d, "s.ply"), faces=20000)
+    >>> _ = mint_mesh.simplify_file(os.path.join(d, "s.ply"), os.path.join(d, "t.ply"), target_faces=2000)
+    >>> mint_mesh.distance_file(os.path.join(d, "s.ply"), os.path.join(d, "t.ply"), samples=10000)["a_to_b"]["max"] < 0.05
+    True
+    """
     return _command("distance", [a, b], options, progress)
 
 
 def render_file(inputs: Union[PathLike, Iterable[PathLike]], output: PathLike, *, progress: Optional[Progress] = None,
                 **options: Any) -> dict:
     """``mint render``: a PNG of meshes of any size (streamed). Returns the
-    ``--json`` summary."""
+    ``--json`` summary.
+
+    >>> import mint_mesh, tempfile, os
+    >>> d = tempfile.mkdtemp()
+    >>> _ = mint_mesh.gen("torus", os.path.join(d, "t.ply"), faces=20000)
+    >>> _ = mint_mesh.render_file(os.path.join(d, "t.ply"), os.path.join(d, "t.png"), size="400x300", view="all")
+    >>> os.path.getsize(os.path.join(d, "t.png")) > 0
+    True
+    """
     return _command("render", [*_paths(inputs, "inputs"), output], options, progress)
 
 
 def convert(inputs: Union[PathLike, Iterable[PathLike]], output: PathLike, *, progress: Optional[Progress] = None,
             **options: Any) -> None:
     """``mint convert``: between PLY, OBJ, STL, OFF, glTF..., streaming
-    (``ascii``, ``double``, ``no_color``)."""
+    (``ascii``, ``double``, ``no_color``).
+
+    >>> import mint_mesh, tempfile, os
+    >>> d = tempfile.mkdtemp()
+    >>> _ = mint_mesh.gen("torus", os.path.join(d, "t.ply"), faces=2000)
+    >>> mint_mesh.convert(os.path.join(d, "t.ply"), os.path.join(d, "t.glb"))
+    >>> len(mint_mesh.read(os.path.join(d, "t.glb")).faces)
+    2000
+    """
     _command("convert", [*_paths(inputs, "inputs"), output], options, progress)
 
 
 def gen(shape: str, output: PathLike, *, progress: Optional[Progress] = None, **options: Any) -> dict:
     """``mint gen``: a synthetic mesh file of any size ("sphere", "torus",
     "genus", "components", "scan"; ``faces``, ``seed``, ``genus``,
-    ``color``). Returns the ``--json`` summary."""
+    ``color``). Returns the ``--json`` summary.
+
+    >>> import mint_mesh, tempfile, os
+    >>> mint_mesh.gen("torus", os.path.join(tempfile.mkdtemp(), "t.ply"), faces=2000)["genus"]
+    1
+    """
     return _command("gen", [shape, output], options, progress)
