@@ -1,5 +1,5 @@
 //! `mint_mesh._mint`, the Rust half of the Python package: it runs mint's
-//! commands in this process through `mint_cli::out::run_embedded` (the same
+//! commands in this process through `mint_cli::embed::run_embedded` (the same
 //! code, options and output bytes as the `mint` binary), and moves meshes
 //! between numpy arrays and files with mint-io's one writer and one loader.
 //! The Python half (`mint_mesh/__init__.py`) checks arguments, names
@@ -16,7 +16,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
-use mint_cli::out::{EmbedError, ErrorKind, Hooks};
+use mint_cli::embed::{EmbedError, ErrorKind};
+use mint_cli::out::Hooks;
 use crossbeam_channel as channel;
 use numpy::{IntoPyArray, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyRuntimeError;
@@ -49,7 +50,7 @@ fn run(py: Python<'_>, argv: Vec<String>, progress: Option<Py<PyAny>>) -> PyResu
     let worker = std::thread::Builder::new()
         .name("mint-run".into())
         .spawn(move || {
-            let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| mint_cli::out::run_embedded(&argv, hooks)));
+            let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| mint_cli::embed::run_embedded(&argv, hooks)));
             let _ = tx.send(Msg::Done(r));
         })
         .map_err(|e| PyRuntimeError::new_err(format!("mint: cannot start a thread: {e}")))?;
@@ -122,7 +123,7 @@ fn run(py: Python<'_>, argv: Vec<String>, progress: Option<Py<PyAny>>) -> PyResu
 /// name); returns its exit status. For the `mint` script the wheel installs.
 #[pyfunction]
 fn cli_main(py: Python<'_>, argv: Vec<String>) -> u8 {
-    py.detach(|| mint_cli::out::exit_status(argv.into_iter().map(Into::into).collect()))
+    py.detach(|| mint_cli::embed::exit_status(argv.into_iter().map(Into::into).collect()))
 }
 
 /// A mesh file, whole: `(vertices float64 (N, 3), faces int64 (M, 3),

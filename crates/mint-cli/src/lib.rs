@@ -12,12 +12,13 @@
 //! file), `paths` (output checks), `progress` (bars and Ctrl-C), `units`
 //! (sizes), `alloc` (the counting allocator) and `out` (where summaries
 //! and warnings go: the terminal, or an embedding such as the Python
-//! package, through [`out::run_embedded`]).
+//! package, through [`embed::run_embedded`]).
 
 pub mod alloc;
 mod cli;
 mod cmd;
 mod contour_report;
+pub mod embed;
 mod jobs;
 pub mod out;
 mod paths;
@@ -33,34 +34,5 @@ static GLOBAL: alloc::CountingAllocator = alloc::CountingAllocator;
 
 /// Runs the command line and returns the process exit code.
 pub fn main() -> ExitCode {
-    ExitCode::from(out::exit_status(std::env::args_os().collect()))
-}
-
-/// The exit status of a command's result, printing the error as one line.
-fn exit_status(result: anyhow::Result<()>) -> u8 {
-    match result {
-        Ok(()) => 0,
-        Err(e) => {
-            eprintln!("mint: error: {}", one_line(&e));
-            if progress::interrupted() {
-                130
-            } else {
-                1
-            }
-        }
-    }
-}
-
-/// An error and its causes on one line (a cause already quoted is not
-/// repeated).
-pub(crate) fn one_line(e: &anyhow::Error) -> String {
-    let mut msg = e.to_string();
-    for cause in e.chain().skip(1) {
-        let c = cause.to_string();
-        if !msg.contains(&c) {
-            msg.push_str(": ");
-            msg.push_str(&c);
-        }
-    }
-    msg.replace('\n', " ")
+    ExitCode::from(embed::exit_status(std::env::args_os().collect()))
 }
