@@ -150,7 +150,10 @@ def test_warnings_become_python_warnings(tmp_path, torus):
 
 
 CTRL_C = textwrap.dedent("""
-    import sys, time, mint_mesh
+    import signal, sys, time, mint_mesh
+    # Python's own Ctrl-C handler, even when this test runs in a background
+    # job (whose children start with SIGINT ignored, so Python installs none).
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     print("ready", flush=True)
     try:
         mint_mesh.resample_file(sys.argv[1], sys.argv[2], cells=400000000, mem="512M", tmp=sys.argv[3])

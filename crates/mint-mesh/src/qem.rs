@@ -332,6 +332,13 @@ pub const BLOCK_MIN_FACES: usize = 400_000;
 pub const BLOCKS: usize = 8;
 /// Blocks stop at this multiple of their share of the target.
 const BLOCK_SLACK: f64 = 1.1;
+/// Nor does a block collapse more than this ratio of its faces: the held
+/// vertices along its cuts keep their fine faces through the block phase,
+/// so a block asked for a large reduction would collapse its inside far
+/// beyond what the whole pass, which later removes those seams, would
+/// have chosen (a 2M-face sphere to 20k: seams of about 23k faces, more
+/// than the target). The whole pass does the rest in cost order.
+pub const BLOCK_MAX_RATIO: u64 = 8;
 
 /// Collapses edges of the mesh until at most `target_faces` faces remain
 /// (or no collapse is allowed, or the next one's error would exceed
@@ -533,6 +540,7 @@ fn collapse_blocks<Q: VertexQuadric>(
         // spends the rest where it costs least, first on the fine faces
         // along the held vertices.
         let share = ((BLOCK_SLACK * target_faces as f64) * part.faces.len() as f64 / total).round() as u64;
+        let share = share.max(part.faces.len() as u64 / block_max_ratio());
         let mut st = CollapseStats::default();
         let (p, f, q) = run(p, part.faces.clone(), q, &pinned, share, max_distance, stop, &mut st);
         *results[b].lock().unwrap() = Some(BlockResult { pos: p, faces: f, quad: q, stats: st });
@@ -572,6 +580,11 @@ fn collapse_blocks<Q: VertexQuadric>(
         out.extend(r.faces.iter().map(|t| t.map(|l| part.global[l as usize])));
     }
     out
+}
+
+/// [`BLOCK_MAX_RATIO`], or `MINT_QEM_BLOCK_RATIO` (for measuring it).
+fn block_max_ratio() -> u64 {
+    std::env::var("MINT_QEM_BLOCK_RATIO").ok().and_then(|v| v.parse().ok()).filter(|&r| r >= 1).unwrap_or(BLOCK_MAX_RATIO)
 }
 
 /// One block of [`collapse_blocks`]: its faces in local ids, and the
