@@ -267,12 +267,33 @@ def read(path: PathLike) -> MeshResult:
     return MeshResult((v, f) if c is None else (v, f, c), None)
 
 
+# Array calls keep their scratch files in memory (tmpfs) when it has room
+# for this many times the arrays' bytes: the input, the output and the
+# engine's shards never touch a disk, as the arrays themselves do not.
+_SHM = "/dev/shm"
+_SHM_ROOM = 8
+
+
+def _scratch_root(need: int) -> Optional[str]:
+    try:
+        st = os.statvfs(_SHM)
+    except OSError:
+        return None
+    if os.access(_SHM, os.W_OK) and st.f_bavail * st.f_frsize >= _SHM_ROOM * need:
+        return _SHM
+    return None
+
+
 class _Scratch:
     """A temporary directory for one array call: removed on return, error
-    and Ctrl-C. ``tmp`` (the option) chooses where it lives."""
+    and Ctrl-C. ``tmp`` (the option) chooses where it lives; by default
+    /dev/shm when it has room for the meshes (``meshes``), else the
+    system's temporary directory."""
 
-    def __init__(self, options: dict):
+    def __init__(self, options: dict, meshes: Sequence[tuple] = ()):
         where = options.pop("tmp", None)
+        if where is None:
+            where = _scratch_root(sum(m[0].nbytes + m[1].nbytes for m in meshes))
         self._dir = tempfile.TemporaryDirectory(prefix="mint-", dir=os.fspath(where) if where else None)
         self.path = self._dir.name
 
@@ -305,7 +326,7 @@ def _result(path: str, colors_in: Optional[np.ndarray], summary: Optional[dict],
 
 
 def _array_job(command: str, mesh: tuple, extra: Sequence[Any], options: dict, progress: Optional[Progress]) -> MeshResult:
-    with _Scratch(options) as s:
+    with _Scratch(options, [mesh]) as s:
         inp = s.mesh(mesh, "in")
         out = s.file("out.ply")
         summary = _command(command, [inp, *extra, out], s.opts(command, options), progress)
@@ -390,7 +411,7 @@ def boolean(a: Any, b: Any, op: str, *, cells: Optional[float] = None,
     if op not in _OPS:
         raise ValueError(f"op: expected one of {', '.join(_OPS)}, got {op!r}")
     ma, mb = _as_mesh(a, None, "a"), _as_mesh(b, None, "b")
-    with _Scratch(options) as s:
+    with _Scratch(options, [ma, mb]) as s:
         pa, pb = s.mesh(ma, "a"), s.mesh(mb, "b")
         out = s.file("out.ply")
         summary = _command("bool", [op, pa, pb, out], s.opts("bool", dict(options, cells=cells)), progress)
@@ -455,7 +476,7 @@ def check(vertices: Any, faces: Any = None, *, progress: Optional[Progress] = No
     (True, 1)
     """
     mesh = _as_mesh(vertices, faces, "mesh")
-    with _Scratch(options) as s:
+    with _Scratch(options, [mesh]) as s:
         return _command("check", [s.mesh(mesh, "mesh")], s.opts("check", options), progress)
 
 
@@ -470,7 +491,7 @@ def distance(a: Any, b: Any, *, progress: Optional[Progress] = None, **options: 
     True
     """
     ma, mb = _as_mesh(a, None, "a"), _as_mesh(b, None, "b")
-    with _Scratch(options) as s:
+    with _Scratch(options, [ma, mb]) as s:
         return _command("distance", [s.mesh(ma, "a"), s.mesh(mb, "b")], options, progress)
 
 
@@ -493,7 +514,7 @@ def render(meshes: Any, *, size: Any = None, view: Optional[str] = None, path: O
     if not meshes:
         raise ValueError("meshes: no mesh to draw")
     checked = [_as_mesh(m, None, f"meshes[{i}]") for i, m in enumerate(meshes)]
-    with _Scratch(options) as s:
+    with _Scratch(options, checked) as s:
         files = [s.mesh(m, f"m{i}") for i, m in enumerate(checked)]
         out = os.fspath(path) if path is not None else s.file("picture.png")
         _command("render", [*files, out], dict(options, size=size, view=view), progress)

@@ -171,3 +171,12 @@ pub(crate) fn print_check(name: &str, r: &mint_mesh::CheckReport) {
     println!("  degenerate faces {} ({} with a repeated index), duplicate faces {}", r.degenerate_faces, r.collapsed_faces, r.duplicate_faces);
     println!("  Euler characteristic {}, signed volume {:.9}, area {:.9}", r.euler_characteristic, r.signed_volume, r.surface_area);
 }
+
+/// The decimate and simplify summaries' line on the output's distance to
+/// its reference.
+pub(crate) fn surface_error_line(e: &mint_decimate::SurfaceError) -> String {
+    format!(
+        "  distance     to the {}: mean {:.2e}, max {:.2e} of its diagonal ({:.3e} and {:.3e}; 2 x {} samples, {:.2} s)",
+        e.reference, e.mean_rel, e.max_rel, e.mean, e.max, e.samples, e.seconds
+    )
+}

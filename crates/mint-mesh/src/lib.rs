@@ -37,7 +37,7 @@ pub use bvh::{closest_point_on_triangle, TriangleBvh};
 pub use check::{check, check_mesh, try_check, CheckReport};
 pub use distance::{
     distance, distance_to_bvh, symmetric_distance, try_distance, try_symmetric_distance,
-    DistanceReport,
+    DistanceReport, MeshRef,
 };
 pub use error::MeshError;
 pub use rng::SplitMix64;

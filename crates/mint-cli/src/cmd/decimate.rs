@@ -127,6 +127,7 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
             s.output_precision,
             if s.colour { "; colour by colour-aware quadrics" } else { "" }
         );
+        eprintln!("{}", crate::summary::surface_error_line(&s.error));
         eprintln!(
             "  output       {}{}",
             if s.output_watertight { "watertight (closed, 2-manifold, consistently oriented)" } else { "NOT watertight" },
