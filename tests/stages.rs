@@ -379,7 +379,7 @@ fn work_directories_compare_files_and_decimate_resumes() {
     let plan: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.path().join("w/plan.json")).unwrap()).unwrap();
     assert_eq!(plan["spec"]["job"]["inputs"][0].as_str().unwrap(), abs.to_str().unwrap());
     for out in ["d1.ply", "d2.ply"] {
-        mint_in(&["decimate", "s.ply", out, "--faces", "2000", "--work", "dw", "--quiet"]);
+        mint_in(&["decimate", "s.ply", out, "--faces", "2000", "--work", "dw", "--quiet", "--route", "resample"]);
     }
     assert!(d.path().join("dw/intermediate.ply").is_file());
     assert_eq!(std::fs::read(d.path().join("d1.ply")).unwrap(), std::fs::read(d.path().join("d2.ply")).unwrap());

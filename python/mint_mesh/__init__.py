@@ -355,11 +355,14 @@ def resample(vertices: Any, faces: Any = None, *, colors: Any = None, cells: Opt
 
 def decimate(vertices: Any, faces: Any = None, *, target_faces: int, colors: Any = None,
              progress: Optional[Progress] = None, **options: Any) -> MeshResult:
-    """Decimates to about ``target_faces`` faces as ``mint decimate``:
-    resampling to an intermediate mesh (closes holes, drops detail below
-    the target's scale), then quadric edge collapse. Watertight when the
-    resampling is. Options: ``intermediate``, ``error``, ``color_weight``,
-    ``no_color``, ``mem``, ``threads``...
+    """Decimates to about ``target_faces`` faces as ``mint decimate``: a
+    clean solid (closed, 2-manifold, oriented) that fits is simplified
+    itself; anything else is resampled to an intermediate mesh first
+    (closes holes, drops detail below the target's scale), then quadric
+    edge collapse. ``.summary["route"]`` says which ran and why, and
+    ``.summary["error"]`` what it cost (sampled distance to the input).
+    Options: ``route`` ("auto", "direct", "resample"), ``intermediate``,
+    ``error``, ``color_weight``, ``no_color``, ``mem``, ``threads``...
 
     >>> import mint_mesh
     >>> v, f = mint_mesh.generate("torus", faces=100000)

@@ -66,6 +66,34 @@ pub const NEEDLE_CELLS: f64 = 8.0;
 /// that a few long slivers in an ordinary scan change nothing.
 pub const NEEDLE_SHARE: f64 = 0.75;
 
+/// How [`decimate`] reaches the in-core stage.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Route {
+    /// Directly when the input is a clean solid that fits (see
+    /// [`DIRECT_FACTOR`]), else by resampling.
+    #[default]
+    Auto,
+    /// Simplify the input itself (read whole, welded).
+    Direct,
+    /// Resample to an intermediate first, whatever the input.
+    Resample,
+}
+
+/// `Route::Auto` simplifies the input directly when it is closed,
+/// 2-manifold and oriented and has at most this many times the faces of
+/// the intermediate it would resample to. The quadric collapse then sees
+/// the input's own triangles: sharp edges stay sharp (a resampling rounds
+/// them to the cell) and thin parts keep the shape the input gives them;
+/// measured on the shared meshes and thin shapes (docs/PERFORMANCE.md,
+/// `scripts/bench/thin.sh`). Larger inputs go through the resampling,
+/// which bounds the in-core stage's time and memory.
+pub const DIRECT_FACTOR: u64 = 4;
+
+/// The heap a direct simplification needs per input face (the in-core
+/// stage's tables, about 185 bytes per face measured, and the welding):
+/// the input goes directly only when its faces fit `--mem` at this rate.
+pub const DIRECT_BYTES_PER_FACE: u64 = 256;
+
 /// Options of [`decimate`].
 #[derive(Debug, Clone)]
 pub struct DecimateOptions {
@@ -81,6 +109,8 @@ pub struct DecimateOptions {
     pub write: WriteSpec,
     /// How much colour weighs in the collapse ([`COLOUR_WEIGHT`]).
     pub colour_weight: f64,
+    /// Directly, by resampling, or chosen ([`Route`]).
+    pub route: Route,
     /// The resampling's tuning (memory, threads, work directory, parts…).
     /// With a work directory the intermediate mesh is kept there too
     /// (`intermediate.ply`), so that the same command resumes.
@@ -92,6 +122,10 @@ pub struct DecimateOptions {
 pub struct DecimateSummary {
     pub input: String,
     pub output: String,
+    /// "direct" (the input simplified itself) or "resample" (through an
+    /// intermediate resampling), and why.
+    pub route: &'static str,
+    pub route_reason: String,
     /// The output carries per-vertex colour: the intermediate's, through
     /// colour-aware quadrics (`mint_mesh::qem::collapse_coloured`).
     pub colour: bool,
@@ -128,7 +162,8 @@ pub struct DecimateSummary {
     pub seconds_total: f64,
     /// Temporary files and directories that killed runs had left, removed.
     pub removed_dead: Vec<String>,
-    pub resample: ResampleSummary,
+    /// The resampling's summary (none on the direct route).
+    pub resample: Option<ResampleSummary>,
 }
 
 /// Decimates `inputs` (one surface, one or more files) into `output`; see
@@ -157,6 +192,35 @@ pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress
     let m = o.intermediate_faces.unwrap_or((INTERMEDIATE_FACTOR * o.target_faces).max(INTERMEDIATE_FLOOR).min(faces)).max(o.target_faces);
     let (h, needles) = cell_size(&pass, m);
     let needle_area: f64 = needles.iter().map(|b| b.area).sum();
+    // The direct route: a clean solid of a size the in-core stage takes.
+    let fits = faces.saturating_mul(DIRECT_BYTES_PER_FACE) <= o.tuning.mem_bytes;
+    let mut why_not = match o.route {
+        Route::Resample => "asked (--route resample)".to_string(),
+        Route::Direct | Route::Auto if inputs.len() > 1 => format!("{} files (the direct route reads one)", inputs.len()),
+        Route::Direct => String::new(),
+        Route::Auto if o.intermediate_faces.is_some() => "an intermediate size was given".to_string(),
+        Route::Auto if faces > DIRECT_FACTOR * m => format!("{faces} faces, more than {DIRECT_FACTOR} x the {m} of the intermediate"),
+        Route::Auto if !fits => format!("{faces} faces need about {} MiB in memory, more than --mem", faces * DIRECT_BYTES_PER_FACE >> 20),
+        Route::Auto => String::new(),
+    };
+    if why_not.is_empty() {
+        let want_colour = !o.write.no_colour && MeshWriter::holds_colour(format);
+        let w = read_welded(input, true, want_colour)?;
+        check_cancel(progress)?;
+        let judged = mint_mesh::try_check(&w.positions, &w.tris).map_err(|e| PipelineError::stage(input, format!("judging the input: {e}")))?;
+        if judged.watertight || o.route == Route::Direct {
+            let reason = if o.route == Route::Direct {
+                "asked (--route direct)".to_string()
+            } else {
+                format!("the input is closed, 2-manifold and oriented, and its {faces} faces fit in memory: its own triangles are simplified")
+            };
+            return decimate_directly(inputs, output, format, o, w, faces, area, reason, seconds_area, t0, progress);
+        }
+        why_not = format!(
+            "the input is not a clean solid ({} boundary edges, {} non-manifold edges, {} inconsistently oriented): the resampling closes and orients it",
+            judged.boundary_edges, judged.non_manifold_edges, judged.inconsistently_oriented_edges
+        );
+    }
     check_grid(input, &pass, h, m, &needles)?;
     // 2. Resample into a temporary file beside the output (or in tmp).
     let t = Instant::now();
@@ -205,6 +269,8 @@ pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress
     Ok(DecimateSummary {
         input: mint_pipeline::spec::files_name(inputs),
         output: output.display().to_string(),
+        route: "resample",
+        route_reason: why_not,
         output_precision,
         input_faces: faces,
         input_area: area,
@@ -229,9 +295,97 @@ pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress
         seconds_write,
         seconds_total: t0.elapsed().as_secs_f64(),
         removed_dead: removed_dead.iter().map(|p| p.display().to_string()).chain(rs.removed_dead.iter().cloned()).collect(),
-        resample: rs,
+        resample: Some(rs),
     })
 }
+
+/// The direct route of [`decimate`]: the input (read whole and welded,
+/// `w`) simplified itself.
+#[allow(clippy::too_many_arguments)]
+fn decimate_directly(
+    inputs: &[PathBuf],
+    output: &Path,
+    format: Format,
+    o: &DecimateOptions,
+    w: Welded,
+    faces: u64,
+    area: f64,
+    route_reason: String,
+    seconds_area: f64,
+    t0: Instant,
+    progress: &dyn Progress,
+) -> Result<DecimateSummary, PipelineError> {
+    let input = inputs[0].as_path();
+    let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
+    let tolerance = tolerance_of(&w.positions);
+    let colour = w.colours.is_some();
+    let (input_faces, t) = (w.tris.len() as u64, Instant::now());
+    let (sr, output_precision, _, seconds_write, error) =
+        simplify_and_write(input, output, format, &o.write.options(None, colour), tolerance, w.positions, w.tris, w.colours, o.colour_weight, &so, Reference::Own("input"), progress)?;
+    Ok(DecimateSummary {
+        input: mint_pipeline::spec::files_name(inputs),
+        output: output.display().to_string(),
+        route: "direct",
+        route_reason,
+        output_precision,
+        input_faces: faces,
+        input_area: area,
+        needles_ignored: 0,
+        needle_area: 0.0,
+        cell_size: 0.0,
+        intermediate_faces_asked: 0,
+        intermediate_faces: input_faces,
+        output_faces: sr.output_faces,
+        output_vertices: sr.output_vertices,
+        colour,
+        target_faces: o.target_faces,
+        simplify_error: sr.error,
+        intermediate_watertight: sr.input_watertight,
+        output_watertight: sr.output_watertight,
+        relaxed: sr.relaxed,
+        folded_pairs_removed: sr.folded_pairs_removed,
+        error,
+        seconds_area,
+        seconds_resample: 0.0,
+        seconds_simplify: t.elapsed().as_secs_f64() - seconds_write,
+        seconds_write,
+        seconds_total: t0.elapsed().as_secs_f64(),
+        removed_dead: Vec::new(),
+        resample: None,
+    })
+}
+
+/// A mesh file read whole for the in-core stage: welded (optionally),
+/// with its per-vertex colours when wanted and present.
+struct Welded {
+    positions: Vec<[f64; 3]>,
+    tris: Vec<[u32; 3]>,
+    colours: Option<Vec<[u8; 4]>>,
+    welded: u64,
+}
+
+/// Reads `input` whole and welds vertices at identical positions (`weld`);
+/// each welded vertex keeps one of its copies' colours (the output's come
+/// from the colour quadrics anyway).
+fn read_welded(input: &Path, weld: bool, want_colour: bool) -> Result<Welded, PipelineError> {
+    let (mut positions, mut tris) = mint_io::read_mesh(input)?;
+    if tris.is_empty() {
+        return Err(PipelineError::Empty { path: input.to_path_buf() });
+    }
+    let mut colours = if want_colour { vertex_colours(input)? } else { None };
+    let welded = if weld {
+        let before = positions.clone();
+        let n = mint_mesh::weld(&mut positions, &mut tris);
+        if let Some(c) = colours.as_mut() {
+            *c = rekey_colours(&before, &positions, c);
+        }
+        n
+    } else {
+        0
+    };
+    Ok(Welded { positions, tris, colours, welded })
+}
+
 
 /// Simplifies a mesh held in memory and writes it: the in-core stage of
 /// [`decimate`] and all of [`simplify_file`]. Returns the simplifier's
@@ -469,25 +623,9 @@ pub fn simplify_file(input: &Path, output: &Path, o: &SimplifyFileOptions, progr
     if o.target_faces < 4 {
         return Err(PipelineError::stage(output, format!("--faces {}: a closed surface needs at least 4 faces", o.target_faces)));
     }
-    let (mut positions, mut tris) = mint_io::read_mesh(input)?;
-    if tris.is_empty() {
-        return Err(PipelineError::Empty { path: input.to_path_buf() });
-    }
-    let (input_faces, input_vertices) = (tris.len() as u64, positions.len() as u64);
-    // Per-vertex colour, when kept: welding merges vertices, so the colours
-    // come from the mesh as read (each welded vertex keeps one of its
-    // copies' colour; the output's from the nearest point anyway).
-    let mut colours = if o.write.colours && MeshWriter::holds_colour(format) { vertex_colours(input)? } else { None };
-    let welded = if o.weld {
-        let before = positions.clone();
-        let n = mint_mesh::weld(&mut positions, &mut tris);
-        if let Some(c) = colours.as_mut() {
-            *c = rekey_colours(&before, &positions, c);
-        }
-        n
-    } else {
-        0
-    };
+    let want_colour = o.write.colours && MeshWriter::holds_colour(format);
+    let Welded { positions, tris, colours, welded } = read_welded(input, o.weld, want_colour)?;
+    let (input_faces, input_vertices) = (tris.len() as u64, positions.len() as u64 + welded);
     let seconds_read = t0.elapsed().as_secs_f64();
     check_cancel(progress)?;
     let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };

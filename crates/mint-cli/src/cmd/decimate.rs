@@ -48,6 +48,13 @@ pub struct DecimateArgs {
     /// intermediate's colour at its nearest point.
     #[arg(long)]
     pub no_color: bool,
+    /// How the in-core stage is reached. auto: a closed, 2-manifold,
+    /// oriented input of at most 4 x the intermediate's faces that fits
+    /// --mem is simplified itself (its sharp edges and thin parts as they
+    /// are); anything else (open, dirty, larger) is resampled first. The
+    /// summary says which ran and why.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub route: RouteArg,
     /// How much colour weighs in the collapse: a full-range colour
     /// difference across a face costs what a distance of W times the
     /// mesh's extent does. Larger keeps colour borders sharper at some cost
@@ -65,6 +72,14 @@ pub struct DecimateArgs {
     pub json: JsonArg,
 }
 
+/// `--route`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum RouteArg {
+    Auto,
+    Direct,
+    Resample,
+}
+
 pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
     let files = crate::jobs::surface_files(&a.inputs)?;
     let refs: Vec<&std::path::Path> = files.iter().map(|p| p.as_path()).collect();
@@ -79,6 +94,11 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         max_error: a.error,
         write: mint_pipeline::WriteSpec { no_colour: a.no_color, ..Default::default() },
         colour_weight: a.color_weight,
+        route: match a.route {
+            RouteArg::Auto => mint_decimate::Route::Auto,
+            RouteArg::Direct => mint_decimate::Route::Direct,
+            RouteArg::Resample => mint_decimate::Route::Resample,
+        },
         tuning: mint_pipeline::Tuning { mem_bytes: mem, threads: a.threads, tmp_dir: a.tmp.clone(), work_dir: a.work.clone(), ..Default::default() },
     };
     let bars = Bars::new(a.quiet.quiet || a.json.json);
@@ -88,9 +108,18 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         write_before_after(&files, &a.output, a.preview_up.up, a.quiet.quiet || a.json.json, &bars)?;
     }
     // The resampling's warnings (an open input read as a sheet, …).
-    let mut warnings = crate::summary::summary_warnings_with(&s.resample, "`mint resample --signs union`");
-    if s.resample.input_coloured_files > 0 && !s.colour && !a.no_color {
-        warnings.insert(0, format!("{}: {} of the input files have colour, which {} cannot hold: the output is geometry only (write .ply, .obj, .gltf or .glb to keep it)", s.resample.input, s.resample.input_coloured_files, s.output));
+    let mut warnings = match &s.resample {
+        Some(r) => {
+            let mut w = crate::summary::summary_warnings_with(r, "`mint resample --signs union`");
+            if r.input_coloured_files > 0 && !s.colour && !a.no_color {
+                w.insert(0, format!("{}: {} of the input files have colour, which {} cannot hold: the output is geometry only (write .ply, .obj, .gltf or .glb to keep it)", r.input, r.input_coloured_files, s.output));
+            }
+            w
+        }
+        None => Vec::new(),
+    };
+    if s.resample.is_none() && !s.colour && !a.no_color && files.iter().any(|f| mint_io::has_vertex_colour(f).unwrap_or(false)) {
+        warnings.insert(0, format!("{}: the input has colour, which {} cannot hold: the output is geometry only (write .ply or .obj to keep it)", s.input, s.output));
     }
     for w in &warnings {
         crate::out::warn(w);
@@ -111,13 +140,17 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
                 100.0 * s.needle_area / s.input_area
             );
         }
-        eprintln!("  resampled    {} faces (asked {}), cells of {:.6}, {}", s.intermediate_faces, s.intermediate_faces_asked, s.cell_size, if s.intermediate_watertight {
-            "watertight"
-        } else if s.resample.sign_rule == "sheet" {
-            "an open sheet (the input is open)"
-        } else {
-            "NOT watertight"
-        });
+        eprintln!("  route        {}: {}", s.route, s.route_reason);
+        match &s.resample {
+            Some(r) => eprintln!("  resampled    {} faces (asked {}), cells of {:.6}, {}", s.intermediate_faces, s.intermediate_faces_asked, s.cell_size, if s.intermediate_watertight {
+                "watertight"
+            } else if r.sign_rule == "sheet" {
+                "an open sheet (the input is open)"
+            } else {
+                "NOT watertight"
+            }),
+            None => eprintln!("  welded       {} faces, {}", s.intermediate_faces, if s.intermediate_watertight { "watertight" } else { "NOT watertight" }),
+        }
         eprintln!(
             "  simplified   {} faces (target {}), {} vertices, error {:.2e} of the extent; coordinates {}{}",
             s.output_faces,
@@ -139,7 +172,7 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         );
     }
     if s.intermediate_watertight && !s.output_watertight {
-        crate::out::warn("the output is less clean than the resampling (see the summary)");
+        crate::out::warn(if s.resample.is_some() { "the output is less clean than the resampling (see the summary)" } else { "the output is less clean than the input (see the summary)" });
     }
     Ok(())
 }
