@@ -531,12 +531,13 @@ fn decimate_hits_its_target_keeps_closed_inputs_closed_and_errs_less_with_more_f
     let (mean, reported) = (dist["a_to_b"]["mean"].as_f64().unwrap().max(dist["b_to_a"]["mean"].as_f64().unwrap()), j["error"]["mean"].as_f64().unwrap());
     assert!((reported / mean - 1.0).abs() < 0.05, "summary's mean error {reported}, mint distance's {mean}");
     assert_eq!(j["error"]["reference"], "input");
-    // A dirty input (holes, flips) is resampled, and the summary says why.
+    // A dirty input (flips, non-manifold slivers) is resampled, and the
+    // summary says why.
     let scan = d.path().join("scan.ply");
     ok(&["gen", "scan", p(&scan), "--faces", "50000"]);
     let j: serde_json::Value = serde_json::from_str(&ok(&["decimate", p(&scan), p(&out), "--faces", "1000", "--json"])).unwrap();
     assert_eq!((j["route"].as_str(), j["output_watertight"].as_bool()), (Some("resample"), Some(true)), "{j}");
-    assert!(j["route_reason"].as_str().unwrap().contains("boundary edges"), "{j}");
+    assert!(j["route_reason"].as_str().unwrap().contains("inconsistently oriented edges"), "{j}");
     // A target below what a closed surface can have is refused.
     let o = run(&["decimate", p(&d.path().join("torus.ply")), p(&d.path().join("x.ply")), "--faces", "3"]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("at least 4"));

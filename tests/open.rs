@@ -215,7 +215,7 @@ fn decimate_keeps_an_open_sheet_open_and_says_so() {
     let d = tempfile::tempdir().unwrap();
     let input = write_trimesh(d.path(), "t.ply", &terrain(40, false));
     let out = d.path().join("d.ply");
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_mint")).arg("decimate").arg(&input).arg(&out).args(["--faces", "1500", "--json"]).output().unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_mint")).arg("decimate").arg(&input).arg(&out).args(["--faces", "1500", "--json", "--route", "resample"]).output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert_eq!(err.matches("the input is open").count(), 1, "{err}");
@@ -226,4 +226,14 @@ fn decimate_keeps_an_open_sheet_open_and_says_so() {
     let r = assert_open_manifold(&m, "decimated terrain");
     assert_eq!((r.components, r.boundary_loops), (1, 1), "{r:?}");
     assert!((m.faces.len() as f64 - 1500.0).abs() <= 30.0, "{} faces", m.faces.len());
+    // By default a clean open sheet is simplified itself, its boundary
+    // loop kept where it was (no resampling, so no sheet warning).
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_mint")).arg("decimate").arg(&input).arg(&out).args(["--faces", "1500", "--json"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["route"].as_str(), Some("direct"), "{j}");
+    assert!(j["output_faces"].as_u64().unwrap().abs_diff(1500) <= 30, "{j}");
+    assert!(j["route_reason"].as_str().unwrap().contains("open along 1 boundary loop"), "{j}");
+    let r = assert_open_manifold(&load(&out), "decimated terrain, direct");
+    assert_eq!((r.components, r.boundary_loops), (1, 1), "{r:?}");
 }

@@ -86,7 +86,10 @@ if [ "$WHAT" = all ] || [ "$WHAT" = intermediates ]; then
     for k in 2 4 8 16 32 64; do
       M=$((k * T))
       [ "$M" -gt $((16 * F)) ] && break
-      "$MINT" decimate "$IN" "$WORK/ti.ply" --faces "$T" --intermediate "$M" --quiet --no-color
+      if ! "$MINT" decimate "$IN" "$WORK/ti.ply" --faces "$T" --intermediate "$M" --quiet --no-color 2>/dev/null; then
+        line="$line  ${k}N (resampling empty: thinner than a cell)"
+        continue
+      fi
       read -r im ix <<< "$(err "$IN" "$WORK/ti.ply")"
       ratio=""
       [ -n "$prev" ] && ratio=" ($(python3 -c "print(f'{$im/$prev:.2f}')")x)"

@@ -79,9 +79,10 @@ pub enum Route {
     Resample,
 }
 
-/// `Route::Auto` simplifies the input directly when it is closed,
-/// 2-manifold and oriented and has at most this many times the faces of
-/// the intermediate it would resample to. The quadric collapse then sees
+/// `Route::Auto` simplifies the input directly when it is a clean,
+/// oriented 2-manifold (closed, or open along simple boundary loops, which
+/// the collapse keeps) and has at most this many times the faces of the
+/// intermediate it would resample to. The quadric collapse then sees
 /// the input's own triangles: sharp edges stay sharp (a resampling rounds
 /// them to the cell) and thin parts keep the shape the input gives them;
 /// measured on the shared meshes and thin shapes (docs/PERFORMANCE.md,
@@ -208,17 +209,33 @@ pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress
         let w = read_welded(input, true, want_colour)?;
         check_cancel(progress)?;
         let judged = mint_mesh::try_check(&w.positions, &w.tris).map_err(|e| PipelineError::stage(input, format!("judging the input: {e}")))?;
-        if judged.watertight || o.route == Route::Direct {
+        // Clean: a 2-manifold, consistently oriented, without degenerate or
+        // duplicate faces; closed, or open along simple boundary loops
+        // (the collapse keeps those loops, as MeshLab does; the resampling
+        // would cap them).
+        let clean = judged.non_manifold_edges == 0
+            && judged.non_manifold_vertices == 0
+            && judged.inconsistently_oriented_edges == 0
+            && judged.non_simple_boundary_edges == 0
+            && judged.duplicate_faces == 0
+            && judged.collapsed_faces == 0;
+        if clean || o.route == Route::Direct {
             let reason = if o.route == Route::Direct {
                 "asked (--route direct)".to_string()
-            } else {
+            } else if judged.watertight {
                 format!("the input is closed, 2-manifold and oriented, and its {faces} faces fit in memory: its own triangles are simplified")
+            } else {
+                format!(
+                    "the input is a 2-manifold, oriented, open along {} boundary loop{}, and its {faces} faces fit in memory: its own triangles are simplified and its boundaries kept (--route resample closes them)",
+                    judged.boundary_loops,
+                    if judged.boundary_loops == 1 { "" } else { "s" }
+                )
             };
             return decimate_directly(inputs, output, format, o, w, faces, area, reason, seconds_area, t0, progress);
         }
         why_not = format!(
-            "the input is not a clean solid ({} boundary edges, {} non-manifold edges, {} inconsistently oriented): the resampling closes and orients it",
-            judged.boundary_edges, judged.non_manifold_edges, judged.inconsistently_oriented_edges
+            "the input is not a clean 2-manifold ({} non-manifold edges, {} non-manifold vertices, {} inconsistently oriented edges, {} duplicate and {} collapsed faces): the resampling repairs it",
+            judged.non_manifold_edges, judged.non_manifold_vertices, judged.inconsistently_oriented_edges, judged.duplicate_faces, judged.collapsed_faces
         );
     }
     check_grid(input, &pass, h, m, &needles)?;

@@ -48,11 +48,12 @@ pub struct DecimateArgs {
     /// intermediate's colour at its nearest point.
     #[arg(long)]
     pub no_color: bool,
-    /// How the in-core stage is reached. auto: a closed, 2-manifold,
-    /// oriented input of at most 4 x the intermediate's faces that fits
-    /// --mem is simplified itself (its sharp edges and thin parts as they
-    /// are); anything else (open, dirty, larger) is resampled first. The
-    /// summary says which ran and why.
+    /// How the in-core stage is reached. auto: a clean, oriented
+    /// 2-manifold (closed, or open along simple boundary loops) of at most
+    /// 4 x the intermediate's faces that fits --mem is simplified itself
+    /// (sharp edges, thin parts and boundaries as they are); anything else
+    /// (non-manifold, flipped, duplicated, larger) is resampled first,
+    /// which also closes holes. The summary says which ran and why.
     #[arg(long, value_enum, default_value = "auto")]
     pub route: RouteArg,
     /// How much colour weighs in the collapse: a full-range colour
