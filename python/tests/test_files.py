@@ -183,3 +183,27 @@ def test_ctrl_c_raises_keyboard_interrupt_quickly_and_leaves_nothing(tmp_path):
     when = float(stdout.split()[1])
     assert when - sent < 1.0, f"KeyboardInterrupt {when - sent:.2f} s after the signal"
     assert os.listdir(out) == [] and os.listdir(scratch) == []
+
+
+def test_long_calls_release_the_gil_and_run_side_by_side(tmp_path):
+    import threading
+
+    scan = tmp_path / "s.ply"
+    mint_mesh.gen("sphere", scan, faces=400000)
+    results = {}
+
+    def work(name):
+        results[name] = mint_mesh.resample_file(scan, tmp_path / f"{name}.ply", cells=3000000, threads=1)
+
+    threads = [threading.Thread(target=work, args=(n,)) for n in ("a", "b")]
+    for t in threads:
+        t.start()
+    ticks = 0
+    while any(t.is_alive() for t in threads):
+        ticks += 1  # Python keeps running here while mint works
+        time.sleep(0.001)
+    for t in threads:
+        t.join()
+    assert ticks > 20, f"the main thread ran only {ticks} times during the runs"
+    assert (tmp_path / "a.ply").read_bytes() == (tmp_path / "b.ply").read_bytes()
+    assert results["a"]["output_faces"] == results["b"]["output_faces"] > 0
