@@ -283,19 +283,47 @@ pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress
     let (sr, output_precision, _, seconds_write, error) = simplify_and_write(input, output, format, &o.write.options(None, colour), tolerance, positions, tris, colours, o.colour_weight, &so, reference, progress)?;
     // Reading the intermediate counts as simplifying.
     let seconds_simplify = t.elapsed().as_secs_f64() - seconds_write;
+    let base = summary_of(inputs, output, o, ("resample", why_not), (faces, area, colour), (sr, output_precision, seconds_simplify, seconds_write, error), seconds_area, t0);
     Ok(DecimateSummary {
-        input: mint_pipeline::spec::files_name(inputs),
-        output: output.display().to_string(),
-        route: "resample",
-        route_reason: why_not,
-        output_precision,
-        input_faces: faces,
-        input_area: area,
         needles_ignored: needles.len() as u64,
         needle_area,
         cell_size: h,
         intermediate_faces_asked: m,
         intermediate_faces: rs.output_faces,
+        seconds_resample,
+        removed_dead: removed_dead.iter().map(|p| p.display().to_string()).chain(rs.removed_dead.iter().cloned()).collect(),
+        resample: Some(rs),
+        ..base
+    })
+}
+
+/// The summary of a decimation whose in-core stage reported `done`, on
+/// the direct route (the resampling's fields empty; the resample route
+/// fills them in).
+#[allow(clippy::type_complexity)]
+fn summary_of(
+    inputs: &[PathBuf],
+    output: &Path,
+    o: &DecimateOptions,
+    (route, route_reason): (&'static str, String),
+    (input_faces, input_area, colour): (u64, f64, bool),
+    (sr, output_precision, seconds_simplify, seconds_write, error): (mint_mesh::SimplifyReport, String, f64, f64, SurfaceError),
+    seconds_area: f64,
+    t0: Instant,
+) -> DecimateSummary {
+    DecimateSummary {
+        input: mint_pipeline::spec::files_name(inputs),
+        output: output.display().to_string(),
+        route,
+        route_reason,
+        output_precision,
+        input_faces,
+        input_area,
+        needles_ignored: 0,
+        needle_area: 0.0,
+        cell_size: 0.0,
+        intermediate_faces_asked: 0,
+        intermediate_faces: sr.input_faces,
         output_faces: sr.output_faces,
         output_vertices: sr.output_vertices,
         colour,
@@ -307,13 +335,13 @@ pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress
         folded_pairs_removed: sr.folded_pairs_removed,
         error,
         seconds_area,
-        seconds_resample,
+        seconds_resample: 0.0,
         seconds_simplify,
         seconds_write,
         seconds_total: t0.elapsed().as_secs_f64(),
-        removed_dead: removed_dead.iter().map(|p| p.display().to_string()).chain(rs.removed_dead.iter().cloned()).collect(),
-        resample: Some(rs),
-    })
+        removed_dead: Vec::new(),
+        resample: None,
+    }
 }
 
 /// The direct route of [`decimate`]: the input (read whole and welded,
@@ -336,40 +364,11 @@ fn decimate_directly(
     let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
     let tolerance = tolerance_of(&w.positions);
     let colour = w.colours.is_some();
-    let (input_faces, t) = (w.tris.len() as u64, Instant::now());
+    let t = Instant::now();
     let (sr, output_precision, _, seconds_write, error) =
         simplify_and_write(input, output, format, &o.write.options(None, colour), tolerance, w.positions, w.tris, w.colours, o.colour_weight, &so, Reference::Own("input"), progress)?;
-    Ok(DecimateSummary {
-        input: mint_pipeline::spec::files_name(inputs),
-        output: output.display().to_string(),
-        route: "direct",
-        route_reason,
-        output_precision,
-        input_faces: faces,
-        input_area: area,
-        needles_ignored: 0,
-        needle_area: 0.0,
-        cell_size: 0.0,
-        intermediate_faces_asked: 0,
-        intermediate_faces: input_faces,
-        output_faces: sr.output_faces,
-        output_vertices: sr.output_vertices,
-        colour,
-        target_faces: o.target_faces,
-        simplify_error: sr.error,
-        intermediate_watertight: sr.input_watertight,
-        output_watertight: sr.output_watertight,
-        relaxed: sr.relaxed,
-        folded_pairs_removed: sr.folded_pairs_removed,
-        error,
-        seconds_area,
-        seconds_resample: 0.0,
-        seconds_simplify: t.elapsed().as_secs_f64() - seconds_write,
-        seconds_write,
-        seconds_total: t0.elapsed().as_secs_f64(),
-        removed_dead: Vec::new(),
-        resample: None,
-    })
+    let seconds_simplify = t.elapsed().as_secs_f64() - seconds_write;
+    Ok(summary_of(inputs, output, o, ("direct", route_reason), (faces, area, colour), (sr, output_precision, seconds_simplify, seconds_write, error), seconds_area, t0))
 }
 
 /// A mesh file read whole for the in-core stage: welded (optionally),
