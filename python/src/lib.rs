@@ -134,7 +134,7 @@ fn read_mesh<'py>(py: Python<'py>, path: PathBuf) -> PyResult<(Bound<'py, PyArra
     let read = py.detach(|| -> Result<_, mint_io::Error> {
         let whole = mint_io::read_mesh_with(&path, mint_io::ReadOptions::default(), || true)?;
         let colours = mint_io::read_vertex_colours(&path)?;
-        let v: Vec<f64> = whole.positions.iter().flatten().copied().collect();
+        let v = flatten(whole.positions);
         let f: Vec<i64> = whole.faces.iter().flatten().map(|&i| i as i64).collect();
         let c: Option<Vec<u8>> = colours.map(|c| c.into_iter().flatten().collect());
         Ok((v, f, c))
@@ -188,40 +188,78 @@ fn write_ply(py: Python<'_>, path: PathBuf, vertices: &Bound<'_, PyAny>, faces: 
         let double = matches!(vs, V::F64(_));
         let opts = mint_io::WriteOptions { double, colours: cs.is_some(), ..Default::default() };
         let mut w = mint_io::MeshWriter::create(&path, mint_io::Format::Ply, opts)?;
-        let n = match vs {
-            V::F64(a) => a.len() / 3,
-            V::F32(a) => a.len() / 3,
-        };
-        for i in 0..n {
-            let p = match vs {
-                V::F64(a) => [a[3 * i], a[3 * i + 1], a[3 * i + 2]],
-                V::F32(a) => [a[3 * i] as f64, a[3 * i + 1] as f64, a[3 * i + 2] as f64],
-            };
-            match cs {
-                Some((c, k)) => {
-                    let r = &c[k * i..k * i + k];
-                    w.write_vertex_rgba(p, [r[0], r[1], r[2], if k == 4 { r[3] } else { 255 }])?
+        match (vs, cs) {
+            (V::F64(a), None) => w.write_vertices(triples(a))?,
+            (vs, cs) => {
+                // Converted a chunk at a time (float32, or with colours).
+                let n = match vs {
+                    V::F64(a) => a.len() / 3,
+                    V::F32(a) => a.len() / 3,
+                };
+                let mut chunk: Vec<[f64; 3]> = Vec::with_capacity(CHUNK.min(n));
+                for start in (0..n).step_by(CHUNK) {
+                    let end = (start + CHUNK).min(n);
+                    chunk.clear();
+                    chunk.extend((start..end).map(|i| match vs {
+                        V::F64(a) => [a[3 * i], a[3 * i + 1], a[3 * i + 2]],
+                        V::F32(a) => [a[3 * i] as f64, a[3 * i + 1] as f64, a[3 * i + 2] as f64],
+                    }));
+                    match cs {
+                        Some((c, k)) => {
+                            for (i, p) in (start..end).zip(&chunk) {
+                                let r = &c[k * i..k * i + k];
+                                w.write_vertex_rgba(*p, [r[0], r[1], r[2], if k == 4 { r[3] } else { 255 }])?;
+                            }
+                        }
+                        None => w.write_vertices(&chunk)?,
+                    }
                 }
-                None => w.write_vertex(p)?,
             }
         }
-        let m = match fs {
-            F::I64(a) => a.len() / 3,
-            F::I32(a) => a.len() / 3,
-            F::U32(a) => a.len() / 3,
-        };
-        for t in 0..m {
-            let f = match fs {
-                F::I64(a) => [a[3 * t] as u32, a[3 * t + 1] as u32, a[3 * t + 2] as u32],
-                F::I32(a) => [a[3 * t] as u32, a[3 * t + 1] as u32, a[3 * t + 2] as u32],
-                F::U32(a) => [a[3 * t], a[3 * t + 1], a[3 * t + 2]],
-            };
-            w.write_face(f)?;
+        match fs {
+            F::U32(a) => w.write_faces(triples(a))?,
+            fs => {
+                let m = match fs {
+                    F::I64(a) => a.len() / 3,
+                    F::I32(a) => a.len() / 3,
+                    F::U32(a) => a.len() / 3,
+                };
+                let mut chunk: Vec<[u32; 3]> = Vec::with_capacity(CHUNK.min(m));
+                for start in (0..m).step_by(CHUNK) {
+                    chunk.clear();
+                    // In range: the Python side checked 0 <= index < vertices.
+                    chunk.extend((start..(start + CHUNK).min(m)).map(|t| match fs {
+                        F::I64(a) => [a[3 * t] as u32, a[3 * t + 1] as u32, a[3 * t + 2] as u32],
+                        F::I32(a) => [a[3 * t] as u32, a[3 * t + 1] as u32, a[3 * t + 2] as u32],
+                        F::U32(a) => [a[3 * t], a[3 * t + 1], a[3 * t + 2]],
+                    }));
+                    w.write_faces(&chunk)?;
+                }
+            }
         }
         w.finish()?;
         Ok(())
     });
     result.map_err(|e| mint_error(py, if e.kind() == mint_io::error::ErrorKind::Io { "io" } else { "input" }, &e.to_string()))
+}
+
+/// `v`'s triples as one flat vector, without copying.
+fn flatten(v: Vec<[f64; 3]>) -> Vec<f64> {
+    let mut v = std::mem::ManuallyDrop::new(v);
+    let (ptr, len, cap) = (v.as_mut_ptr(), v.len(), v.capacity());
+    // SAFETY: the allocation held `cap` triples of f64 with f64's alignment;
+    // it now holds `3 cap` f64, of which the first `3 len` are initialised.
+    unsafe { Vec::from_raw_parts(ptr.cast::<f64>(), 3 * len, 3 * cap) }
+}
+
+/// Records converted at a time when the arrays' type is not the writer's.
+const CHUNK: usize = 1 << 16;
+
+/// `a` (3 n values, C order) as n triples, in place.
+fn triples<T>(a: &[T]) -> &[[T; 3]] {
+    // SAFETY: `[T; 3]` has `T`'s alignment and three `T`s' size, and the
+    // length is a whole number of triples (the arrays are (n, 3)).
+    unsafe { std::slice::from_raw_parts(a.as_ptr().cast::<[T; 3]>(), a.len() / 3) }
 }
 
 /// A PNG file as a uint8 array (H, W, 3) (or (H, W, 4) with alpha).

@@ -330,6 +330,16 @@ pub(crate) trait FormatWriter: Send {
         self.vertex(p)
     }
     fn face(&mut self, f: [u32; 3]) -> Result<(), Error>;
+    /// Many vertices at once (checked by the caller); the same bytes as
+    /// one [`FormatWriter::vertex`] each.
+    fn vertices(&mut self, ps: &[[f64; 3]]) -> Result<(), Error> {
+        ps.iter().try_for_each(|&p| self.vertex(p))
+    }
+    /// Many faces at once (checked by the caller); the same bytes as one
+    /// [`FormatWriter::face`] each.
+    fn faces(&mut self, fs: &[[u32; 3]]) -> Result<(), Error> {
+        fs.iter().try_for_each(|&f| self.face(f))
+    }
     /// Patches counts, syncs and renames; returns the file size.
     fn finish(self: Box<Self>, vertices: u64, faces: u64) -> Result<u64, Error>;
 }

@@ -13,6 +13,9 @@ use crate::error::Error;
 use crate::ply::header::Encoding;
 use crate::backend::{write_coord, FormatWriter, OutFile, WriteOptions};
 
+/// Records per bulk chunk ([`FormatWriter::vertices`], [`FormatWriter::faces`]).
+const BULK: usize = 1 << 16;
+
 pub(crate) struct PlyWriter {
     out: OutFile,
     encoding: Encoding,
@@ -114,6 +117,49 @@ impl FormatWriter for PlyWriter {
         b[5..9].copy_from_slice(&f[1].to_le_bytes());
         b[9..13].copy_from_slice(&f[2].to_le_bytes());
         self.out.put(&b)
+    }
+
+    fn vertices(&mut self, ps: &[[f64; 3]]) -> Result<(), Error> {
+        if self.encoding == Encoding::Ascii {
+            return ps.iter().try_for_each(|&p| self.vertex(p));
+        }
+        // Binary: a chunk's records built at once, one copy into the buffer.
+        let mut buf = Vec::with_capacity(ps.len().min(BULK) * 24);
+        for chunk in ps.chunks(BULK) {
+            buf.clear();
+            for p in chunk {
+                for c in p {
+                    if self.double {
+                        buf.extend_from_slice(&c.to_le_bytes());
+                    } else {
+                        buf.extend_from_slice(&(*c as f32).to_le_bytes());
+                    }
+                }
+            }
+            self.out.put(&buf)?;
+        }
+        self.vertices += ps.len() as u64;
+        Ok(())
+    }
+
+    fn faces(&mut self, fs: &[[u32; 3]]) -> Result<(), Error> {
+        if self.encoding == Encoding::Ascii || fs.is_empty() {
+            return fs.iter().try_for_each(|&f| self.face(f));
+        }
+        let vertices = self.vertices;
+        self.uint.get_or_insert(vertices > i32::MAX as u64);
+        let mut buf = Vec::with_capacity(fs.len().min(BULK) * 13);
+        for chunk in fs.chunks(BULK) {
+            buf.clear();
+            for f in chunk {
+                buf.push(3);
+                for i in f {
+                    buf.extend_from_slice(&i.to_le_bytes());
+                }
+            }
+            self.out.put(&buf)?;
+        }
+        Ok(())
     }
 
     fn finish(mut self: Box<Self>, vertices: u64, faces: u64) -> Result<u64, Error> {

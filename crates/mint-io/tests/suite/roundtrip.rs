@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use mint_core::TriMesh;
-use mint_io::{convert, read_info, Format, MeshReader, ReadOptions, WriteOptions};
+use mint_io::{convert, read_info, Format, MeshReader, MeshWriter, ReadOptions, WriteOptions};
 use proptest::prelude::*;
 
 use super::util::{as_f32, entries, read, soup, write};
@@ -190,4 +190,40 @@ proptest! {
         let dir = tempfile::tempdir().unwrap();
         check_all_formats(dir.path(), &m);
     }
+}
+
+/// `write_vertices` and `write_faces` (the bulk path of the Python arrays)
+/// write the same bytes as one `write_vertex` and `write_face` each, in
+/// every PLY encoding and precision and for a format without a bulk path,
+/// and refuse a bad record naming it, appending nothing.
+#[test]
+fn bulk_writes_give_the_same_bytes_as_one_at_a_time() {
+    let d = tempfile::tempdir().unwrap();
+    let ps: Vec<[f64; 3]> = (0..70_000).map(|i| { let t = i as f64 * 0.001; [t.sin(), t.cos() * 1e3, -t] }).collect();
+    let fs: Vec<[u32; 3]> = (0..69_998u32).map(|i| [i, i + 1, i + 2]).collect();
+    for (name, double, ascii) in [("a.ply", false, false), ("b.ply", true, false), ("c.ply", true, true), ("d.off", false, false)] {
+        let opts = || WriteOptions { double, ascii, ..Default::default() };
+        let (one, bulk) = (d.path().join(format!("one-{name}")), d.path().join(format!("bulk-{name}")));
+        let mut w = MeshWriter::create(&one, Format::from_path(&one).unwrap(), opts()).unwrap();
+        ps.iter().for_each(|&p| w.write_vertex(p).unwrap());
+        fs.iter().for_each(|&f| w.write_face(f).unwrap());
+        w.finish().unwrap();
+        let mut w = MeshWriter::create(&bulk, Format::from_path(&bulk).unwrap(), opts()).unwrap();
+        w.write_vertices(&ps[..1000]).unwrap();
+        w.write_vertices(&ps[1000..]).unwrap();
+        w.write_faces(&fs).unwrap();
+        w.finish().unwrap();
+        assert_eq!(std::fs::read(&one).unwrap(), std::fs::read(&bulk).unwrap(), "{name}");
+    }
+    let bad = d.path().join("bad.ply");
+    let mut w = MeshWriter::create(&bad, Format::Ply, WriteOptions::default()).unwrap();
+    let mut nan = ps[..10].to_vec();
+    nan[7][1] = f64::NAN;
+    let e = w.write_vertices(&nan).unwrap_err();
+    assert!(e.to_string().contains("vertex 7") || e.to_string().contains("record 7"), "{e}");
+    assert_eq!(w.vertices(), 0);
+    w.write_vertices(&ps[..10]).unwrap();
+    let e = w.write_faces(&[[0, 1, 2], [0, 1, 10]]).unwrap_err();
+    assert!(e.to_string().contains("out of range"), "{e}");
+    assert_eq!(w.faces(), 0);
 }
