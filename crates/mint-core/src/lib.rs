@@ -15,6 +15,7 @@
 //! - [`holes`]: which hole-capping cells stay open under `--max-hole`;
 //! - [`robust`]: the state-first reconstruction of one solid or a CSG expression, closing holes;
 //! - [`primitives`]: analytic solids that intersect grid lines exactly (for CSG);
+//! - [`volume`]: voxel volumes on the grid: node values from slices, the iso-surface's crossings;
 //! - [`in_core`]: the whole resampling in memory (strict, robust, hole protocol), for tests and small inputs;
 //! - [`rng`]: SplitMix64, the seeded generator shared by samplers and generators;
 //! - [`sink`]: the [`MeshSink`] trait through which meshes leave algorithms;
@@ -40,6 +41,7 @@ pub mod rng;
 pub mod robust;
 pub mod signs;
 pub mod sink;
+pub mod volume;
 
 pub use discretize::{discretize_triangle, Crossing, MARGIN};
 pub use grid::{Grid, GridError, GridSize};

@@ -1,0 +1,468 @@
+//! Voxel volumes on the grid: where an iso-surface crosses grid lines
+//! (Rocchini et al. 2001, §3.2: MI converts "volumetric schemes" by the
+//! crossings alone). A volume is a field sampled at voxel centres; the grid's
+//! nodes take the field's value there (trilinear between voxel centres), a
+//! node is *inside* when its value is at least the iso value, and each grid
+//! edge whose two nodes disagree holds one crossing, where the linear
+//! interpolation of its two node values meets the iso value. These are the
+//! same [`Intercept`] records the mesh discretization produces, so the rest
+//! of the engine (shards, slabs, the robust reconstruction's consistent
+//! rules for ambiguous cells) is the one it runs for meshes: the output is a
+//! closed, oriented 2-manifold by the same argument.
+//!
+//! Contract:
+//! - **Placement.** The grid's axes run along the volume's index axes (a
+//!   signed permutation, [`Placement`]), its slab axis along the volume's
+//!   slice axis (index `k`, the slowest in every format), so a slab of grid
+//!   planes reads a contiguous range of slices and a volume larger than
+//!   memory streams. Oblique volumes are placed in their own index frame
+//!   and mapped to the world when written (mint-pipeline).
+//! - **Domain.** The field is defined over the voxels' extent, half a voxel
+//!   beyond the outer centres (nearest value there); beyond it every node is
+//!   outside, so the border of the volume closes the surface. A crossing
+//!   between a node inside the domain and one outside sits on the domain's
+//!   border.
+//! - **Ties.** A value equal to the iso value is inside; NaN is outside,
+//!   and a crossing next to a NaN node sits halfway along its edge.
+//! - At the volume's own resolution (a grid of cell 1 in index units whose
+//!   nodes are the voxel centres) node values are the samples themselves, and
+//!   the crossings are marching cubes' vertices exactly.
+//! - Labels ([`Field::Label`]): the field is 1 on voxels of the label and 0
+//!   elsewhere, iso 1/2: two labels that touch cross each shared edge at the
+//!   same point, so their surfaces share their boundary without gaps.
+//!
+//! Crossing values are kept [`MARGIN`] inside their cell, as everywhere.
+
+use crate::intercept::{Intercept, FAMILY_A, FAMILY_B, FAMILY_S};
+use crate::MARGIN;
+
+/// Which surface of the volume: an iso value, or the boundary of a label.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Field {
+    /// Voxels with a value `>= iso` are inside.
+    Iso(f32),
+    /// Voxels whose value equals the label are inside (the field is their
+    /// indicator, iso 1/2).
+    Label(f32),
+}
+
+impl Field {
+    /// The iso value of the sampled field.
+    #[inline]
+    pub fn iso(&self) -> f32 {
+        match *self {
+            Field::Iso(v) => v,
+            Field::Label(_) => 0.5,
+        }
+    }
+    /// A voxel's value as the field sees it.
+    #[inline]
+    pub fn value(&self, v: f32) -> f32 {
+        match *self {
+            Field::Iso(_) => v,
+            Field::Label(l) => (v == l) as u8 as f32,
+        }
+    }
+}
+
+/// How the grid's nodes sit on the volume: along local grid axis `d`
+/// (a, b, s), node `n` is at index `start[d] + step[d] · n` of volume
+/// axis `axis[d]` (0 = x, the fastest in memory; 1 = y; 2 = z, the
+/// slices). `axis[2]` is always 2.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    pub axis: [usize; 3],
+    pub start: [f64; 3],
+    pub step: [f64; 3],
+    /// The volume's size in voxels (x, y, z).
+    pub dims: [u64; 3],
+    /// Node counts of the grid along a, b, s (cells + 1).
+    pub nodes: [u32; 3],
+}
+
+impl Placement {
+    /// The volume index of node `n` along local axis `d`.
+    #[inline]
+    pub fn index(&self, d: usize, n: u32) -> f64 {
+        self.start[d] + self.step[d] * n as f64
+    }
+
+    /// The interval of node coordinates along local axis `d` where the
+    /// field is defined (the voxels' extent).
+    pub fn domain(&self, d: usize) -> (f64, f64) {
+        let n = self.dims[self.axis[d]] as f64;
+        let (x, y) = ((-0.5 - self.start[d]) / self.step[d], (n - 0.5 - self.start[d]) / self.step[d]);
+        (x.min(y), x.max(y))
+    }
+
+    /// Where plane `k` reads the volume: slice `z0`, and the weight `w` of
+    /// slice `z0 + 1` (0 when the plane lies on slice `z0`); `None` when
+    /// the plane is outside the domain.
+    pub fn slices_of_plane(&self, k: u32) -> Option<(u64, f32)> {
+        let (z, nz) = (self.index(2, k), self.dims[2]);
+        if !(z >= -0.5 && z <= nz as f64 - 0.5) {
+            return None;
+        }
+        // (floor of a value clamped to the last centre: w > 0 only below it.)
+        let z = z.clamp(0.0, (nz - 1) as f64);
+        let z0 = z.floor() as u64;
+        let w = (z - z0 as f64) as f32;
+        Some((z0, if w > 0.0 { w } else { 0.0 }))
+    }
+
+    /// The slices that planes `k0 ..= k1` read: `[first, end)`.
+    pub fn slice_range(&self, k0: u32, k1: u32) -> (u64, u64) {
+        let mut r: Option<(u64, u64)> = None;
+        for k in [k0, k1] {
+            // Planes map monotonically to slices: the ends bound the rest.
+            if let Some((z0, w)) = self.slices_of_plane(k) {
+                let end = z0 + if w > 0.0 { 2 } else { 1 };
+                r = Some(match r {
+                    Some((a, b)) => (a.min(z0), b.max(end)),
+                    None => (z0, end),
+                });
+            }
+        }
+        if r.is_none() {
+            // Both ends outside: the planes between may still be inside.
+            let (lo, hi) = self.domain(2);
+            if (k0 as f64) < lo && (k1 as f64) > hi {
+                return (0, self.dims[2]);
+            }
+        }
+        r.unwrap_or((0, 0))
+    }
+
+    /// True when every node sits on a voxel centre or outside the domain
+    /// (steps of ±1 from an integer start): node values are samples.
+    pub fn on_voxels(&self) -> bool {
+        (0..2).all(|d| self.step[d].abs() == 1.0 && self.start[d].fract() == 0.0)
+    }
+}
+
+/// Per in-plane node coordinate: the voxel index and weight of the next one
+/// along that axis (bilinear), or `None` outside the domain.
+fn axis_taps(p: &Placement, d: usize) -> Vec<Option<(u32, f32)>> {
+    let n = p.dims[p.axis[d]];
+    (0..p.nodes[d])
+        .map(|i| {
+            let x = p.index(d, i);
+            if !(x >= -0.5 && x <= n as f64 - 0.5) {
+                return None;
+            }
+            let x = x.clamp(0.0, (n - 1) as f64);
+            let x0 = x.floor() as u64;
+            let w = (x - x0 as f64) as f32;
+            Some((x0 as u32, if w > 0.0 { w } else { 0.0 }))
+        })
+        .collect()
+}
+
+/// The node values of one grid plane, from the volume slices it reads.
+/// Nodes are stored `j * na1 + i` (local a fastest); a node outside the
+/// domain holds `-inf`.
+pub struct PlaneSampler {
+    p: Placement,
+    taps: [Vec<Option<(u32, f32)>>; 2],
+}
+
+impl PlaneSampler {
+    pub fn new(p: Placement) -> PlaneSampler {
+        PlaneSampler { taps: [axis_taps(&p, 0), axis_taps(&p, 1)], p }
+    }
+
+    pub fn placement(&self) -> &Placement {
+        &self.p
+    }
+
+    /// Fills `out` with plane `k`'s node values from `lower` (slice `z0`)
+    /// and `upper` (slice `z0 + 1`, weight `w`; ignored when `w == 0`),
+    /// each `nx · ny` samples, x fastest. `inside` is `None` when the plane
+    /// is outside the domain (then `lower`/`upper` are not read).
+    pub fn sample(&self, field: Field, at: Option<(&[f32], &[f32], f32)>, out: &mut Vec<f32>) {
+        let [na1, nb1, _] = self.p.nodes.map(|n| n as usize);
+        out.clear();
+        out.resize(na1 * nb1, f32::NEG_INFINITY);
+        let Some((lower, upper, w)) = at else { return };
+        let nx = self.p.dims[0] as usize;
+        // Offsets in a slice of one step along local a and b.
+        let stride = |d: usize| if self.p.axis[d] == 0 { 1 } else { nx };
+        let (sa, sb) = (stride(0), stride(1));
+        let value = |s: &[f32], at: usize, wa: f32, wb: f32| -> f32 {
+            let v00 = field.value(s[at]);
+            if wa == 0.0 && wb == 0.0 {
+                return v00;
+            }
+            let v10 = if wa > 0.0 { field.value(s[at + sa]) } else { v00 };
+            let v01 = if wb > 0.0 { field.value(s[at + sb]) } else { v00 };
+            let v11 = if wa > 0.0 && wb > 0.0 { field.value(s[at + sa + sb]) } else if wa > 0.0 { v10 } else { v01 };
+            let x0 = v00 + wa * (v10 - v00);
+            let x1 = v01 + wa * (v11 - v01);
+            x0 + wb * (x1 - x0)
+        };
+        let fast = self.p.on_voxels() && w == 0.0 && matches!(field, Field::Iso(_));
+        for (j, tb) in self.taps[1].iter().enumerate() {
+            let Some((b0, wb)) = *tb else { continue };
+            let row = &mut out[j * na1..(j + 1) * na1];
+            if fast && sa == 1 {
+                // Own resolution: a run of samples is a run of nodes.
+                let first = self.taps[0].iter().position(|t| t.is_some());
+                if let Some(first) = first {
+                    let count = self.taps[0][first..].iter().take_while(|t| t.is_some()).count();
+                    let x0 = self.taps[0][first].unwrap().0 as usize;
+                    let step = self.p.step[0];
+                    let base = b0 as usize * sb;
+                    if step > 0.0 {
+                        row[first..first + count].copy_from_slice(&lower[base + x0..base + x0 + count]);
+                    } else {
+                        for (n, v) in row[first..first + count].iter_mut().enumerate() {
+                            *v = lower[base + x0 - n];
+                        }
+                    }
+                }
+                continue;
+            }
+            for (i, ta) in self.taps[0].iter().enumerate() {
+                let Some((a0, wa)) = *ta else { continue };
+                let at = a0 as usize * sa + b0 as usize * sb;
+                let v0 = value(lower, at, wa, wb);
+                row[i] = if w > 0.0 { v0 + w * (value(upper, at, wa, wb) - v0) } else { v0 };
+            }
+        }
+    }
+}
+
+/// Where along an edge from node `n` (value `f0`) to node `n + 1` (value
+/// `f1`) the field crosses `iso`, in node units from `n`: on the domain's
+/// border `(lo, hi)` when one end is outside it, halfway when one value is
+/// not finite, else by linear interpolation.
+#[inline]
+fn crossing(n: u32, f0: f32, f1: f32, iso: f32, (lo, hi): (f64, f64)) -> f64 {
+    let x = n as f64;
+    let t = if x < lo {
+        lo - x
+    } else if x + 1.0 > hi {
+        hi - x
+    } else if f0.is_finite() && f1.is_finite() {
+        (iso as f64 - f0 as f64) / (f1 as f64 - f0 as f64)
+    } else {
+        0.5
+    };
+    x + t.clamp(MARGIN, 1.0 - MARGIN)
+}
+
+/// The crossings of plane `k`: families A and B within the plane, from its
+/// node values `nodes` (see [`PlaneSampler::sample`]), and with `next`
+/// (plane `k + 1`'s node values) family S between the two. Appends them to
+/// `out`.
+pub fn plane_crossings(p: &Placement, field: Field, k: u32, nodes: &[f32], next: Option<&[f32]>, out: &mut Vec<Intercept>) {
+    let [na1, nb1, _] = p.nodes;
+    let iso = field.iso();
+    let (da, db, ds) = (p.domain(0), p.domain(1), p.domain(2));
+    let inside = |v: f32| v >= iso;
+    for j in 0..nb1 {
+        let row = &nodes[(j * na1) as usize..((j + 1) * na1) as usize];
+        for i in 0..na1 - 1 {
+            let (f0, f1) = (row[i as usize], row[i as usize + 1]);
+            let (s0, s1) = (inside(f0), inside(f1));
+            if s0 != s1 {
+                out.push(Intercept::new(k, FAMILY_A, j, crossing(i, f0, f1, iso, da), s1));
+            }
+        }
+    }
+    for j in 0..nb1 - 1 {
+        let (r0, r1) = (&nodes[(j * na1) as usize..((j + 1) * na1) as usize], &nodes[((j + 1) * na1) as usize..((j + 2) * na1) as usize]);
+        for i in 0..na1 {
+            let (f0, f1) = (r0[i as usize], r1[i as usize]);
+            let (s0, s1) = (inside(f0), inside(f1));
+            if s0 != s1 {
+                out.push(Intercept::new(k, FAMILY_B, i, crossing(j, f0, f1, iso, db), s1));
+            }
+        }
+    }
+    let Some(next) = next else { return };
+    for j in 0..nb1 {
+        for i in 0..na1 {
+            let at = (j * na1 + i) as usize;
+            let (f0, f1) = (nodes[at], next[at]);
+            let (s0, s1) = (inside(f0), inside(f1));
+            if s0 != s1 {
+                out.push(Intercept::new(k, FAMILY_S, i * nb1 + j, crossing(k, f0, f1, iso, ds), s1));
+            }
+        }
+    }
+}
+
+/// The crossings of every plane of a volume held in memory (`samples`:
+/// `dims[0] · dims[1] · dims[2]` values, x fastest), per plane: for tests,
+/// fuzzing and small volumes. The engine streams the same per slab.
+pub fn volume_planes(p: &Placement, field: Field, samples: &[f32]) -> Vec<Vec<Intercept>> {
+    let slice = (p.dims[0] * p.dims[1]) as usize;
+    let sampler = PlaneSampler::new(*p);
+    let ns1 = p.nodes[2];
+    let nodes_of = |k: u32, out: &mut Vec<f32>| {
+        let at = p.slices_of_plane(k).map(|(z0, w)| {
+            let lo = &samples[z0 as usize * slice..(z0 as usize + 1) * slice];
+            let hi = if w > 0.0 { &samples[(z0 as usize + 1) * slice..(z0 as usize + 2) * slice] } else { lo };
+            (lo, hi, w)
+        });
+        sampler.sample(field, at, out);
+    };
+    let (mut cur, mut next) = (Vec::new(), Vec::new());
+    nodes_of(0, &mut cur);
+    let mut planes = Vec::with_capacity(ns1 as usize);
+    for k in 0..ns1 {
+        let mut out = Vec::new();
+        if k + 1 < ns1 {
+            nodes_of(k + 1, &mut next);
+            plane_crossings(p, field, k, &cur, Some(&next), &mut out);
+            std::mem::swap(&mut cur, &mut next);
+        } else {
+            plane_crossings(p, field, k, &cur, None, &mut out);
+        }
+        planes.push(out);
+    }
+    planes
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{Grid, GridSize};
+    use crate::robust::reconstruct_slab_robust;
+    use crate::signs::SignRule;
+
+    /// The own-resolution grid of a volume: nodes on the voxel centres, one
+    /// padding node beyond each side.
+    fn own_grid(dims: [u64; 3]) -> (Grid, Placement) {
+        let hi = dims.map(|n| (n - 1) as f64);
+        let g = Grid::around([0.0; 3], hi, GridSize::CellSize(1.0), [0.0; 3], Some(2)).unwrap();
+        let [na, nb, ns] = g.local_dims();
+        let p = Placement { axis: [0, 1, 2], start: [g.origin[0], g.origin[1], g.origin[2]], step: [1.0; 3], dims, nodes: [na + 1, nb + 1, ns + 1] };
+        (g, p)
+    }
+
+    fn mesh(dims: [u64; 3], field: Field, samples: &[f32]) -> crate::cells::SlabResult {
+        let (g, p) = own_grid(dims);
+        reconstruct_slab_robust(&g, 0, volume_planes(&p, field, samples), SignRule::Union).0
+    }
+
+    /// Vertices, edges, faces, boundary edges and non-manifold edges.
+    fn counts(r: &crate::cells::SlabResult) -> (usize, usize, usize, usize, usize) {
+        let mut e = std::collections::HashMap::new();
+        let mut directed = std::collections::HashSet::new();
+        for f in &r.faces {
+            for k in 0..3 {
+                let (a, b) = (f[k], f[(k + 1) % 3]);
+                *e.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+                assert!(directed.insert((a, b)), "edge {a}-{b} used twice in one direction: not oriented");
+            }
+        }
+        let boundary = e.values().filter(|&&c| c == 1).count();
+        let nonmanifold = e.values().filter(|&&c| c > 2).count();
+        (r.vertices.len(), e.len(), r.faces.len(), boundary, nonmanifold)
+    }
+
+    #[test]
+    fn one_voxel_above_iso_is_an_octahedron() {
+        let mut s = vec![0.0f32; 27];
+        s[13] = 1.0;
+        let r = mesh([3, 3, 3], Field::Iso(0.5), &s);
+        assert_eq!(counts(&r), (6, 12, 8, 0, 0));
+        // Each vertex halfway between the centre voxel (1, 1, 1) and a neighbour.
+        let mut v: Vec<[f64; 3]> = r.vertices.clone();
+        v.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        let want = [[0.5, 1.0, 1.0], [1.0, 0.5, 1.0], [1.0, 1.0, 0.5], [1.0, 1.0, 1.5], [1.0, 1.5, 1.0], [1.5, 1.0, 1.0]];
+        assert_eq!(v, want);
+    }
+
+    #[test]
+    fn a_lone_voxel_at_the_border_closes_on_the_border() {
+        // A 1x1x1 volume above iso: the grid around a single centre puts
+        // nodes on the domain's border (inside, nearest value) with
+        // padding beyond, so the surface is closed on the domain's border,
+        // half a voxel from the centre (within the crossing margin).
+        let r = mesh([1, 1, 1], Field::Iso(0.5), &[1.0]);
+        let (_, _, f, b, n) = counts(&r);
+        assert!(f > 0);
+        assert_eq!((b, n), (0, 0), "closed and 2-manifold");
+        for p in &r.vertices {
+            let far = p.iter().map(|x| x.abs()).fold(0.0, f64::max);
+            assert!((far - 0.5).abs() < 1e-3, "{p:?}");
+        }
+    }
+
+    #[test]
+    fn the_ambiguous_checkerboard_is_two_manifold() {
+        // 2x2x2 voxels alternating: every face of the middle cell ambiguous.
+        let s: Vec<f32> = (0..8).map(|i| ((i & 1) ^ (i >> 1 & 1) ^ (i >> 2 & 1)) as f32).collect();
+        for field in [Field::Iso(0.5), Field::Iso(0.5 + 1e-3)] {
+            let r = mesh([2, 2, 2], field, &s);
+            let (_, _, f, b, n) = counts(&r);
+            assert!(f > 0);
+            assert_eq!((b, n), (0, 0), "closed and 2-manifold");
+        }
+    }
+
+    #[test]
+    fn a_full_volume_is_its_box() {
+        // Every voxel inside: the surface is the domain's border, a box
+        // of 4x3x2 voxels, closed; its vertices on the border planes.
+        let dims = [4, 3, 2];
+        let s = vec![7.0f32; 24];
+        let r = mesh(dims, Field::Iso(7.0), &s);
+        let (_, _, f, b, n) = counts(&r);
+        assert!(f > 0);
+        assert_eq!((b, n), (0, 0));
+        for p in &r.vertices {
+            let on = (0..3).any(|d| (p[d] + 0.5).abs() < 1e-9 || (p[d] - (dims[d] as f64 - 0.5)).abs() < 1e-9);
+            assert!(on, "{p:?} is not on the border");
+        }
+        // Nothing inside: nothing out.
+        assert!(mesh(dims, Field::Iso(7.5), &s).faces.is_empty());
+    }
+
+    #[test]
+    fn touching_labels_share_their_boundary() {
+        // Two labels side by side in a 4x2x2 volume: their surfaces meet
+        // on the plane x = 1.5 with the same vertices there.
+        let s: Vec<f32> = (0..16).map(|i| if i % 4 < 2 { 1.0 } else { 2.0 }).collect();
+        let a = mesh([4, 2, 2], Field::Label(1.0), &s);
+        let b = mesh([4, 2, 2], Field::Label(2.0), &s);
+        let on = |r: &crate::cells::SlabResult| {
+            let mut v: Vec<[f64; 3]> = r.vertices.iter().copied().filter(|p| (p[0] - 1.5).abs() < 1e-12).collect();
+            v.sort_by(|x, y| x.partial_cmp(y).unwrap());
+            v
+        };
+        assert!(!on(&a).is_empty());
+        assert_eq!(on(&a), on(&b));
+        assert_eq!(counts(&a).3, 0);
+        assert_eq!(counts(&b).3, 0);
+    }
+
+    #[test]
+    fn own_resolution_crossings_interpolate_linearly() {
+        // Along x: 0, 10, 20, 30; iso 12 crosses between voxels 1 and 2 at 1.2.
+        let s = [0.0f32, 10.0, 20.0, 30.0];
+        let (_, p) = own_grid([4, 1, 1]);
+        let planes = volume_planes(&p, Field::Iso(12.0), &s);
+        let a: Vec<f64> = planes.iter().flatten().filter(|r| r.family() == FAMILY_A).map(|r| r.value()).collect();
+        // Node 0 is padding at index -1: the crossing at 1.2 is at node 2.2.
+        assert!(a.iter().any(|&v| (v - 2.2).abs() < 1e-6), "{a:?}");
+    }
+
+    #[test]
+    fn a_coarser_grid_samples_trilinearly() {
+        // A linear ramp along z sampled on planes between slices.
+        let dims = [2u64, 2, 5];
+        let s: Vec<f32> = (0..20).map(|i| (i / 4) as f32).collect();
+        let p = Placement { axis: [0, 1, 2], start: [-1.0, -1.0, -0.25], step: [1.0, 1.0, 0.5], dims, nodes: [4, 4, 10] };
+        let sampler = PlaneSampler::new(p);
+        let mut out = Vec::new();
+        let (z0, w) = p.slices_of_plane(3).unwrap();
+        assert_eq!((z0, w), (1, 0.25));
+        sampler.sample(Field::Iso(0.0), Some((&s[4..8], &s[8..12], w)), &mut out);
+        assert_eq!(out[5], 1.25);
+        assert_eq!(out[0], f32::NEG_INFINITY);
+    }
+}

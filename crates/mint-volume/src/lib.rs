@@ -1,0 +1,1 @@
+//! Voxel volumes read slice by slice (placeholder: being written).
