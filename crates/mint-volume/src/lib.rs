@@ -1,1 +1,243 @@
-//! Voxel volumes read slice by slice (placeholder: being written).
+//! mint-volume: voxel volumes in and out, slice by slice, with their world
+//! frame. CT, MRI and micro-CT volumes are hundreds of megabytes to tens
+//! of gigabytes, so nothing here holds a whole volume: [`Volume::open`]
+//! parses a header into a [`VolumeInfo`] (dimensions, sample type, the
+//! index-to-world affine, the frame the file declares, rescale slope and
+//! intercept, the files that hold the data) and [`Volume::read_slices`]
+//! decodes a range of slices (index `k`, the slowest axis in every format)
+//! into `f32` values with the rescale applied. [`VolumeWriter`] streams
+//! slices out (for `mint gen volume`), beside the target and renamed into
+//! place.
+//!
+//! Formats: raw ([`RawSpec`], everything given by the caller), MetaImage
+//! (`.mhd` + data, `.mha`), NRRD (attached or detached header, raw or gzip,
+//! one data file or one file per slice), NIfTI-1 (`.nii`, `.nii.gz`,
+//! `.hdr` + `.img`), DICOM series (a folder of slices, ordered by position
+//! along the slice normal) and TIFF stacks (a folder of single-page files,
+//! or one multi-page file). Modules: [`error`], `decode` (sample types and
+//! byte order), `source` (contiguous, gzip and per-slice data), `nrrd`,
+//! `metaimage`, `nifti`, `dicom`, `tiff`, [`writer`].
+//!
+//! Contract and non-goals: scalar volumes only (one channel, three
+//! dimensions; a fourth dimension of size 1 is accepted); a header is
+//! trusted for nothing: every size is checked against the data it names
+//! before a slice is read, and every failure is one [`VolumeError`] line
+//! naming the file and the place in it. Compressed data (gzip, zlib) reads
+//! sequentially: reading slice `k` after slice `k + 1` starts the stream
+//! again ([`VolumeInfo::sequential_only`] says so).
+
+#![warn(missing_docs)]
+
+mod decode;
+mod dicom;
+pub mod error;
+mod metaimage;
+mod nifti;
+mod nrrd;
+mod source;
+mod tiff;
+pub mod writer;
+
+use std::path::{Path, PathBuf};
+
+pub use decode::Sample;
+pub use error::{VolumeError, VolumeErrorKind};
+pub use writer::{VolumeFormat, VolumeWriter};
+
+use source::SliceSource;
+
+/// The world frame a file declares for its index-to-world affine.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Frame {
+    /// DICOM's patient frame: +x to the patient's left, +y posterior, +z
+    /// superior (DICOM, MetaImage/ITK, NRRD `left-posterior-superior`).
+    Lps,
+    /// NIfTI's frame: +x right, +y anterior, +z superior (NIfTI sform/qform
+    /// codes 1..4, NRRD `right-anterior-superior`).
+    Ras,
+    /// Scanner or other frame the file names without an anatomical
+    /// meaning (NRRD `scanner-xyz`, `3D-right-handed`, …).
+    Scanner,
+    /// No frame: spacing only (a raw volume, NRRD without `space`, NIfTI
+    /// with both codes 0).
+    Unnamed,
+}
+
+impl Frame {
+    /// The name the summary prints.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Frame::Lps => "LPS (patient)",
+            Frame::Ras => "RAS (patient)",
+            Frame::Scanner => "scanner",
+            Frame::Unnamed => "voxel spacing (no frame declared)",
+        }
+    }
+}
+
+/// What a volume's header says: everything needed to place and read it.
+#[derive(Clone, Debug)]
+pub struct VolumeInfo {
+    /// Samples along i (fastest), j and k (slices, slowest).
+    pub dims: [u64; 3],
+    /// The stored sample type.
+    pub sample: Sample,
+    /// world = M · (i, j, k, 1): columns are the step along i, j, k and the
+    /// position of voxel (0, 0, 0)'s centre, in the file's units (mm for
+    /// medical formats).
+    pub index_to_world: [[f64; 4]; 3],
+    /// The frame `index_to_world` maps into.
+    pub frame: Frame,
+    /// Stored value × slope + intercept is the value [`Volume::read_slices`]
+    /// returns (DICOM rescale, NIfTI scl_*); 1 and 0 elsewhere. For DICOM a
+    /// slice may carry its own pair; this is the first slice's.
+    pub slope: f64,
+    /// See `slope`.
+    pub intercept: f64,
+    /// The format's name ("NRRD", "MetaImage", "NIfTI-1", "DICOM series",
+    /// "TIFF stack", "raw").
+    pub format: &'static str,
+    /// Every file the volume is read from (header first): what a staged run
+    /// fingerprints.
+    pub files: Vec<PathBuf>,
+    /// True when slices come from a compressed stream: read them in
+    /// increasing order.
+    pub sequential_only: bool,
+}
+
+impl VolumeInfo {
+    /// Samples in one slice (i × j).
+    pub fn slice_len(&self) -> usize {
+        (self.dims[0] * self.dims[1]) as usize
+    }
+
+    /// The length of one voxel step along index axis `d` in world units.
+    pub fn spacing(&self, d: usize) -> f64 {
+        let m = &self.index_to_world;
+        (m[0][d] * m[0][d] + m[1][d] * m[1][d] + m[2][d] * m[2][d]).sqrt()
+    }
+
+    /// The world position of index (i, j, k) (fractional indices allowed).
+    pub fn world(&self, ijk: [f64; 3]) -> [f64; 3] {
+        let m = &self.index_to_world;
+        std::array::from_fn(|r| m[r][0] * ijk[0] + m[r][1] * ijk[1] + m[r][2] * ijk[2] + m[r][3])
+    }
+}
+
+/// A raw volume's layout, all of it given by the caller (nothing in the
+/// file says it).
+#[derive(Clone, Debug)]
+pub struct RawSpec {
+    /// Samples along i, j, k.
+    pub dims: [u64; 3],
+    /// Stored sample type.
+    pub sample: Sample,
+    /// Big-endian samples (default little).
+    pub big_endian: bool,
+    /// Voxel spacing along i, j, k (default 1).
+    pub spacing: [f64; 3],
+    /// Bytes to skip at the start of the file (default 0).
+    pub header_bytes: u64,
+}
+
+/// How to open a volume.
+#[derive(Clone, Debug, Default)]
+pub struct OpenOptions {
+    /// Read the file as raw samples with this layout (required for `.raw`
+    /// and any file without a header mint knows).
+    pub raw: Option<RawSpec>,
+}
+
+/// An open volume: its header and a reader of its slices.
+pub struct Volume {
+    info: VolumeInfo,
+    source: Box<dyn SliceSource>,
+}
+
+impl std::fmt::Debug for Volume {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Volume").field("info", &self.info).finish_non_exhaustive()
+    }
+}
+
+impl Volume {
+    /// Opens `path`: a header file (`.nhdr`, `.nrrd`, `.mhd`, `.mha`,
+    /// `.nii`, `.nii.gz`, `.hdr`), a folder (a DICOM series or a TIFF
+    /// stack), a `.dcm` file (its folder's series), a `.tif`/`.tiff` file
+    /// (its pages), or raw samples with [`OpenOptions::raw`]. Checks the
+    /// header against the data's size; reads no slice.
+    pub fn open(path: &Path, options: &OpenOptions) -> Result<Volume, VolumeError> {
+        let (info, source) = if let Some(raw) = &options.raw {
+            source::open_raw(path, raw)?
+        } else {
+            let name = path.file_name().map(|n| n.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+            let ext = |e: &str| name.ends_with(e);
+            if path.is_dir() {
+                if tiff::is_stack_dir(path)? {
+                    tiff::open(path)?
+                } else {
+                    dicom::open(path)?
+                }
+            } else if ext(".nhdr") || ext(".nrrd") {
+                nrrd::open(path)?
+            } else if ext(".mhd") || ext(".mha") {
+                metaimage::open(path)?
+            } else if ext(".nii") || ext(".nii.gz") || ext(".hdr") {
+                nifti::open(path)?
+            } else if ext(".dcm") {
+                dicom::open(path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")))?
+            } else if ext(".tif") || ext(".tiff") {
+                tiff::open(path)?
+            } else {
+                return Err(VolumeError::new(
+                    VolumeErrorKind::Unsupported,
+                    path,
+                    "not a volume mint knows (.nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, .hdr, .dcm, .tif or a folder of DICOM or TIFF slices); for raw samples give their dimensions and type (--raw-dims, --raw-type)",
+                ));
+            }
+        };
+        source::check_info(path, &info)?;
+        Ok(Volume { info, source })
+    }
+
+    /// The header.
+    pub fn info(&self) -> &VolumeInfo {
+        &self.info
+    }
+
+    /// Reads slices `k0 .. k0 + count` into `out` (length `count` ×
+    /// [`VolumeInfo::slice_len`]), sample (i, j) of slice k at
+    /// `(k - k0) · slice_len + j · dims[0] + i`, rescaled to `f32`.
+    pub fn read_slices(&mut self, k0: u64, count: u64, out: &mut [f32]) -> Result<(), VolumeError> {
+        let n = self.info.slice_len();
+        let end = k0.checked_add(count).filter(|&e| e <= self.info.dims[2]);
+        if end.is_none() || out.len() as u64 != count * n as u64 {
+            return Err(VolumeError::new(
+                VolumeErrorKind::Value,
+                &self.info.files[0],
+                format!("slices {k0}..{} asked of a volume of {} slices into {} values", k0.saturating_add(count), self.info.dims[2], out.len()),
+            ));
+        }
+        for (c, chunk) in out.chunks_exact_mut(n.max(1)).enumerate().take(count as usize) {
+            self.source.read_slice(k0 + c as u64, chunk)?;
+        }
+        Ok(())
+    }
+
+    /// A second reader of the same volume (its own file handles), for a
+    /// task on another thread.
+    pub fn try_clone(&self) -> Result<Volume, VolumeError> {
+        Ok(Volume { info: self.info.clone(), source: self.source.try_clone()? })
+    }
+}
+
+/// The world frame for an axis-aligned affine built from spacing and an
+/// origin (NRRD without directions, MetaImage without a matrix, raw).
+pub(crate) fn diagonal_affine(spacing: [f64; 3], origin: [f64; 3]) -> [[f64; 4]; 3] {
+    let mut m = [[0.0; 4]; 3];
+    for r in 0..3 {
+        m[r][r] = spacing[r];
+        m[r][3] = origin[r];
+    }
+    m
+}
