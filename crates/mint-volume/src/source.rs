@@ -50,6 +50,8 @@ pub(crate) struct FileSlices {
     compression: Compression,
     decoder: Decoder,
     slice_bytes: u64,
+    /// Bytes of the file before the compressed stream (an attached header).
+    file_start: u64,
     buf: Vec<u8>,
     /// The open file and the sample start in it (uncompressed).
     open: Option<(usize, File, u64)>,
@@ -104,7 +106,14 @@ impl FileSlices {
                 }
             }
         }
-        Ok(FileSlices { files, per_file, skip, compression, decoder, slice_bytes, buf: Vec::new(), open: None, stream: None })
+        Ok(FileSlices { files, per_file, skip, compression, decoder, slice_bytes, file_start: 0, buf: Vec::new(), open: None, stream: None })
+    }
+
+    /// A compressed stream that starts `at` bytes into its file (after an
+    /// attached header).
+    pub fn with_file_start(mut self, at: u64) -> FileSlices {
+        self.file_start = at;
+        self
     }
 
     fn read_plain(&mut self, f: usize, local: u64) -> Result<(), VolumeError> {
@@ -133,7 +142,8 @@ impl FileSlices {
         };
         if restart {
             let path = &self.files[f];
-            let file = File::open(path).map_err(|e| VolumeError::io(path, "opening the data file", e))?;
+            let mut file = File::open(path).map_err(|e| VolumeError::io(path, "opening the data file", e))?;
+            std::io::Seek::seek(&mut file, std::io::SeekFrom::Start(self.file_start)).map_err(|e| VolumeError::io(path, "opening the data file", e))?;
             let reader = BufReader::with_capacity(1 << 20, file);
             let mut r: Box<dyn Read + Send> = match self.compression {
                 Compression::Gzip => Box::new(flate2::read::MultiGzDecoder::new(reader)),
@@ -187,6 +197,7 @@ impl SliceSource for FileSlices {
             compression: self.compression,
             decoder: self.decoder,
             slice_bytes: self.slice_bytes,
+            file_start: self.file_start,
             buf: Vec::new(),
             open: None,
             stream: None,
