@@ -371,7 +371,7 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(Header, usize), VolumeError> {
 }
 
 /// `pattern` with its one `%d`/`%0Nd`/`%Nd` replaced by `i`.
-fn printf_int(pattern: &str, i: i64) -> Option<String> {
+pub(crate) fn printf_int(pattern: &str, i: i64) -> Option<String> {
     let p = pattern.find('%')?;
     let rest = &pattern[p + 1..];
     let d = rest.find(|c: char| !c.is_ascii_digit())?;
