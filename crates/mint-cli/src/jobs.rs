@@ -252,6 +252,131 @@ pub struct CsgArgs {
     pub run: RunArgs,
 }
 
+/// `mint volume`'s arguments (shared with `mint stage plan volume` and
+/// `mint slurm volume`).
+#[derive(Args, Debug, Clone)]
+pub struct VolumeArgs {
+    /// The volume: a NRRD (.nrrd, .nhdr), MetaImage (.mhd, .mha) or NIfTI-1
+    /// (.nii, .nii.gz, .hdr) file, a folder holding one DICOM series or a
+    /// TIFF stack (or one of its files), a multi-page TIFF, or raw samples
+    /// (give --raw-dims and --raw-type).
+    #[arg(value_name = "IN")]
+    pub input: PathBuf,
+    /// Output mesh; the format follows the extension.
+    #[arg(value_name = "OUT")]
+    pub output: PathBuf,
+    /// The iso value: samples at or above it are inside (after the file's
+    /// rescale, e.g. Hounsfield units for CT: 300 for bone, -500 for skin).
+    #[arg(long, value_name = "V", allow_hyphen_values = true, required_unless_present = "labels", conflicts_with = "labels")]
+    pub iso: Option<f32>,
+    /// A label map: one closed surface per label value (`all`, the
+    /// default when the flag has no value: every value but 0; or a list
+    /// such as 1,2,5). Neighbouring labels share their boundary. Written
+    /// one file per label (OUT's name with `.label-V` before the
+    /// extension) unless --one-file.
+    #[arg(long, value_name = "LIST", num_args = 0..=1, default_missing_value = "all")]
+    pub labels: Option<String>,
+    /// With --labels: every label's surface in OUT itself, one component
+    /// set per label, in label order.
+    #[arg(long, requires = "labels")]
+    pub one_file: bool,
+    /// About N cubic cells over the volume's extent, sampled trilinearly
+    /// [default: the volume's own grid, one node per voxel centre, whose
+    /// crossings are marching cubes' vertices].
+    #[arg(long, conflicts_with = "cell_size", value_parser = clap::value_parser!(u64).range(1..))]
+    pub cells: Option<u64>,
+    /// Cubic cells of edge H in the volume's units (mm for medical formats).
+    #[arg(long, value_name = "H", value_parser = parse_cell_size)]
+    pub cell_size: Option<f64>,
+    /// Raw samples: dimensions X,Y,Z (X fastest in the file).
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_dims, requires = "raw_type")]
+    pub raw_dims: Option<[u64; 3]>,
+    /// Raw samples: type (u8, i8, u16, i16, u32, i32, u64, i64, f32, f64).
+    #[arg(long, value_name = "T", requires = "raw_dims")]
+    pub raw_type: Option<String>,
+    /// Raw samples: voxel spacing [default: 1,1,1].
+    #[arg(long, value_name = "SX,SY,SZ", value_parser = parse_triple, requires = "raw_dims")]
+    pub raw_spacing: Option<[f64; 3]>,
+    /// Raw samples: big-endian [default: little].
+    #[arg(long, requires = "raw_dims")]
+    pub raw_big_endian: bool,
+    /// Raw samples: bytes to skip before the first sample [default: 0].
+    #[arg(long, value_name = "BYTES", default_value_t = 0, requires = "raw_dims")]
+    pub raw_header: u64,
+    /// Write ASCII instead of binary (PLY/STL).
+    #[arg(long)]
+    pub ascii: bool,
+    /// Write vertex coordinates as f64 [default: f32 where it places every
+    /// vertex within a thousandth of a cell].
+    #[arg(long)]
+    pub double: bool,
+    #[command(flatten)]
+    pub mem: MemArg,
+    /// Worker threads [default: all cores]. The output is the same for any value.
+    #[arg(long, default_value_t = 0, hide_default_value = true)]
+    pub threads: usize,
+    /// Directory for temporary shards [default: the output's directory].
+    #[arg(long)]
+    pub tmp: Option<PathBuf>,
+    /// Force slabs of K cell layers (for tests and tuning); without it, --mem decides.
+    #[arg(long, value_name = "K")]
+    pub slab: Option<u32>,
+    #[command(flatten)]
+    pub staged: StagedArgs,
+    #[command(flatten)]
+    pub report: ReportArgs,
+}
+
+impl VolumeArgs {
+    /// The volume job of the surface `surface` (the iso value, or one label).
+    pub fn job(&self, surface: mint_pipeline::VolumeSurface) -> mint_pipeline::VolumeJob {
+        let raw = self.raw_dims.map(|dims| mint_pipeline::RawLayout {
+            dims,
+            sample: self.raw_type.clone().unwrap_or_default(),
+            big_endian: self.raw_big_endian,
+            spacing: self.raw_spacing.unwrap_or([1.0; 3]),
+            header_bytes: self.raw_header,
+        });
+        mint_pipeline::VolumeJob { input: self.input.clone(), raw, surface, own_grid: self.cells.is_none() && self.cell_size.is_none() }
+    }
+
+    /// The run's spec for `surface`, written to `output`.
+    pub fn spec(&self, surface: mint_pipeline::VolumeSurface, output: &Path) -> Result<RunSpec> {
+        let size = match (self.cells, self.cell_size) {
+            (Some(n), _) => GridSize::Cells(n),
+            (_, Some(h)) => GridSize::CellSize(h),
+            // The own grid: cells of one voxel (the size is not used).
+            _ => GridSize::CellSize(1.0),
+        };
+        let mut spec = RunSpec::new(Job::Volume(self.job(surface)), output, size);
+        spec.grid = GridSpec { size, axis: SlabAxis::Z, offset: [0.0; 3] };
+        spec.write = WriteSpec { ascii: self.ascii, double: self.double, no_colour: false };
+        Ok(spec.normalized())
+    }
+
+    /// The run's tuning.
+    pub fn tuning(&self) -> Tuning {
+        Tuning {
+            mem_bytes: self.mem.bytes(),
+            threads: self.threads,
+            deref: self.staged.deref,
+            tmp_dir: self.tmp.clone(),
+            slab_layers: self.slab,
+            work_dir: self.staged.work.clone(),
+            parts: self.staged.parts,
+            slabs: self.staged.slabs,
+        }
+    }
+}
+
+fn parse_dims(s: &str) -> Result<[u64; 3], String> {
+    let v: Vec<u64> = s.split(',').map(|x| x.trim().parse::<u64>()).collect::<Result<_, _>>().map_err(|e| format!("'{s}': {e}"))?;
+    if v.len() != 3 || v.contains(&0) {
+        return Err(format!("'{s}': expected three positive whole numbers X,Y,Z"));
+    }
+    Ok([v[0], v[1], v[2]])
+}
+
 /// The files of one surface, from its arguments (see
 /// `mint_io::expand_inputs`).
 pub(crate) fn surface_files(args: &[PathBuf]) -> Result<Vec<PathBuf>> {
@@ -378,22 +503,35 @@ pub enum JobCommand {
     Bool(BoolArgs),
     /// A CSG scene (every `mint csg` option).
     Csg(CsgArgs),
+    /// A volume's iso-surface (every `mint volume` option but --labels).
+    Volume(VolumeArgs),
 }
 
 impl JobCommand {
-    /// The run's options.
-    pub fn run_args(&self) -> &RunArgs {
+    /// The run's report flags.
+    pub fn report(&self) -> &ReportArgs {
         match self {
-            JobCommand::Resample(a) => &a.run,
-            JobCommand::Bool(a) => &a.run,
-            JobCommand::Csg(a) => &a.run,
+            JobCommand::Resample(a) => &a.run.report,
+            JobCommand::Bool(a) => &a.run.report,
+            JobCommand::Csg(a) => &a.run.report,
+            JobCommand::Volume(a) => &a.report,
         }
     }
 
     /// The spec and tuning of a staged run of this job (`--work` required).
     /// Range images are triangulated into the work directory first.
     pub fn staged(&self) -> Result<(RunSpec, Tuning, PathBuf)> {
-        let r = self.run_args();
+        let r = match self {
+            JobCommand::Resample(a) => &a.run,
+            JobCommand::Bool(a) => &a.run,
+            JobCommand::Csg(a) => &a.run,
+            JobCommand::Volume(a) => {
+                let Some(work) = a.staged.work.clone() else { bail!("a staged run needs --work DIR (a directory every task can reach)") };
+                let Some(iso) = a.iso else { bail!("a staged volume run takes --iso V (run one label at a time with --iso on a label map's indicator, or use `mint volume --labels`)") };
+                crate::paths::check_output(&a.output, &[a.input.as_path()])?;
+                return Ok((a.spec(mint_pipeline::VolumeSurface::Iso(iso), &a.output)?, a.tuning(), work));
+            }
+        };
         let Some(work) = r.staged.work.clone() else { bail!("a staged run needs --work DIR (a directory every task can reach)") };
         let spec = match self {
             JobCommand::Resample(a) => {
@@ -407,6 +545,7 @@ impl JobCommand {
                 crate::paths::check_output(&a.output, &fa.iter().chain(&fb).map(|p| p.as_path()).collect::<Vec<_>>())?;
                 r.spec(Job::Bool { op: a.op, a: fa, b: fb }, &a.output, None)?
             }
+            JobCommand::Volume(_) => unreachable!("returned above"),
             JobCommand::Csg(a) => {
                 let text = std::fs::read_to_string(&a.scene).with_context(|| format!("{}: cannot read the scene", a.scene.display()))?;
                 let scene = mint_pipeline::parse_scene(&text, &a.scene)?;

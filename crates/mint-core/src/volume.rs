@@ -110,27 +110,20 @@ impl Placement {
         Some((z0, if w > 0.0 { w } else { 0.0 }))
     }
 
-    /// The slices that planes `k0 ..= k1` read: `[first, end)`.
+    /// The slices that planes `k0 ..= k1` read: `[first, end)` (empty
+    /// when every plane is outside the domain). Planes map monotonically
+    /// to slices, and one outside the domain reads nothing, so the ends,
+    /// clamped to the outer centres, bound the rest.
     pub fn slice_range(&self, k0: u32, k1: u32) -> (u64, u64) {
-        let mut r: Option<(u64, u64)> = None;
-        for k in [k0, k1] {
-            // Planes map monotonically to slices: the ends bound the rest.
-            if let Some((z0, w)) = self.slices_of_plane(k) {
-                let end = z0 + if w > 0.0 { 2 } else { 1 };
-                r = Some(match r {
-                    Some((a, b)) => (a.min(z0), b.max(end)),
-                    None => (z0, end),
-                });
-            }
+        let (z0, z1) = (self.index(2, k0), self.index(2, k1));
+        let (a, b) = (z0.min(z1), z0.max(z1));
+        let nz = self.dims[2];
+        if b < -0.5 || a > nz as f64 - 0.5 {
+            return (0, 0);
         }
-        if r.is_none() {
-            // Both ends outside: the planes between may still be inside.
-            let (lo, hi) = self.domain(2);
-            if (k0 as f64) < lo && (k1 as f64) > hi {
-                return (0, self.dims[2]);
-            }
-        }
-        r.unwrap_or((0, 0))
+        let top = (nz - 1) as f64;
+        let (lo, hi) = (a.clamp(0.0, top), b.clamp(0.0, top));
+        (lo.floor() as u64, (hi.ceil() as u64 + 1).min(nz))
     }
 
     /// True when every node sits on a voxel centre or outside the domain
@@ -449,6 +442,26 @@ mod tests {
         let a: Vec<f64> = planes.iter().flatten().filter(|r| r.family() == FAMILY_A).map(|r| r.value()).collect();
         // Node 0 is padding at index -1: the crossing at 1.2 is at node 2.2.
         assert!(a.iter().any(|&v| (v - 2.2).abs() < 1e-6), "{a:?}");
+    }
+
+    #[test]
+    fn slice_ranges_cover_every_plane_between_their_ends() {
+        let (_, p) = own_grid([3, 3, 5]);
+        // Plane 0 is the padding before slice 0; planes 1..=5 are slices 0..=4.
+        assert_eq!(p.slice_range(0, 0), (0, 0));
+        assert_eq!(p.slice_range(0, 3), (0, 3));
+        assert_eq!(p.slice_range(2, 6), (1, 5));
+        assert_eq!(p.slice_range(6, 6), (0, 0));
+        for k0 in 0..7 {
+            for k1 in k0..7 {
+                let (a, b) = p.slice_range(k0, k1);
+                for k in k0..=k1 {
+                    if let Some((z, w)) = p.slices_of_plane(k) {
+                        assert!(z >= a && z + (w > 0.0) as u64 + 1 <= b, "plane {k} in {k0}..={k1}: slice {z} not in {a}..{b}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]

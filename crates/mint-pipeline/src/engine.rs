@@ -361,10 +361,52 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
             .zip(rules)
             .map(|(op, r)| match op {
                 Operand::Primitive(_) => "exact".to_string(),
-                Operand::Mesh { .. } => r.to_string(),
+                Operand::Mesh { .. } | Operand::Volume(_) => r.to_string(),
             })
             .collect();
         s.sign_rule = names.join(",");
+    }
+    if let Some((job, info)) = ctx.volume()? {
+        let mut st = crate::volume::VolumeStats::default();
+        for p in parts {
+            if let Some(Some(v)) = p.volumes.first() {
+                st.merge(v);
+            }
+        }
+        let surface = match job.surface {
+            crate::spec::VolumeSurface::Iso(v) => format!("iso {v}"),
+            crate::spec::VolumeSurface::Label(v) => format!("label {v}"),
+        };
+        let name = job.input.display();
+        if st.nan > 0 {
+            s.input_warnings.push(format!("{name}: {} of {} samples are NaN; they count as outside", st.nan, st.samples));
+        }
+        match (st.range, job.surface) {
+            (None, _) => s.input_warnings.push(format!("{name}: no sample is a finite number; the result is empty")),
+            (Some([lo, hi]), crate::spec::VolumeSurface::Iso(v)) if v > hi => {
+                s.input_warnings.push(format!("{name}: iso {v} is above every value ({lo} .. {hi}): nothing is inside, the result is empty"))
+            }
+            (Some([lo, hi]), crate::spec::VolumeSurface::Iso(v)) if v <= lo => {
+                s.input_warnings.push(format!("{name}: iso {v} is at or below every value ({lo} .. {hi}): everything is inside, the result is the volume's box"))
+            }
+            _ => {}
+        }
+        s.input_files = info.files.len() as u64;
+        s.volume = Some(crate::summary::VolumeSummary {
+            format: info.format.to_string(),
+            dims: info.dims,
+            sample: info.sample.name().to_string(),
+            slope: info.slope,
+            intercept: info.intercept,
+            spacing: std::array::from_fn(|d| info.spacing(d)),
+            frame: info.frame.name().to_string(),
+            surface,
+            own_grid: job.own_grid,
+            slices_read: st.slices,
+            samples_read: st.samples,
+            nan_samples: st.nan,
+            value_range: st.range,
+        });
     }
     let (open, holes) = ctx.open_cells()?;
     s.holes_closed = holes.closed;

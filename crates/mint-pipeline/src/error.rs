@@ -11,6 +11,9 @@ pub enum PipelineError {
     /// Reading the input or writing the output failed (bad input, full disk…).
     #[error(transparent)]
     Io(#[from] mint_io::Error),
+    /// A volume's header or data is bad, or reading it failed.
+    #[error(transparent)]
+    Volume(#[from] mint_volume::VolumeError),
     /// The shard store failed, or a shard is damaged.
     #[error(transparent)]
     Store(#[from] StoreError),

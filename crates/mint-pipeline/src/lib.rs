@@ -1,6 +1,7 @@
 //! mint's out-of-core engine: one staged evaluation of solids on the grid
-//! for `resample` (one mesh), `bool` (two) and `csg` (meshes and analytic
-//! primitives under an expression). Entry points read like a script: check
+//! for `resample` (one mesh), `bool` (two), `csg` (meshes and analytic
+//! primitives under an expression) and `volume` (a voxel volume's
+//! iso-surface). Entry points read like a script: check
 //! the contract, then run named stages; each stage reports to a
 //! [`Progress`] hook that can also cancel the run.
 //!
@@ -18,7 +19,9 @@
 //!   or Lindstrom–Silva dereferencing by distribution sort);
 //! - [`workdir`]: task directories, atomic commits, checksums;
 //! - [`slurm`]: submitting a plan to a Slurm cluster;
-//! - [`scene`]: the CSG scene format.
+//! - [`scene`]: the CSG scene format;
+//! - [`volume`]: voxel volumes as operands (`mint volume`): their frames,
+//!   grid, and the discretize pass that samples slices into shards.
 //!
 //! Above the engine: `mint-decimate` (the engine to an intermediate mesh,
 //! then quadric edge collapse). Beside it: `mint-check` (`mint check`
@@ -39,6 +42,7 @@ pub mod slurm;
 pub mod spec;
 pub mod stages;
 pub mod summary;
+pub mod volume;
 pub mod workdir;
 
 pub use mint_store::budget::{self, default_mem_bytes, Budget};
@@ -46,7 +50,7 @@ pub use engine::{plan_run, run, run_scene, run_task, status, summarize_dir, RunS
 pub use deref::Deref;
 pub use error::PipelineError;
 pub use plan::{Plan, Stage};
-pub use spec::{GridSpec, Job, RunSpec, SlabAxis, Tuning, WriteSpec};
+pub use spec::{GridSpec, Job, RawLayout, RunSpec, SlabAxis, Tuning, VolumeJob, VolumeSurface, WriteSpec};
 pub use summary::ResampleSummary;
 pub use progress::{NoProgress, Phase, Progress};
 pub use scene::{parse_scene, Scene, SceneError};

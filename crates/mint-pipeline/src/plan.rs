@@ -104,6 +104,8 @@ pub enum OperandPlan {
     Mesh { files: Vec<MeshFile> },
     /// An analytic primitive (computed on demand; nothing to read).
     Primitive,
+    /// A voxel volume (its files are among the plan's inputs).
+    Volume,
 }
 
 /// One stage and its task count.
@@ -241,6 +243,16 @@ impl Plan {
         for op in &scene.operands {
             operands.push(match op {
                 Operand::Primitive(_) => OperandPlan::Primitive,
+                Operand::Volume(v) => {
+                    // The header is checked now, before any work.
+                    for f in v.open()?.info().files.iter() {
+                        let f = absolute(f);
+                        if !files.contains(&f) {
+                            files.push(f);
+                        }
+                    }
+                    OperandPlan::Volume
+                }
                 Operand::Mesh { paths, .. } => {
                     let mut mesh_files = Vec::with_capacity(paths.len());
                     for (k, opened) in open_all(paths, tuning.thread_count()).into_iter().enumerate() {
@@ -374,6 +386,7 @@ impl Plan {
             Job::Resample { .. } => Some((1, "resample")),
             Job::Bool { .. } => Some((2, "bool")),
             Job::Csg { .. } => None,
+            Job::Volume(_) => Some((1, "volume")),
         };
         if let Some((n, kind)) = scene_operands.filter(|(n, _)| *n != self.operands.len()) {
             return refuse(format!("field 'operands': {} operands for a {kind} job (it has {n})", self.operands.len()));
@@ -397,7 +410,7 @@ impl Plan {
         }
         for (j, (p, o)) in self.operands.iter().zip(&scene.operands).enumerate() {
             match (p, o) {
-                (OperandPlan::Primitive, Operand::Primitive(_)) => {}
+                (OperandPlan::Primitive, Operand::Primitive(_)) | (OperandPlan::Volume, Operand::Volume(_)) => {}
                 (OperandPlan::Mesh { files }, Operand::Mesh { paths, .. }) => {
                     if files.len() != paths.len() || files.iter().zip(paths).any(|(f, p)| f.path != absolute(p)) {
                         return refuse(format!("operand {j}: not the files of the scene's surface"));

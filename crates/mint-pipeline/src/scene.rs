@@ -41,6 +41,9 @@ pub enum Operand {
     Primitive(Primitive),
     /// One surface, given as one or more files (in the engine's order).
     Mesh { paths: Vec<PathBuf>, transform: Transform },
+    /// A voxel volume's iso-surface (`mint volume`), in the volume's own
+    /// frame (see `crate::volume`).
+    Volume(Box<crate::spec::VolumeJob>),
 }
 
 /// A scene error: `file:line: message`.

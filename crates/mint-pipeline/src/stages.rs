@@ -97,6 +97,9 @@ pub struct DiscretizeResult {
     /// Per operand, the shard store (`op-J`) of all its pieces: one store
     /// per task, however many files the task read (`None`: no piece).
     pub shards: Vec<Option<ShardManifest>>,
+    /// Per operand, what the task read of a volume (`None` for others).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub volumes: Vec<Option<crate::volume::VolumeStats>>,
 }
 
 /// A line census (see `mint_core::signs::LineCensus`).
@@ -177,6 +180,7 @@ pub struct Ctx<'a> {
     parts: OnceCell<Vec<DiscretizeResult>>,
     rules: OnceCell<(Vec<SignRule>, Vec<Census>)>,
     open: OnceCell<(Option<OpenCells>, HoleStats)>,
+    volume: OnceCell<Option<(crate::spec::VolumeJob, mint_volume::VolumeInfo)>>,
 }
 
 fn identity(t: &Transform) -> bool {
@@ -245,7 +249,26 @@ impl<'a> Ctx<'a> {
             parts: OnceCell::new(),
             rules: OnceCell::new(),
             open: OnceCell::new(),
+            volume: OnceCell::new(),
         }
+    }
+
+    /// The volume operand of a volume job and its header (read once).
+    pub fn volume(&self) -> Result<Option<&(crate::spec::VolumeJob, mint_volume::VolumeInfo)>, PipelineError> {
+        if let Some(v) = self.volume.get() {
+            return Ok(v.as_ref());
+        }
+        let v = match self.scene.operands.as_slice() {
+            [Operand::Volume(job)] => {
+                let info = job.open()?.info().clone();
+                Some(((**job).clone(), info))
+            }
+            ops if ops.iter().any(|o| matches!(o, Operand::Volume(_))) => {
+                return Err(PipelineError::stage(self.name(), "a volume is an operand of `mint volume` only (not yet of bool and csg)"));
+            }
+            _ => None,
+        };
+        Ok(self.volume.get_or_init(|| v).as_ref())
     }
 
     fn name(&self) -> PathBuf {
@@ -294,11 +317,24 @@ impl<'a> Ctx<'a> {
                 }
             }
         }
-        let mut boxes = Vec::with_capacity(n);
+        let g = &self.plan.spec.grid;
+        let grid = if let Some((job, info)) = self.volume()? {
+            crate::volume::grid(job, info, g.size, g.offset).map_err(|source| PipelineError::Grid { path: self.name(), source })?
+        } else {
+            self.mesh_grid(&leaf)?
+        };
+        self.check_layers(&grid)?;
+        Ok(self.grid.get_or_init(|| grid))
+    }
+
+    /// The grid around mesh and primitive operands.
+    fn mesh_grid(&self, leaf: &[Option<([f64; 3], [f64; 3])>]) -> Result<Grid, PipelineError> {
+        let mut boxes = Vec::with_capacity(leaf.len());
         for (j, op) in self.scene.operands.iter().enumerate() {
             boxes.push(match op {
                 Operand::Primitive(p) => p.bounds(),
                 Operand::Mesh { paths, .. } => leaf[j].ok_or_else(|| PipelineError::Empty { path: paths.first().cloned().unwrap_or_default() })?,
+                Operand::Volume(v) => return Err(PipelineError::stage(&v.input, "a volume is an operand of `mint volume` only (not yet of bool and csg)")),
             });
         }
         let (elo, ehi) = expr_bounds(&self.scene.expr, &boxes);
@@ -320,7 +356,11 @@ impl<'a> Ctx<'a> {
             }
         }
         let g = &self.plan.spec.grid;
-        let grid = Grid::around(lo, hi, g.size, g.offset, g.axis.index()).map_err(|source| PipelineError::Grid { path: self.name(), source })?;
+        Grid::around(lo, hi, g.size, g.offset, g.axis.index()).map_err(|source| PipelineError::Grid { path: self.name(), source })
+    }
+
+    /// Refuses a grid whose per-layer tables would not fit the budget.
+    fn check_layers(&self, grid: &Grid) -> Result<(), PipelineError> {
         // Tables with an entry per layer (a count per plane in each part's
         // result, as a number in its JSON, and their sum) grow with the
         // layers, not the input: a needle 10^7 cells long must not exhaust
@@ -329,6 +369,7 @@ impl<'a> Ctx<'a> {
         // Pieces: at most a part per task and file of every mesh operand.
         let pieces: u64 = self.plan.operands.iter().map(|o| match o {
             OperandPlan::Mesh { files } => self.plan.parts as u64 + files.len() as u64,
+            OperandPlan::Volume => self.plan.parts as u64,
             OperandPlan::Primitive => 0,
         }).sum();
         let need = layers * BYTES_PER_LAYER_ENTRY * (pieces + 1);
@@ -347,7 +388,7 @@ impl<'a> Ctx<'a> {
                 ),
             ));
         }
-        Ok(self.grid.get_or_init(|| grid))
+        Ok(())
     }
 
     /// Every discretize task's result, in part order.
@@ -369,8 +410,20 @@ impl<'a> Ctx<'a> {
             for (j, ms) in r.operands.iter().enumerate() {
                 let files = match &self.plan.operands[j] {
                     OperandPlan::Mesh { files } => files,
+                    OperandPlan::Volume if ms.is_empty() => {
+                        match r.shards.get(j) {
+                            Some(Some(m)) => {
+                                if let Err(what) = m.validate(planes) {
+                                    return Err(PipelineError::stage(&path, format!("damaged task result: {what}; remove its task directory and run the task again")));
+                                }
+                            }
+                            Some(None) => {}
+                            None => return Err(PipelineError::stage(&path, format!("damaged task result: no shard entry for volume operand {j}; remove its task directory and run the task again"))),
+                        }
+                        continue;
+                    }
                     OperandPlan::Primitive if ms.is_empty() => continue,
-                    OperandPlan::Primitive => {
+                    OperandPlan::Primitive | OperandPlan::Volume => {
                         return Err(PipelineError::stage(&path, format!("damaged task result: shards for operand {j}, which is not a mesh; remove its task directory and run the task again")))
                     }
                 };
@@ -502,7 +555,7 @@ impl<'a> Ctx<'a> {
             .iter()
             .zip(&census)
             .map(|(op, c)| match op {
-                Operand::Primitive(_) => SignRule::Union,
+                Operand::Primitive(_) | Operand::Volume(_) => SignRule::Union,
                 Operand::Mesh { .. } => {
                     let census = LineCensus { lines: c.lines, winding_valid: c.winding_valid, odd: c.odd };
                     match asked {
@@ -575,7 +628,7 @@ impl<'a> Ctx<'a> {
         for (j, op) in self.scene.operands.iter().enumerate() {
             let sheet = rules[j] == SignRule::Sheet;
             operands.push(match op {
-                Operand::Mesh { .. } => {
+                Operand::Mesh { .. } | Operand::Volume(_) => {
                     let first = if sheet && k0 > 0 { k0 - 1 } else { k0 };
                     let mut planes = match tinted.as_mut() {
                         Some(t) => {
@@ -789,6 +842,19 @@ fn bounds_task(ctx: &Ctx, task: u32) -> Result<BoundsResult, PipelineError> {
 fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult, PipelineError> {
     let mut operands = Vec::new();
     let mut shards = Vec::new();
+    let mut volumes = Vec::new();
+    if let Some((job, _)) = ctx.volume()? {
+        let grid = ctx.grid()?;
+        let planes = crate::volume::task_planes(grid, ctx.plan.parts, task);
+        if planes.0 >= planes.1 {
+            return Ok(DiscretizeResult { operands: vec![Vec::new()], shards: vec![None], volumes: vec![None] });
+        }
+        let mut volume = job.open()?;
+        let dir = make_dir(&out.join("op-0"))?;
+        let mut writer = ShardWriter::create(&dir, grid.local_dims()[2] + 1);
+        let stats = crate::volume::discretize_planes(job, &mut volume, grid, planes, &mut writer, ctx.threads, ctx.budget.sort() / 2, ctx.progress)?;
+        return Ok(DiscretizeResult { operands: vec![Vec::new()], shards: vec![Some(writer.finish()?)], volumes: vec![Some(stats)] });
+    }
     for (j, op) in ctx.scene.operands.iter().enumerate() {
         let (Operand::Mesh { .. }, OperandPlan::Mesh { files }) = (op, &ctx.plan.operands[j]) else {
             operands.push(Vec::new());
@@ -821,7 +887,8 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
         operands.push(parts);
         shards.push(Some(writer.finish()?));
     }
-    Ok(DiscretizeResult { operands, shards })
+    volumes.resize(operands.len(), None);
+    Ok(DiscretizeResult { operands, shards, volumes })
 }
 
 /// Discretizes several pieces (tiles) of mesh operand `j` in one queue of
@@ -1185,8 +1252,15 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
     // cell (mint_io::precision): geo-referenced and tiny models get f64.
     let grid = ctx.grid()?;
     let hi: [f64; 3] = std::array::from_fn(|d| grid.origin[d] + grid.dims[d] as f64 * grid.cell);
-    let tolerance = grid.cell * crate::spec::defaults::F32_TOLERANCE_CELLS;
-    let (double, precision) = mint_io::precision::choose(output, format, ctx.plan.spec.write.double, grid.origin, hi, tolerance)?;
+    // A volume's vertices go from its engine frame to the frame its file declares.
+    let map = ctx.volume()?.map(|(job, info)| crate::volume::OutputMap::new(job, info, grid));
+    let ((lo, hi), cell) = match &map {
+        Some(m) => (m.bounds(grid.origin, hi), m.cell),
+        None => ((grid.origin, hi), grid.cell),
+    };
+    let tolerance = cell * crate::spec::defaults::F32_TOLERANCE_CELLS;
+    let (double, precision) = mint_io::precision::choose(output, format, ctx.plan.spec.write.double, lo, hi, tolerance)?;
+    let flip = map.is_some_and(|m| m.flip);
     let coloured = ctx.plan.coloured();
     let write = mint_io::WriteOptions { double, ..ctx.plan.spec.write.options(Some(ctx.dir.clone()), coloured) };
     let slabs: Vec<(Stage, ReconstructResult)> = (0..ctx.plan.tasks(Stage::Reconstruct)).map(|t| ctx.final_slab(t)).collect::<Result<_, _>>()?;
@@ -1198,7 +1272,10 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
         let sum = s.vertices_file.unwrap_or(FileSum { len: 0, crc32: 0 });
         let mut vertex = |b: &[u8], rgba: Option<[u8; 4]>| -> Result<(), PipelineError> {
             let c = |d: usize| f64::from_le_bytes(b[8 * d..8 * d + 8].try_into().unwrap());
-            let v = [c(0), c(1), c(2)];
+            let mut v = [c(0), c(1), c(2)];
+            if let Some(m) = &map {
+                v = m.apply(v);
+            }
             if !v.iter().all(|x| x.is_finite()) {
                 return Err(PipelineError::NonFiniteResult { path: ctx.name(), x: v[0], y: v[1], z: v[2] });
             }
@@ -1222,7 +1299,7 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
         let path = crate::workdir::task_dir(&ctx.dir, *stage, t as u32).join("faces.bin");
         read_records::<12>(&path, s.faces_file.unwrap_or(FileSum { len: 0, crc32: 0 }), |b| {
             let id = |d: usize| u32::from_le_bytes(b[4 * d..4 * d + 4].try_into().unwrap()) as u64 + offset;
-            let f = [id(0), id(1), id(2)];
+            let f = if flip { [id(0), id(2), id(1)] } else { [id(0), id(1), id(2)] };
             // A damaged slab result is blamed on itself, before its
             // checksum (checked at its end) could say so: never on the output.
             if f.iter().any(|&v| v >= total_vertices) {

@@ -101,6 +101,35 @@ pub struct ResampleSummary {
     /// are wall times between stage completions, and this process's memory
     /// says nothing of theirs.
     pub distributed: bool,
+    /// The volume of a `mint volume` run (`None` for meshes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub volume: Option<VolumeSummary>,
+}
+
+/// What a `mint volume` run read, and in which frame it wrote.
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
+pub struct VolumeSummary {
+    /// "NRRD", "MetaImage", "NIfTI-1", "DICOM series", "TIFF stack", "raw".
+    pub format: String,
+    pub dims: [u64; 3],
+    /// Stored sample type (`u16`, `f32`, …) and rescale.
+    pub sample: String,
+    pub slope: f64,
+    pub intercept: f64,
+    /// World length of a voxel step along i, j, k.
+    pub spacing: [f64; 3],
+    /// The frame the output's coordinates are in (the file's).
+    pub frame: String,
+    /// `iso V` or `label V`.
+    pub surface: String,
+    /// True: one grid node per voxel centre (the volume's own resolution).
+    pub own_grid: bool,
+    /// Slices and samples read (over all parts; neighbouring parts share
+    /// slices), NaN samples, and the finite samples' range.
+    pub slices_read: u64,
+    pub samples_read: u64,
+    pub nan_samples: u64,
+    pub value_range: Option<[f32; 2]>,
 }
 
 impl ResampleSummary {

@@ -1,7 +1,663 @@
-//! DICOM series (being written).
-use std::path::Path;
+//! DICOM series: a folder of single-frame DICOM images (one slice per
+//! file, any file names) read as one volume. [`open`] reads every file's
+//! header only (dicom-object, stopping before PixelData), keeps the files
+//! with the `DICM` preamble that hold an image (Rows present; a DICOMDIR,
+//! text files and other non-DICOM files are skipped), and checks that they
+//! form one regular grid: one SeriesInstanceUID, the same Rows/Columns,
+//! bits, pixel representation, ImageOrientationPatient (within 1e-4) and
+//! PixelSpacing, distinct positions along the slice normal
+//! `n = row_dir × col_dir`, and a uniform step (a gap of about k steps is
+//! named as a missing slice). Slices are ordered by `dot(IPP, n)`.
+//!
+//! The affine: column 0 is `row_dir · PixelSpacing[1]` (i runs along a
+//! row, across columns), column 1 `col_dir · PixelSpacing[0]`, column 2
+//! the actual step `(IPP_last − IPP_first)/(n − 1)` (so a gantry tilt is
+//! kept), column 3 the first sorted slice's IPP; frame LPS. A single slice
+//! steps `SpacingBetweenSlices`, else `SliceThickness`, else 1 mm along n.
+//!
+//! Transfer syntaxes: Implicit VR Little Endian, Explicit VR Little and
+//! Big Endian. A compressed (encapsulated) or deflated syntax fails at
+//! [`open`] with one Unsupported line naming it and a conversion command.
+//! Samples: 8, 16 or 32 bits allocated, one sample per pixel, MONOCHROME1
+//! or MONOCHROME2; the stored value is masked to BitsStored (taken from
+//! HighBit down) and sign-extended when PixelRepresentation is 1, then
+//! each slice's own RescaleSlope/RescaleIntercept applies. MONOCHROME1
+//! (inverted display) values are kept as stored: the rescale gives the
+//! physical value, the inversion is a display convention only.
+//! Multi-frame files (NumberOfFrames > 1) are refused.
+//!
+//! Memory: one parsed file at a time (the header pass keeps only a few
+//! numbers per slice; a slice read parses one file and its PixelData).
+//! Every value read from a file is checked: bad input is a one-line
+//! [`VolumeError`] naming the file and the tag, never a panic.
+
+use std::fs::File;
+use std::io::{BufReader, Read, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
+
+use dicom_core::value::{PrimitiveValue, Value};
+use dicom_object::mem::InMemDicomObject;
+use dicom_object::{FileMetaTable, OpenFileOptions, Tag};
+use dicom_transfer_syntax_registry::{TransferSyntaxIndex, TransferSyntaxRegistry};
+
+use crate::decode::Sample;
 use crate::source::SliceSource;
-use crate::{VolumeError, VolumeInfo};
-pub(crate) fn open(path: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), VolumeError> {
-    Err(VolumeError::unsupported(path, "DICOM series: not yet"))
+use crate::{Frame, VolumeError, VolumeInfo};
+
+/// The attributes read (names as in PS3.6).
+mod tags {
+    use dicom_object::Tag;
+    pub const SOP_CLASS_UID: Tag = Tag(0x0008, 0x0016);
+    pub const SLICE_THICKNESS: Tag = Tag(0x0018, 0x0050);
+    pub const SPACING_BETWEEN_SLICES: Tag = Tag(0x0018, 0x0088);
+    pub const SERIES_INSTANCE_UID: Tag = Tag(0x0020, 0x000E);
+    pub const IMAGE_POSITION_PATIENT: Tag = Tag(0x0020, 0x0032);
+    pub const IMAGE_ORIENTATION_PATIENT: Tag = Tag(0x0020, 0x0037);
+    pub const SAMPLES_PER_PIXEL: Tag = Tag(0x0028, 0x0002);
+    pub const PHOTOMETRIC_INTERPRETATION: Tag = Tag(0x0028, 0x0004);
+    pub const NUMBER_OF_FRAMES: Tag = Tag(0x0028, 0x0008);
+    pub const ROWS: Tag = Tag(0x0028, 0x0010);
+    pub const COLUMNS: Tag = Tag(0x0028, 0x0011);
+    pub const PIXEL_SPACING: Tag = Tag(0x0028, 0x0030);
+    pub const BITS_ALLOCATED: Tag = Tag(0x0028, 0x0100);
+    pub const BITS_STORED: Tag = Tag(0x0028, 0x0101);
+    pub const HIGH_BIT: Tag = Tag(0x0028, 0x0102);
+    pub const PIXEL_REPRESENTATION: Tag = Tag(0x0028, 0x0103);
+    pub const RESCALE_INTERCEPT: Tag = Tag(0x0028, 0x1052);
+    pub const RESCALE_SLOPE: Tag = Tag(0x0028, 0x1053);
+    pub const PIXEL_DATA: Tag = Tag(0x7FE0, 0x0010);
+}
+
+/// The Media Storage Directory SOP class (a DICOMDIR).
+const DICOMDIR_CLASS: &str = "1.2.840.10008.1.3.10";
+
+/// `(gggg,eeee) Name`, for messages.
+fn place(tag: Tag, name: &str) -> String {
+    format!("({:04X},{:04X}) {name}", tag.0, tag.1)
+}
+
+/// An error and its sources, on one line.
+fn chain(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut src = e.source();
+    while let Some(c) = src {
+        let m = c.to_string();
+        if !s.contains(&m) {
+            s.push_str(": ");
+            s.push_str(&m);
+        }
+        src = c.source();
+    }
+    s.replace('\n', " ")
+}
+
+/// The file's name (for naming a second file in a message).
+fn short(p: &Path) -> String {
+    p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| p.display().to_string())
+}
+
+/// What one file's header says.
+#[derive(Clone, Debug)]
+struct Header {
+    path: PathBuf,
+    series: String,
+    rows: u64,
+    cols: u64,
+    bits_allocated: u32,
+    bits_stored: u32,
+    high_bit: u32,
+    signed: bool,
+    iop: [f64; 6],
+    ipp: [f64; 3],
+    /// Row spacing (between rows), column spacing (between columns).
+    ps: [f64; 2],
+    slope: f64,
+    intercept: f64,
+    big_endian: bool,
+    thickness: Option<f64>,
+    between: Option<f64>,
+}
+
+/// Whether the file starts with a 128-byte preamble and `DICM`.
+fn is_dicom(path: &Path) -> Result<bool, VolumeError> {
+    let f = File::open(path).map_err(|e| VolumeError::io(path, "opening", e))?;
+    let mut head = Vec::with_capacity(132);
+    f.take(132).read_to_end(&mut head).map_err(|e| VolumeError::io(path, "reading", e))?;
+    Ok(head.len() == 132 && &head[128..132] == b"DICM")
+}
+
+/// Whether the transfer syntax `uid` is big endian, or why it cannot be
+/// read (an Unsupported error about `path`).
+fn check_transfer_syntax(path: &Path, uid: &str) -> Result<bool, VolumeError> {
+    match uid {
+        "1.2.840.10008.1.2" | "1.2.840.10008.1.2.1" => return Ok(false),
+        "1.2.840.10008.1.2.2" => return Ok(true),
+        "1.2.840.10008.1.2.1.99" => {
+            return Err(VolumeError::unsupported(
+                path,
+                "transfer syntax Deflated Explicit VR Little Endian (1.2.840.10008.1.2.1.99) is compressed; mint reads uncompressed DICOM only: convert with `gdcmconv --raw` or `dcmconv +te`",
+            ))
+        }
+        _ => {}
+    }
+    let msg = match TransferSyntaxRegistry.get(uid) {
+        Some(ts) if ts.is_encapsulated_pixel_data() => format!(
+            "transfer syntax {} ({uid}) is compressed; mint reads uncompressed DICOM only: convert with `gdcmconv --raw` or `dcmdjpeg`",
+            ts.name()
+        ),
+        Some(ts) => format!("transfer syntax {} ({uid}) is not one mint reads (Implicit VR Little Endian, Explicit VR Little or Big Endian): convert with `gdcmconv --raw`", ts.name()),
+        None => format!("transfer syntax {uid} is unknown; mint reads uncompressed DICOM only (Implicit VR Little Endian, Explicit VR Little or Big Endian): convert with `gdcmconv --raw`"),
+    };
+    Err(VolumeError::unsupported(path, msg))
+}
+
+/// An optional integer attribute (absent or empty: `None`).
+fn int_of(obj: &InMemDicomObject, path: &Path, tag: Tag, name: &str) -> Result<Option<i64>, VolumeError> {
+    let Some(e) = obj.get(tag) else { return Ok(None) };
+    if e.to_str().map(|s| s.trim_matches(|c: char| c == '\0' || c.is_whitespace()).is_empty()).unwrap_or(false) {
+        return Ok(None);
+    }
+    e.to_int::<i64>()
+        .map(Some)
+        .map_err(|err| VolumeError::format(path, format!("{}: not an integer: {}", place(tag, name), chain(&err))))
+}
+
+/// A required integer attribute.
+fn int_req(obj: &InMemDicomObject, path: &Path, tag: Tag, name: &str) -> Result<i64, VolumeError> {
+    int_of(obj, path, tag, name)?.ok_or_else(|| VolumeError::format(path, format!("{} is missing", place(tag, name))))
+}
+
+/// An optional list of finite numbers of length `n` (0: any length ≥ 1).
+fn floats_of(obj: &InMemDicomObject, path: &Path, tag: Tag, name: &str, n: usize) -> Result<Option<Vec<f64>>, VolumeError> {
+    let Some(e) = obj.get(tag) else { return Ok(None) };
+    if e.to_str().map(|s| s.trim_matches(|c: char| c == '\0' || c.is_whitespace()).is_empty()).unwrap_or(false) {
+        return Ok(None);
+    }
+    let v = e
+        .to_multi_float64()
+        .map_err(|err| VolumeError::format(path, format!("{}: not a list of numbers: {}", place(tag, name), chain(&err))))?;
+    if (n > 0 && v.len() != n) || v.is_empty() {
+        return Err(VolumeError::format(path, format!("{}: {} values, expected {}", place(tag, name), v.len(), n.max(1))));
+    }
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(VolumeError::format(path, format!("{}: {:?} is not finite", place(tag, name), v)));
+    }
+    Ok(Some(v))
+}
+
+/// A required list of `n` numbers.
+fn floats_req(obj: &InMemDicomObject, path: &Path, tag: Tag, name: &str, n: usize) -> Result<Vec<f64>, VolumeError> {
+    floats_of(obj, path, tag, name, n)?.ok_or_else(|| VolumeError::format(path, format!("{} is missing", place(tag, name))))
+}
+
+/// An optional text attribute, trimmed.
+fn text_of(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
+    let s = obj.get(tag)?.to_str().ok()?;
+    let s = s.trim_matches(|c: char| c == '\0' || c.is_whitespace());
+    (!s.is_empty()).then(|| s.to_string())
+}
+
+/// Reads the header of the DICOM file `path` (up to PixelData); `None`
+/// when it holds no image (a DICOMDIR, a structure set, a report).
+fn read_header(path: &Path) -> Result<Option<Header>, VolumeError> {
+    let obj = match OpenFileOptions::new().read_until(tags::PIXEL_DATA).open_file(path) {
+        Ok(o) => o,
+        Err(e) => {
+            // Say why when the meta group names a syntax we cannot read.
+            if let Some(uid) = meta_transfer_syntax(path) {
+                check_transfer_syntax(path, &uid)?;
+            }
+            return Err(VolumeError::format(path, format!("cannot read the DICOM header (truncated or corrupted file?): {}", chain(&e))));
+        }
+    };
+    if obj.meta().media_storage_sop_class_uid() == DICOMDIR_CLASS || text_of(&obj, tags::SOP_CLASS_UID).as_deref() == Some(DICOMDIR_CLASS) {
+        return Ok(None);
+    }
+    if obj.get(tags::ROWS).is_none() {
+        return Ok(None);
+    }
+    let big_endian = check_transfer_syntax(path, obj.meta().transfer_syntax())?;
+    let spp = int_of(&obj, path, tags::SAMPLES_PER_PIXEL, "SamplesPerPixel")?.unwrap_or(1);
+    if spp != 1 {
+        return Err(VolumeError::unsupported(
+            path,
+            format!("{}: colour (SamplesPerPixel {spp}); mint reads one sample per pixel (grayscale) only", place(tags::SAMPLES_PER_PIXEL, "SamplesPerPixel")),
+        ));
+    }
+    if let Some(pi) = text_of(&obj, tags::PHOTOMETRIC_INTERPRETATION) {
+        if pi != "MONOCHROME1" && pi != "MONOCHROME2" {
+            return Err(VolumeError::unsupported(
+                path,
+                format!("{}: {pi}; mint reads MONOCHROME1 or MONOCHROME2 only", place(tags::PHOTOMETRIC_INTERPRETATION, "PhotometricInterpretation")),
+            ));
+        }
+    }
+    if let Some(nf) = int_of(&obj, path, tags::NUMBER_OF_FRAMES, "NumberOfFrames")? {
+        if nf != 1 {
+            return Err(VolumeError::unsupported(
+                path,
+                format!(
+                    "{}: a multi-frame image ({nf} frames); mint reads a series of single-frame files only (split it with `dcmsplit` or `gdcmtar --split`)",
+                    place(tags::NUMBER_OF_FRAMES, "NumberOfFrames")
+                ),
+            ));
+        }
+    }
+    let dim = |tag: Tag, name: &str| -> Result<u64, VolumeError> {
+        let v = int_req(&obj, path, tag, name)?;
+        if !(1..=65535).contains(&v) {
+            return Err(VolumeError::format(path, format!("{}: {v} is not a usable size", place(tag, name))));
+        }
+        Ok(v as u64)
+    };
+    let rows = dim(tags::ROWS, "Rows")?;
+    let cols = dim(tags::COLUMNS, "Columns")?;
+    let ba = int_req(&obj, path, tags::BITS_ALLOCATED, "BitsAllocated")?;
+    if !matches!(ba, 8 | 16 | 32) {
+        return Err(VolumeError::unsupported(path, format!("{}: {ba}; mint reads 8, 16 or 32 bits per sample", place(tags::BITS_ALLOCATED, "BitsAllocated"))));
+    }
+    let bs = int_of(&obj, path, tags::BITS_STORED, "BitsStored")?.unwrap_or(ba);
+    if !(1..=ba).contains(&bs) {
+        return Err(VolumeError::format(path, format!("{}: {bs} with BitsAllocated {ba}", place(tags::BITS_STORED, "BitsStored"))));
+    }
+    let hb = int_of(&obj, path, tags::HIGH_BIT, "HighBit")?.unwrap_or(bs - 1);
+    if hb < bs - 1 || hb >= ba {
+        return Err(VolumeError::format(path, format!("{}: {hb} with BitsStored {bs} and BitsAllocated {ba}", place(tags::HIGH_BIT, "HighBit"))));
+    }
+    let pr = int_of(&obj, path, tags::PIXEL_REPRESENTATION, "PixelRepresentation")?.unwrap_or(0);
+    if !matches!(pr, 0 | 1) {
+        return Err(VolumeError::format(path, format!("{}: {pr} (0 unsigned or 1 signed)", place(tags::PIXEL_REPRESENTATION, "PixelRepresentation"))));
+    }
+    let iop_v = floats_req(&obj, path, tags::IMAGE_ORIENTATION_PATIENT, "ImageOrientationPatient", 6)?;
+    let ipp_v = floats_req(&obj, path, tags::IMAGE_POSITION_PATIENT, "ImagePositionPatient", 3)?;
+    let ps_v = floats_req(&obj, path, tags::PIXEL_SPACING, "PixelSpacing", 2)?;
+    if ps_v.iter().any(|&s| s <= 0.0) {
+        return Err(VolumeError::format(path, format!("{}: {:?} must be positive", place(tags::PIXEL_SPACING, "PixelSpacing"), ps_v)));
+    }
+    let one = |tag: Tag, name: &str| -> Result<Option<f64>, VolumeError> { Ok(floats_of(&obj, path, tag, name, 1)?.map(|v| v[0])) };
+    let slope = one(tags::RESCALE_SLOPE, "RescaleSlope")?.unwrap_or(1.0);
+    let intercept = one(tags::RESCALE_INTERCEPT, "RescaleIntercept")?.unwrap_or(0.0);
+    if slope == 0.0 {
+        return Err(VolumeError::format(path, format!("{}: 0", place(tags::RESCALE_SLOPE, "RescaleSlope"))));
+    }
+    let thickness = one(tags::SLICE_THICKNESS, "SliceThickness")?.filter(|&t| t > 0.0);
+    let between = one(tags::SPACING_BETWEEN_SLICES, "SpacingBetweenSlices")?.filter(|&t| t > 0.0);
+    let series = text_of(&obj, tags::SERIES_INSTANCE_UID).unwrap_or_default();
+    Ok(Some(Header {
+        path: path.to_path_buf(),
+        series,
+        rows,
+        cols,
+        bits_allocated: ba as u32,
+        bits_stored: bs as u32,
+        high_bit: hb as u32,
+        signed: pr == 1,
+        iop: std::array::from_fn(|i| iop_v[i]),
+        ipp: std::array::from_fn(|i| ipp_v[i]),
+        ps: [ps_v[0], ps_v[1]],
+        slope,
+        intercept,
+        big_endian,
+        thickness,
+        between,
+    }))
+}
+
+/// The transfer syntax the file meta group names, if it can be read.
+fn meta_transfer_syntax(path: &Path) -> Option<String> {
+    let mut f = File::open(path).ok()?;
+    f.seek(SeekFrom::Start(128)).ok()?;
+    let meta = FileMetaTable::from_reader(BufReader::new(f.take(1 << 16))).ok()?;
+    Some(meta.transfer_syntax().to_string())
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// The layout every slice shares.
+#[derive(Clone, Copy, Debug)]
+struct Layout {
+    rows: u64,
+    cols: u64,
+    bits_allocated: u32,
+    bits_stored: u32,
+    high_bit: u32,
+    signed: bool,
+}
+
+/// What a slice read needs of one file.
+#[derive(Clone, Debug)]
+struct SliceMeta {
+    path: PathBuf,
+    slope: f64,
+    intercept: f64,
+    big_endian: bool,
+}
+
+/// Opens the DICOM series in the folder `dir`.
+pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), VolumeError> {
+    let rd = std::fs::read_dir(dir).map_err(|e| VolumeError::io(dir, "listing the folder", e))?;
+    let mut paths = Vec::new();
+    for ent in rd {
+        let ent = ent.map_err(|e| VolumeError::io(dir, "listing the folder", e))?;
+        let p = ent.path();
+        if p.is_file() {
+            paths.push(p);
+        }
+    }
+    paths.sort();
+    let mut heads: Vec<Header> = Vec::new();
+    let mut dicom_files = 0usize;
+    for p in &paths {
+        if !is_dicom(p)? {
+            continue;
+        }
+        dicom_files += 1;
+        if let Some(h) = read_header(p)? {
+            heads.push(h);
+        }
+    }
+    if heads.is_empty() {
+        return Err(VolumeError::format(
+            dir,
+            format!(
+                "no DICOM image in the folder ({} files, {} of them DICOM with no image): give a folder of DICOM slices",
+                paths.len(),
+                dicom_files
+            ),
+        ));
+    }
+    // One series.
+    let mut series: Vec<(String, usize, PathBuf)> = Vec::new();
+    for h in &heads {
+        match series.iter_mut().find(|s| s.0 == h.series) {
+            Some(s) => s.1 += 1,
+            None => series.push((h.series.clone(), 1, h.path.clone())),
+        }
+    }
+    if series.len() > 1 {
+        let list: Vec<String> = series
+            .iter()
+            .map(|(uid, n, p)| format!("{} ({n} file{}, e.g. {})", if uid.is_empty() { "(no SeriesInstanceUID)" } else { uid }, if *n == 1 { "" } else { "s" }, short(p)))
+            .collect();
+        return Err(VolumeError::format(
+            dir,
+            format!("the folder holds {} series (0020,000E) SeriesInstanceUID: {}; give a folder with one", series.len(), list.join(", ")),
+        ));
+    }
+    // The same grid in every file.
+    let h0 = heads[0].clone();
+    for h in &heads[1..] {
+        let differ = |what: String| -> VolumeError { VolumeError::format(&h.path, format!("{what}, but {} has {}", short(&h0.path), "the first value")) };
+        let _ = differ;
+        let msg = if (h.rows, h.cols) != (h0.rows, h0.cols) {
+            Some(format!("{} x {} (Columns x Rows), but {} is {} x {}", h.cols, h.rows, short(&h0.path), h0.cols, h0.rows))
+        } else if (h.bits_allocated, h.bits_stored, h.high_bit, h.signed) != (h0.bits_allocated, h0.bits_stored, h0.high_bit, h0.signed) {
+            Some(format!(
+                "BitsAllocated/BitsStored/HighBit/PixelRepresentation {}/{}/{}/{}, but {} has {}/{}/{}/{}",
+                h.bits_allocated, h.bits_stored, h.high_bit, h.signed as u8, short(&h0.path), h0.bits_allocated, h0.bits_stored, h0.high_bit, h0.signed as u8
+            ))
+        } else if h.iop.iter().zip(&h0.iop).any(|(a, b)| (a - b).abs() > 1e-4) {
+            Some(format!("(0020,0037) ImageOrientationPatient {:?}, but {} has {:?}", h.iop, short(&h0.path), h0.iop))
+        } else if h.ps.iter().zip(&h0.ps).any(|(a, b)| (a - b).abs() > 1e-4 * b.abs().max(1.0)) {
+            Some(format!("(0028,0030) PixelSpacing {:?}, but {} has {:?}", h.ps, short(&h0.path), h0.ps))
+        } else {
+            None
+        };
+        if let Some(m) = msg {
+            return Err(VolumeError::format(&h.path, format!("not the same grid as the rest of the series: {m}")));
+        }
+    }
+    // Directions.
+    let mut row = [h0.iop[0], h0.iop[1], h0.iop[2]];
+    let mut col = [h0.iop[3], h0.iop[4], h0.iop[5]];
+    let (nr, nc) = (norm(row), norm(col));
+    if (nr - 1.0).abs() > 1e-2 || (nc - 1.0).abs() > 1e-2 || dot(row, col).abs() > 1e-2 {
+        return Err(VolumeError::format(
+            &h0.path,
+            format!("(0020,0037) ImageOrientationPatient {:?}: the row and column directions are not orthogonal unit vectors", h0.iop),
+        ));
+    }
+    row = row.map(|v| v / nr);
+    col = col.map(|v| v / nc);
+    let n = cross(row, col);
+    let nn = norm(n);
+    let n = n.map(|v| v / nn);
+    // Order along the normal.
+    let mut order: Vec<(f64, usize)> = heads.iter().enumerate().map(|(i, h)| (dot(h.ipp, n), i)).collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(heads[a.1].path.cmp(&heads[b.1].path)));
+    let sorted: Vec<&Header> = order.iter().map(|&(_, i)| &heads[i]).collect();
+    let pos: Vec<f64> = order.iter().map(|&(d, _)| d).collect();
+    for w in 0..sorted.len().saturating_sub(1) {
+        if (pos[w + 1] - pos[w]).abs() < 1e-4 {
+            return Err(VolumeError::format(
+                &sorted[w + 1].path,
+                format!("(0020,0032) ImagePositionPatient: the same slice position ({:.4} mm along the normal) as {}: duplicate slices", pos[w], short(&sorted[w].path)),
+            ));
+        }
+    }
+    let count = sorted.len();
+    let step_vec: [f64; 3] = if count == 1 {
+        let s = h0.between.or(h0.thickness).unwrap_or(1.0);
+        n.map(|v| v * s)
+    } else {
+        let steps: Vec<f64> = pos.windows(2).map(|w| w[1] - w[0]).collect();
+        let mut sorted_steps = steps.clone();
+        sorted_steps.sort_by(f64::total_cmp);
+        let median = sorted_steps[(sorted_steps.len() - 1) / 2];
+        for (w, &g) in steps.iter().enumerate() {
+            let (a, b) = (sorted[w], sorted[w + 1]);
+            if g >= 1.5 * median {
+                let k = (g / median).round() as i64 - 1;
+                return Err(VolumeError::format(
+                    &a.path,
+                    format!(
+                        "slice missing between {} (position {:.4}) and {} (position {:.4}): a step of {:.4} mm where the series steps {:.4} mm (about {} slice{} missing)",
+                        short(&a.path),
+                        pos[w],
+                        short(&b.path),
+                        pos[w + 1],
+                        g,
+                        median,
+                        k.max(1),
+                        if k > 1 { "s" } else { "" }
+                    ),
+                ));
+            }
+            if (g - median).abs() > 0.01 * median + 1e-5 {
+                return Err(VolumeError::format(
+                    &a.path,
+                    format!(
+                        "non-uniform slice spacing between {} (position {:.4}) and {} (position {:.4}): a step of {:.4} mm where the series steps {:.4} mm",
+                        short(&a.path),
+                        pos[w],
+                        short(&b.path),
+                        pos[w + 1],
+                        g,
+                        median
+                    ),
+                ));
+            }
+        }
+        let (first, last) = (sorted[0].ipp, sorted[count - 1].ipp);
+        let sv: [f64; 3] = std::array::from_fn(|r| (last[r] - first[r]) / (count - 1) as f64);
+        // Every slice on the line through the first and the last.
+        let tol = 0.01 * norm(sv) + 1e-3;
+        for (k, h) in sorted.iter().enumerate() {
+            let expect: [f64; 3] = std::array::from_fn(|r| first[r] + k as f64 * sv[r]);
+            let off = norm(std::array::from_fn(|r| h.ipp[r] - expect[r]));
+            if off > tol {
+                return Err(VolumeError::format(
+                    &h.path,
+                    format!(
+                        "(0020,0032) ImagePositionPatient {:?} is {:.4} mm off the line of slices from {} to {}: the slices do not form one grid",
+                        h.ipp,
+                        off,
+                        short(&sorted[0].path),
+                        short(&sorted[count - 1].path)
+                    ),
+                ));
+            }
+        }
+        sv
+    };
+    let layout = Layout {
+        rows: h0.rows,
+        cols: h0.cols,
+        bits_allocated: h0.bits_allocated,
+        bits_stored: h0.bits_stored,
+        high_bit: h0.high_bit,
+        signed: h0.signed,
+    };
+    // A file shorter than one slice's samples cannot hold them.
+    let slice_bytes = layout.rows * layout.cols * (layout.bits_allocated as u64 / 8);
+    for h in &sorted {
+        let len = std::fs::metadata(&h.path).map_err(|e| VolumeError::io(&h.path, "reading", e))?.len();
+        if len < slice_bytes {
+            return Err(VolumeError::format(
+                &h.path,
+                format!(
+                    "(7FE0,0010) PixelData: the file holds {len} bytes, fewer than the {slice_bytes} of one slice ({} x {} x {} bits): truncated",
+                    layout.cols, layout.rows, layout.bits_allocated
+                ),
+            ));
+        }
+    }
+    let first = sorted[0];
+    let mut m = [[0.0; 4]; 3];
+    for r in 0..3 {
+        m[r][0] = row[r] * h0.ps[1];
+        m[r][1] = col[r] * h0.ps[0];
+        m[r][2] = step_vec[r];
+        m[r][3] = first.ipp[r];
+    }
+    let sample = match (layout.bits_allocated, layout.signed) {
+        (8, false) => Sample::U8,
+        (8, true) => Sample::I8,
+        (16, false) => Sample::U16,
+        (16, true) => Sample::I16,
+        (32, false) => Sample::U32,
+        _ => Sample::I32,
+    };
+    let info = VolumeInfo {
+        dims: [layout.cols, layout.rows, count as u64],
+        sample,
+        index_to_world: m,
+        frame: Frame::Lps,
+        slope: first.slope,
+        intercept: first.intercept,
+        format: "DICOM series",
+        files: sorted.iter().map(|h| h.path.clone()).collect(),
+        sequential_only: false,
+    };
+    let slices = sorted
+        .iter()
+        .map(|h| SliceMeta { path: h.path.clone(), slope: h.slope, intercept: h.intercept, big_endian: h.big_endian })
+        .collect();
+    Ok((info, Box::new(DicomSlices { layout, slices })))
+}
+
+/// One slice per file.
+struct DicomSlices {
+    layout: Layout,
+    slices: Vec<SliceMeta>,
+}
+
+/// The PixelData bytes in the file's byte order (dicom-object decodes OW
+/// into 16-bit words in native order; put them back).
+fn stream_bytes(p: &PrimitiveValue, big_endian: bool) -> Option<Vec<u8>> {
+    macro_rules! words {
+        ($v:expr) => {
+            $v.iter().flat_map(|w| if big_endian { w.to_be_bytes() } else { w.to_le_bytes() }).collect::<Vec<u8>>()
+        };
+    }
+    Some(match p {
+        PrimitiveValue::U8(v) => v.to_vec(),
+        PrimitiveValue::U16(v) => words!(v),
+        PrimitiveValue::I16(v) => words!(v),
+        PrimitiveValue::U32(v) => words!(v),
+        PrimitiveValue::I32(v) => words!(v),
+        PrimitiveValue::Empty => Vec::new(),
+        _ => return None,
+    })
+}
+
+/// Decodes `need` samples of `layout` from `bytes` into `out`: mask to
+/// BitsStored below HighBit, sign-extend if signed, rescale.
+fn decode_samples(bytes: &[u8], layout: &Layout, big_endian: bool, slope: f64, intercept: f64, out: &mut [f32]) {
+    let bpp = (layout.bits_allocated / 8) as usize;
+    let bs = layout.bits_stored;
+    let shift = layout.high_bit + 1 - bs;
+    let mask: u32 = if bs >= 32 { u32::MAX } else { (1u32 << bs) - 1 };
+    let sign = 1u32 << (bs - 1);
+    let plain = slope == 1.0 && intercept == 0.0;
+    for (o, c) in out.iter_mut().zip(bytes.chunks_exact(bpp)) {
+        let raw: u32 = match (bpp, big_endian) {
+            (1, _) => c[0] as u32,
+            (2, false) => u16::from_le_bytes([c[0], c[1]]) as u32,
+            (2, true) => u16::from_be_bytes([c[0], c[1]]) as u32,
+            (_, false) => u32::from_le_bytes([c[0], c[1], c[2], c[3]]),
+            (_, true) => u32::from_be_bytes([c[0], c[1], c[2], c[3]]),
+        };
+        let u = (raw >> shift) & mask;
+        let v: f64 = if layout.signed && u & sign != 0 { (u as i64 - (1i64 << bs)) as f64 } else { u as f64 };
+        *o = if plain { v as f32 } else { (v * slope + intercept) as f32 };
+    }
+}
+
+impl SliceSource for DicomSlices {
+    fn read_slice(&mut self, k: u64, out: &mut [f32]) -> Result<(), VolumeError> {
+        let Some(s) = self.slices.get(k as usize) else {
+            let p = self.slices.first().map(|s| s.path.clone()).unwrap_or_default();
+            return Err(VolumeError::new(crate::VolumeErrorKind::Value, &p, format!("slice {k} of a series of {}", self.slices.len())));
+        };
+        let l = self.layout;
+        let need = (l.rows * l.cols) as usize;
+        if out.len() != need {
+            return Err(VolumeError::new(crate::VolumeErrorKind::Value, &s.path, format!("slice {k}: {} values asked, a slice holds {need}", out.len())));
+        }
+        let obj = OpenFileOptions::new()
+            .read_to(tags::PIXEL_DATA)
+            .open_file(&s.path)
+            .map_err(|e| VolumeError::format(&s.path, format!("slice {k}: cannot read the DICOM file (truncated or corrupted?): {}", chain(&e))))?;
+        let pd = place(tags::PIXEL_DATA, "PixelData");
+        let e = obj.get(tags::PIXEL_DATA).ok_or_else(|| VolumeError::format(&s.path, format!("slice {k}: {pd} is missing")))?;
+        let prim = match e.value() {
+            Value::Primitive(p) => p,
+            Value::PixelSequence(_) => {
+                return Err(VolumeError::unsupported(&s.path, format!("slice {k}: {pd} is encapsulated (compressed); mint reads uncompressed DICOM only: convert with `gdcmconv --raw`")))
+            }
+            Value::Sequence(_) => return Err(VolumeError::format(&s.path, format!("slice {k}: {pd} is a sequence, not samples"))),
+        };
+        let bytes = stream_bytes(prim, s.big_endian).ok_or_else(|| VolumeError::format(&s.path, format!("slice {k}: {pd} holds values of an unexpected type")))?;
+        let bpp = (l.bits_allocated / 8) as usize;
+        if bytes.len() < need * bpp {
+            return Err(VolumeError::format(
+                &s.path,
+                format!(
+                    "slice {k}: {pd} holds {} bytes, fewer than the {} of Rows x Columns x BitsAllocated/8 ({} x {} x {}/8): truncated",
+                    bytes.len(),
+                    need * bpp,
+                    l.rows,
+                    l.cols,
+                    l.bits_allocated
+                ),
+            ));
+        }
+        decode_samples(&bytes[..need * bpp], &l, s.big_endian, s.slope, s.intercept, out);
+        Ok(())
+    }
+
+    fn try_clone(&self) -> Result<Box<dyn SliceSource>, VolumeError> {
+        Ok(Box::new(DicomSlices { layout: self.layout, slices: self.slices.clone() }))
+    }
 }

@@ -25,4 +25,5 @@ pub mod slice;
 pub mod slurm;
 pub mod stage;
 pub mod validate;
+pub mod volume;
 pub mod zipper;

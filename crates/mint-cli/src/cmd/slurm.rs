@@ -30,7 +30,7 @@ pub struct SlurmArgs {
 
 pub fn cmd_slurm(a: SlurmArgs) -> Result<()> {
     let (plan, dir) = a.job.plan()?;
-    let (json, quiet) = (a.job.run_args().report.json(), a.job.run_args().report.quiet());
+    let (json, quiet) = (a.job.report().json(), a.job.report().quiet());
     // Jobs run wherever Slurm starts them: name the work directory absolutely.
     let dir = mint_pipeline::spec::absolute(&dir);
     let mint = std::env::current_exe().context("finding the mint executable")?;

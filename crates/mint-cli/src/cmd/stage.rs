@@ -60,7 +60,7 @@ pub fn cmd_stage(c: StageCommand) -> Result<()> {
         StageCommand::Plan(job) => {
             let (plan, dir) = job.plan()?;
             print!("{}", plan.to_json());
-            if !job.run_args().report.quiet() {
+            if !job.report().quiet() {
                 let tasks: Vec<String> = plan.stages.iter().map(|s| format!("{} {}", s.name, s.tasks)).collect();
                 eprintln!("planned {} in {} ({} tasks: {})", plan.spec.job.name(), dir.display(), plan.stages.iter().map(|s| s.tasks).sum::<u32>(), tasks.join(", "));
             }

@@ -1,0 +1,337 @@
+//! Voxel volumes as operands of the engine (`mint volume`). A volume is
+//! discretized like a mesh: each discretize task takes a run of the grid's
+//! node planes along the slab axis (z, the volume's slice axis, so that a
+//! task reads a contiguous range of slices), samples them
+//! (`mint_core::volume::PlaneSampler`), and writes the crossings of their
+//! grid lines into the task's shard store. Census, slabs, budget,
+//! reconstruction, resumption and Slurm are then the mesh path's.
+//!
+//! Frames: the engine runs in the volume's *engine frame*, index × `scale`
+//! per axis: `scale` = 1 on the volume's own grid (a node on every voxel
+//! centre, cells of one voxel), the voxel spacing otherwise (cubic cells
+//! in physical units). The write stage maps vertices to the frame the file
+//! declares by [`OutputMap`] (index-to-world ∘ engine-to-index), flipping
+//! faces when that map mirrors.
+//!
+//! Memory: a task holds the slices its batch of planes reads (at least
+//! three) and two node planes per thread; the batch shrinks to the budget.
+
+use crate::error::PipelineError;
+use crate::progress::{check_cancel, Progress};
+use crate::spec::VolumeJob;
+use mint_core::grid::{Grid, GridSize};
+use mint_core::volume::{plane_crossings, Placement, PlaneSampler};
+use mint_core::Intercept;
+use mint_store::ShardWriter;
+use mint_volume::{Volume, VolumeInfo};
+use serde::{Deserialize, Serialize};
+
+/// What one discretize task saw of the volume.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct VolumeStats {
+    /// Slices read.
+    pub slices: u64,
+    /// Samples read, NaN among them, and the finite ones' range (after
+    /// the rescale; `None` when no sample was finite).
+    pub samples: u64,
+    pub nan: u64,
+    pub range: Option<[f32; 2]>,
+    /// Crossings written.
+    pub records: u64,
+}
+
+impl VolumeStats {
+    /// Both tasks' statistics together.
+    pub fn merge(&mut self, o: &VolumeStats) {
+        self.slices += o.slices;
+        self.samples += o.samples;
+        self.nan += o.nan;
+        self.records += o.records;
+        self.range = match (self.range, o.range) {
+            (Some(a), Some(b)) => Some([a[0].min(b[0]), a[1].max(b[1])]),
+            (a, b) => a.or(b),
+        };
+    }
+}
+
+/// The engine frame's scale per axis (see the module docs).
+pub fn scale(job: &VolumeJob, info: &VolumeInfo) -> [f64; 3] {
+    if job.own_grid {
+        [1.0; 3]
+    } else {
+        std::array::from_fn(|d| info.spacing(d))
+    }
+}
+
+/// The box the grid is built around, in the engine frame: the voxel
+/// centres on the own grid (so that nodes land on them), the voxels'
+/// extent otherwise.
+pub fn bounds(job: &VolumeJob, info: &VolumeInfo) -> ([f64; 3], [f64; 3]) {
+    let s = scale(job, info);
+    if job.own_grid {
+        ([0.0; 3], std::array::from_fn(|d| (info.dims[d] - 1) as f64))
+    } else {
+        (std::array::from_fn(|d| -0.5 * s[d]), std::array::from_fn(|d| (info.dims[d] as f64 - 0.5) * s[d]))
+    }
+}
+
+/// The grid of a volume job: around [`bounds`], slabs along z (the slices);
+/// on the own grid cells of one voxel and no shift.
+pub fn grid(job: &VolumeJob, info: &VolumeInfo, size: GridSize, offset: [f64; 3]) -> Result<Grid, mint_core::grid::GridError> {
+    let (lo, hi) = bounds(job, info);
+    if job.own_grid {
+        Grid::around(lo, hi, GridSize::CellSize(1.0), [0.0; 3], Some(2))
+    } else {
+        Grid::around(lo, hi, size, offset, Some(2))
+    }
+}
+
+/// Where the grid's nodes sit on the volume.
+pub fn placement(job: &VolumeJob, info: &VolumeInfo, grid: &Grid) -> Placement {
+    let s = scale(job, info);
+    let [na, nb, ns] = grid.local_dims();
+    Placement {
+        axis: [0, 1, 2],
+        start: std::array::from_fn(|d| grid.origin[d] / s[d]),
+        step: std::array::from_fn(|d| grid.cell / s[d]),
+        dims: info.dims,
+        nodes: [na + 1, nb + 1, ns + 1],
+    }
+}
+
+/// Engine coordinates to the file's world frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputMap {
+    /// world = m · (x, y, z, 1).
+    pub m: [[f64; 4]; 3],
+    /// The map mirrors (negative determinant): faces are written reversed
+    /// so that they still face out.
+    pub flip: bool,
+    /// The shortest world length of a cell edge (the precision the output
+    /// needs is a fraction of it).
+    pub cell: f64,
+}
+
+impl OutputMap {
+    pub fn new(job: &VolumeJob, info: &VolumeInfo, grid: &Grid) -> OutputMap {
+        let s = scale(job, info);
+        let a = &info.index_to_world;
+        let mut m = [[0.0; 4]; 3];
+        for r in 0..3 {
+            for c in 0..3 {
+                m[r][c] = a[r][c] / s[c];
+            }
+            m[r][3] = a[r][3];
+        }
+        let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+        let cell = (0..3).map(|c| grid.cell * (m[0][c].powi(2) + m[1][c].powi(2) + m[2][c].powi(2)).sqrt()).fold(f64::INFINITY, f64::min);
+        OutputMap { m, flip: det < 0.0, cell }
+    }
+
+    #[inline]
+    pub fn apply(&self, v: [f64; 3]) -> [f64; 3] {
+        let m = &self.m;
+        std::array::from_fn(|r| m[r][0] * v[0] + m[r][1] * v[1] + m[r][2] * v[2] + m[r][3])
+    }
+
+    /// The world box of the engine box `[lo, hi]` (its eight corners').
+    pub fn bounds(&self, lo: [f64; 3], hi: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+        let (mut a, mut b) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for c in 0..8 {
+            let p = self.apply(std::array::from_fn(|d| if c >> d & 1 == 1 { hi[d] } else { lo[d] }));
+            for d in 0..3 {
+                a[d] = a[d].min(p[d]);
+                b[d] = b[d].max(p[d]);
+            }
+        }
+        (a, b)
+    }
+}
+
+/// The node planes `[k0, k1)` that discretize task `task` of `parts` takes.
+pub fn task_planes(grid: &Grid, parts: u32, task: u32) -> (u32, u32) {
+    let planes = grid.local_dims()[2] as u64 + 1;
+    let (a, b) = crate::stages::part_range(planes, parts.max(1), task, 1);
+    (a as u32, b as u32)
+}
+
+/// Writes the crossings of node planes `[k0, k1)` (each with the S lines
+/// to the plane after it) into `writer`, reading the slices they need from
+/// `volume`, on `threads` threads within `budget` bytes.
+#[allow(clippy::too_many_arguments)]
+pub fn discretize_planes(
+    job: &VolumeJob,
+    volume: &mut Volume,
+    grid: &Grid,
+    (k0, k1): (u32, u32),
+    writer: &mut ShardWriter,
+    threads: usize,
+    budget: u64,
+    progress: &dyn Progress,
+) -> Result<VolumeStats, PipelineError> {
+    let info = volume.info().clone();
+    let p = placement(job, &info, grid);
+    let field = job.surface.field();
+    let sampler = PlaneSampler::new(p);
+    let ns = grid.local_dims()[2];
+    let slice_len = info.slice_len();
+    let slice_bytes = slice_len as u64 * 4;
+    let plane_bytes = p.nodes[0] as u64 * p.nodes[1] as u64 * 4;
+    let threads = threads.max(1);
+    // Two node planes and a plane's records (bounded by its edges) per thread.
+    let per_thread = 2 * plane_bytes + 3 * plane_bytes * 4;
+    let fixed = threads as u64 * per_thread;
+    let room = budget.saturating_sub(fixed) / slice_bytes.max(1);
+    if room < 3 {
+        return Err(PipelineError::budget(
+            &job.input,
+            format!(
+                "one slice of {} x {} samples needs {} MiB and a task at least three of them plus {} MiB of planes: more than the memory budget ({} MiB); use more --mem or fewer threads",
+                info.dims[0],
+                info.dims[1],
+                slice_bytes >> 20,
+                fixed >> 20,
+                budget >> 20
+            ),
+        ));
+    }
+    // Planes per batch: as many as the slices in memory allow (a plane
+    // reads at most two slices, neighbours share them), at most 64.
+    let per_plane = (grid.cell / scale(job, &info)[2]).max(1.0);
+    let batch = (((room - 2) as f64 / per_plane).floor() as u32).clamp(1, 64);
+    let mut stats = VolumeStats::default();
+    let mut slices: Vec<f32> = Vec::new();
+    let mut have: (u64, u64) = (0, 0);
+    let mut k = k0;
+    progress.start(crate::progress::DISCRETIZE, (k1 - k0) as u64);
+    while k < k1 {
+        let end = (k + batch).min(k1);
+        // Slices read by planes k ..= end (the last for the S lines only).
+        let (z0, z1) = p.slice_range(k, end.min(ns));
+        if z1 > z0 && (z0, z1) != have {
+            // Keep the slices this batch shares with the last one.
+            let mut next = vec![0f32; ((z1 - z0) as usize) * slice_len];
+            let mut from = z0;
+            if have.0 <= z0 && z0 < have.1 {
+                let keep = (have.1.min(z1) - z0) as usize * slice_len;
+                let at = (z0 - have.0) as usize * slice_len;
+                next[..keep].copy_from_slice(&slices[at..at + keep]);
+                from = have.1.min(z1);
+            }
+            if from < z1 {
+                let at = (from - z0) as usize * slice_len;
+                volume.read_slices(from, z1 - from, &mut next[at..])?;
+                stats.slices += z1 - from;
+                for &v in &next[at..] {
+                    if v.is_nan() {
+                        stats.nan += 1;
+                    } else if v.is_finite() {
+                        let r = stats.range.get_or_insert([v, v]);
+                        r[0] = r[0].min(v);
+                        r[1] = r[1].max(v);
+                    }
+                }
+                stats.samples += (z1 - from) * slice_len as u64;
+            }
+            slices = next;
+            have = (z0, z1);
+        }
+        let slice_of = |z: u64| -> &[f32] {
+            let i = (z - have.0) as usize;
+            &slices[i * slice_len..(i + 1) * slice_len]
+        };
+        let nodes_of = |k: u32, out: &mut Vec<f32>| {
+            let at = p.slices_of_plane(k).map(|(z, w)| (slice_of(z), if w > 0.0 { slice_of(z + 1) } else { slice_of(z) }, w));
+            sampler.sample(field, at, out);
+        };
+        // Planes k .. end in `threads` runs; each thread samples its first
+        // plane and every next one once.
+        let count = end - k;
+        let runs = (threads as u32).min(count);
+        let results: Vec<Vec<Vec<Intercept>>> = std::thread::scope(|s| {
+            let handles: Vec<_> = (0..runs)
+                .map(|t| {
+                    let (a, b) = (k + count * t / runs, k + count * (t + 1) / runs);
+                    let nodes_of = &nodes_of;
+                    s.spawn(move || {
+                        let (mut cur, mut nxt) = (Vec::new(), Vec::new());
+                        nodes_of(a, &mut cur);
+                        let mut planes = Vec::with_capacity((b - a) as usize);
+                        for q in a..b {
+                            let mut out = Vec::new();
+                            if q < ns {
+                                nodes_of(q + 1, &mut nxt);
+                                plane_crossings(&p, field, q, &cur, Some(&nxt), &mut out);
+                                std::mem::swap(&mut cur, &mut nxt);
+                            } else {
+                                plane_crossings(&p, field, q, &cur, None, &mut out);
+                            }
+                            planes.push(out);
+                        }
+                        planes
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().expect("a volume worker panicked")).collect()
+        });
+        for plane in results.into_iter().flatten() {
+            stats.records += plane.len() as u64;
+            writer.append(&plane)?;
+        }
+        progress.advance(count as u64);
+        check_cancel(progress)?;
+        k = end;
+    }
+    progress.finish();
+    Ok(stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::spec::VolumeSurface;
+
+    fn job(own: bool) -> VolumeJob {
+        VolumeJob { input: "v.nrrd".into(), raw: None, surface: VolumeSurface::Iso(0.5), own_grid: own }
+    }
+
+    fn info(dims: [u64; 3], m: [[f64; 4]; 3]) -> VolumeInfo {
+        VolumeInfo {
+            dims,
+            sample: mint_volume::Sample::U8,
+            index_to_world: m,
+            frame: mint_volume::Frame::Lps,
+            slope: 1.0,
+            intercept: 0.0,
+            format: "test",
+            files: vec![],
+            sequential_only: false,
+        }
+    }
+
+    #[test]
+    fn the_own_grid_puts_nodes_on_voxel_centres() {
+        let i = info([5, 4, 3], [[2.0, 0.0, 0.0, 0.0], [0.0, 3.0, 0.0, 0.0], [0.0, 0.0, 4.0, 0.0]]);
+        let g = grid(&job(true), &i, GridSize::Cells(10), [0.3; 3]).unwrap();
+        assert_eq!(g.cell, 1.0);
+        let p = placement(&job(true), &i, &g);
+        assert!(p.on_voxels(), "{p:?}");
+        assert_eq!(p.start, [-1.0; 3]);
+    }
+
+    #[test]
+    fn the_output_map_mirrors_and_scales() {
+        // LPS with i running to the right (-x): a mirror.
+        let i = info([4, 4, 4], [[-0.5, 0.0, 0.0, 10.0], [0.0, 0.5, 0.0, 0.0], [0.0, 0.0, 2.0, -3.0]]);
+        let g = grid(&job(false), &i, GridSize::CellSize(1.0), [0.0; 3]).unwrap();
+        let m = OutputMap::new(&job(false), &i, &g);
+        assert!(m.flip);
+        // Engine point (index × spacing) (1, 1, 4) is index (2, 2, 2).
+        assert_eq!(m.apply([1.0, 1.0, 4.0]), [9.0, 1.0, 1.0]);
+        assert_eq!(m.cell, 1.0);
+        let own = OutputMap::new(&job(true), &i, &grid(&job(true), &i, GridSize::Cells(1), [0.0; 3]).unwrap());
+        assert_eq!(own.apply([2.0, 2.0, 2.0]), [9.0, 1.0, 1.0]);
+        assert_eq!(own.cell, 0.5);
+    }
+}
