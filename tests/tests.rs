@@ -18,3 +18,4 @@ mod same_bytes;
 mod scans;
 mod stages;
 mod tiles;
+mod volume;

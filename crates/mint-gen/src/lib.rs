@@ -12,6 +12,8 @@
 //! - [`components()`] ([`balls`]): many small disjoint spheres on a lattice.
 //! - [`torus_shuffled()`] and [`shuffle_mesh()`] ([`shuffle`]): the same
 //!   meshes with vertices and faces in a pseudo-random order, as scans come.
+//! - [`volume`]: synthetic voxel volumes (a smooth field with thin
+//!   features, a label map), one slice at a time, for `mint gen volume`.
 //! - [`scan_like()`] ([`scan`]): a noisy sphere with holes, flipped faces,
 //!   duplicated patches and non-manifold slivers at known sites, returning
 //!   [`ScanDefects`], which states the exact counts `mint_mesh::check`
@@ -35,6 +37,7 @@ pub mod shuffle;
 pub mod sphere;
 pub mod surface;
 pub mod torus;
+pub mod volume;
 
 pub use balls::components;
 pub use error::GenError;

@@ -45,7 +45,7 @@ pub(crate) fn cmd_demo(a: DemoArgs) -> Result<()> {
     let input = dir.join("demo-genus3.ply");
     let output = dir.join("demo-genus3-resampled.ply");
     eprintln!("1/3 generating a genus-3 solid with about {} faces: {}", a.faces, input.display());
-    cmd_gen(GenArgs { shape: Shape::Genus, output: input.clone(), faces: a.faces, seed: 1, genus: 3, ascii: false, color: false, order: OrderArg::InOrder, json: Default::default() })?;
+    cmd_gen(GenArgs { shape: Shape::Genus, output: input.clone(), faces: a.faces, seed: 1, genus: 3, ascii: false, color: false, dims: "128,128,128".into(), sample: None, spacing: "1,1,1".into(), order: OrderArg::InOrder, json: Default::default() })?;
     eprintln!("2/3 resampling it on about {} cells", a.cells);
     // The very arguments `mint resample IN OUT --cells N` parses to.
     #[derive(clap::Parser)]

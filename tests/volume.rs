@@ -1,0 +1,228 @@
+//! `mint volume` end to end (issue 32's done-when list): exact counts on
+//! tiny volumes through the whole engine, the border closing the surface,
+//! oblique affines putting a known point where the header says, labels
+//! sharing their boundary, the same bytes under every configuration, the
+//! shared real volumes closed and 2-manifold, and one line for each bad
+//! input with nothing written.
+
+use crate::cli::{mint, ok, p, run};
+use mint_volume::{Frame, Sample, VolumeWriter};
+use std::path::{Path, PathBuf};
+
+fn shared(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/volumes").join(rel)
+}
+
+/// Writes `samples` (x fastest) as a volume at `path` with affine `m`.
+fn write(path: &Path, dims: [u64; 3], sample: Sample, m: [[f64; 4]; 3], frame: Frame, samples: &[f32]) {
+    let mut w = VolumeWriter::create(path, dims, sample, m, frame).unwrap();
+    let n = (dims[0] * dims[1]) as usize;
+    for k in 0..dims[2] as usize {
+        w.write_slice(&samples[k * n..(k + 1) * n]).unwrap();
+    }
+    w.finish().unwrap();
+}
+
+const IDENTITY: [[f64; 4]; 3] = [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]];
+
+fn check(path: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["check", p(path), "--json"];
+    args.extend(extra);
+    serde_json::from_str(&ok(&args)).unwrap()
+}
+
+fn watertight(path: &Path) {
+    let c = check(path, &[]);
+    assert_eq!(c["watertight"], true, "{}: {c}", path.display());
+    assert_eq!((c["degenerate_faces"].as_u64(), c["duplicate_faces"].as_u64()), (Some(0), Some(0)), "{c}");
+}
+
+fn vertices(path: &Path) -> Vec<[f64; 3]> {
+    mint_io::read_mesh(path).unwrap().0
+}
+
+#[test]
+fn one_voxel_above_iso_is_an_octahedron_placed_by_an_oblique_affine() {
+    let d = tempfile::tempdir().unwrap();
+    let mut s = vec![0.0f32; 27];
+    s[13] = 100.0;
+    // 30 degrees about z, anisotropic spacing, an origin: LPS as DICOM would say.
+    let (c, sn) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let m = [[0.5 * c, -0.7 * sn, 0.0, 10.0], [0.5 * sn, 0.7 * c, 0.0, -20.0], [0.0, 0.0, 2.0, 5.0]];
+    for name in ["v.nii", "v.nhdr", "v.mha"] {
+        let vol = d.path().join(name);
+        write(&vol, [3, 3, 3], Sample::I16, m, Frame::Lps, &s);
+        let out = d.path().join(format!("{name}.ply"));
+        let json: serde_json::Value = serde_json::from_str(&ok(&["volume", p(&vol), p(&out), "--iso", "50", "--json"])).unwrap();
+        let c = check(&out, &[]);
+        assert_eq!((c["vertices"].as_u64(), c["faces"].as_u64(), c["watertight"].as_bool()), (Some(6), Some(8), Some(true)), "{name}: {c}");
+        assert!(c["signed_volume"].as_f64().unwrap() > 0.0, "{name}: faces point out after a mirroring map");
+        // Each vertex halfway from voxel (1,1,1) to a neighbour, in the file's frame.
+        let world = |ijk: [f64; 3]| -> [f64; 3] { std::array::from_fn(|r| m[r][0] * ijk[0] + m[r][1] * ijk[1] + m[r][2] * ijk[2] + m[r][3]) };
+        let mut want: Vec<[f64; 3]> = [[0.5, 1., 1.], [1.5, 1., 1.], [1., 0.5, 1.], [1., 1.5, 1.], [1., 1., 0.5], [1., 1., 1.5]].iter().map(|&q| world(q)).collect();
+        if name.ends_with(".nii") {
+            // NIfTI is RAS: the writer turned the LPS affine by negating x and y.
+            want.iter_mut().for_each(|w| {
+                w[0] = -w[0];
+                w[1] = -w[1];
+            });
+            assert_eq!(json["volume"]["frame"], "RAS (patient)");
+        } else if name.ends_with(".mha") {
+            assert_eq!(json["volume"]["frame"], "LPS (patient)");
+        }
+        for v in vertices(&out) {
+            assert!(want.iter().any(|w| (0..3).all(|k| (w[k] - v[k]).abs() < 1e-4)), "{name}: vertex {v:?} is not one of {want:?}");
+        }
+    }
+}
+
+#[test]
+fn the_border_closes_the_surface_and_the_checkerboard_is_two_manifold() {
+    let d = tempfile::tempdir().unwrap();
+    // Every voxel inside: the surface is the box of the voxels' extent.
+    let vol = d.path().join("full.nrrd");
+    write(&vol, [4, 3, 2], Sample::U8, IDENTITY, Frame::Scanner, &[9.0; 24]);
+    let out = d.path().join("full.ply");
+    let o = run(&["volume", p(&vol), p(&out), "--iso", "9"]);
+    assert!(o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("everything is inside"), "the warning: {}", String::from_utf8_lossy(&o.stderr));
+    watertight(&out);
+    for v in vertices(&out) {
+        assert!((0..3).any(|k| (v[k] + 0.5).abs() < 1e-3 || (v[k] - ([4.0, 3.0, 2.0][k] - 0.5)).abs() < 1e-3), "{v:?} is not on the border");
+    }
+    // The ambiguous case: 2x2x2 alternating, at and beside the tie.
+    let s: Vec<f32> = (0..8).map(|i| ((i & 1) ^ (i >> 1 & 1) ^ (i >> 2 & 1)) as f32).collect();
+    let vol = d.path().join("cb.nrrd");
+    write(&vol, [2, 2, 2], Sample::F32, IDENTITY, Frame::Scanner, &s);
+    for iso in ["0.5", "1", "0.001"] {
+        let out = d.path().join(format!("cb-{iso}.ply"));
+        ok(&["volume", p(&vol), p(&out), "--iso", iso]);
+        let c = check(&out, &["--no-weld"]);
+        assert_eq!((c["boundary_edges"].as_u64(), c["non_manifold_edges"].as_u64()), (Some(0), Some(0)), "iso {iso}: {c}");
+    }
+}
+
+#[test]
+fn labels_share_their_boundary_without_gaps() {
+    let d = tempfile::tempdir().unwrap();
+    let vol = d.path().join("l.nrrd");
+    ok(&["gen", "labels", p(&vol), "--dims", "40,40,40"]);
+    let out = d.path().join("l.ply");
+    ok(&["volume", p(&vol), p(&out), "--labels"]);
+    let mut sets = Vec::new();
+    for v in [1, 2, 3] {
+        let f = d.path().join(format!("l.label-{v}.ply"));
+        watertight(&f);
+        sets.push(vertices(&f).into_iter().map(|q| q.map(|c| c.to_bits())).collect::<std::collections::HashSet<_>>());
+    }
+    // Labels 1 and 2 touch (ball against box): many vertices bit for bit the same.
+    let shared = sets[0].intersection(&sets[1]).count();
+    assert!(shared > 20, "labels 1 and 2 share {shared} vertices");
+    // One file: every label's surface, closed each (judged without welding).
+    let one = d.path().join("one.ply");
+    ok(&["volume", p(&vol), p(&one), "--labels", "1,2,3", "--one-file"]);
+    let c = check(&one, &["--no-weld"]);
+    assert_eq!((c["boundary_edges"].as_u64(), c["non_manifold_edges"].as_u64()), (Some(0), Some(0)), "{c}");
+    let faces: u64 = (1..=3).map(|v| check(&d.path().join(format!("l.label-{v}.ply")), &[])["faces"].as_u64().unwrap()).sum();
+    assert_eq!(c["faces"].as_u64(), Some(faces));
+}
+
+#[test]
+fn a_volume_gives_the_same_bytes_under_every_configuration() {
+    let d = tempfile::tempdir().unwrap();
+    let vol = d.path().join("g.nhdr");
+    ok(&["gen", "volume", p(&vol), "--dims", "70,60,50", "--spacing", "0.8,0.8,1.25"]);
+    for grid in [&[][..], &["--cell-size", "1.7"][..]] {
+        let mut want: Option<Vec<u8>> = None;
+        let work = d.path().join("work");
+        let variants: [&[&str]; 6] = [&["--threads", "1"], &["--threads", "2"], &["--parts", "3", "--slabs", "4"], &["--mem", "70M", "--slab", "3"], &["--parts", "7", "--threads", "2"], &["--work", p(&work)]];
+        for (i, v) in variants.iter().enumerate() {
+            let out = d.path().join(format!("o{i}.ply"));
+            let mut args = vec!["volume", p(&vol), p(&out), "--iso", "1000", "-q"];
+            args.extend(grid);
+            args.extend(*v);
+            ok(&args);
+            let got = std::fs::read(&out).unwrap();
+            match &want {
+                None => {
+                    watertight(&out);
+                    want = Some(got)
+                }
+                Some(w) => assert!(&got == w, "{grid:?} {v:?}: other bytes"),
+            }
+        }
+        std::fs::remove_dir_all(&work).unwrap();
+    }
+}
+
+#[test]
+fn every_shared_volume_gives_a_closed_two_manifold_surface() {
+    let d = tempfile::tempdir().unwrap();
+    for (rel, iso, frame) in [
+        ("ct-head-headsq-nrrd/quarter.nhdr", "1150", "scanner"),
+        ("mr-head-mhd-vtk/HeadMRVolume.mhd", "60", "LPS (patient)"),
+        ("ct-body-nifti-totalsegmentator/example_ct.nii.gz", "300", "RAS (patient)"),
+        ("ct-body-nifti-totalsegmentator/example_ct_sm.nii.gz", "-500", "RAS (patient)"),
+    ] {
+        let out = d.path().join("o.ply");
+        let json: serde_json::Value = serde_json::from_str(&ok(&["volume", p(&shared(rel)), p(&out), "--iso", iso, "--json"])).unwrap();
+        assert_eq!(json["volume"]["frame"], frame, "{rel}");
+        assert!(json["output_faces"].as_u64().unwrap() > 10_000, "{rel}: {json}");
+        watertight(&out);
+    }
+}
+
+#[test]
+fn bad_volumes_fail_with_one_line_and_write_nothing() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    let w = |name: &str, bytes: &[u8]| -> PathBuf {
+        let f = dir.join(name);
+        std::fs::write(&f, bytes).unwrap();
+        f
+    };
+    let mut cases: Vec<(PathBuf, Vec<&str>, &str)> = Vec::new();
+    // Dimensions that do not match the data.
+    w("short.raw", &[0u8; 100]);
+    cases.push((w("short.nhdr", b"NRRD0004\ntype: uchar\ndimension: 3\nsizes: 5 5 5\nencoding: raw\ndata file: short.raw\n"), vec![], "the dimensions do not match the data"));
+    // A truncated gzip slice.
+    let mut gz = b"NRRD0004\ntype: uchar\ndimension: 3\nsizes: 8 8 8\nencoding: gzip\n\n".to_vec();
+    let mut e = flate2_encoder();
+    std::io::Write::write_all(&mut e, &[200u8; 300]).unwrap();
+    gz.extend(e.finish().unwrap());
+    cases.push((w("trunc.nrrd", &gz), vec![], "ends inside slice 4"));
+    // Dimensions whose product overflows.
+    cases.push((w("huge.nhdr", b"NRRD0004\ntype: short\ndimension: 3\nsizes: 4294967296 4294967296 4294967296\nendian: little\nencoding: raw\ndata file: short.raw\n"), vec![], "overflow"));
+    // Raw dimensions that do not fit the file.
+    cases.push((dir.join("short.raw"), vec!["--raw-dims", "10,10,10", "--raw-type", "u8"], "do not match the data"));
+    // Not a volume.
+    cases.push((w("x.txt", b"hello"), vec![], "not a volume mint knows"));
+    for (input, extra, want) in cases {
+        let out = dir.join("out.ply");
+        let mut args = vec!["volume", p(&input), p(&out), "--iso", "1"];
+        args.extend(extra);
+        let o = run(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{}: succeeded", input.display());
+        assert!(err.contains(want), "{}: {err}", input.display());
+        assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+        assert!(!out.exists());
+    }
+    let names: Vec<String> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert!(names.iter().all(|n| !n.starts_with('.')), "temporary files left: {names:?}");
+    // A NaN-filled float volume: a warning, an empty result.
+    let vol = dir.join("nan.nrrd");
+    write(&vol, [3, 3, 3], Sample::F32, IDENTITY, Frame::Scanner, &[f32::NAN; 27]);
+    let o = mint().args(["volume", p(&vol), p(&dir.join("nan.ply")), "--iso", "0"]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("27 of 27 samples are NaN") && err.contains("no sample is a finite number"), "{err}");
+    // An iso above every value: warned, empty.
+    let vol = dir.join("low.nrrd");
+    write(&vol, [3, 3, 3], Sample::U8, IDENTITY, Frame::Scanner, &[5.0; 27]);
+    let o = run(&["volume", p(&vol), p(&dir.join("low.ply")), "--iso", "6"]);
+    assert!(String::from_utf8_lossy(&o.stderr).contains("above every value"), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+fn flate2_encoder() -> flate2::write::GzEncoder<Vec<u8>> {
+    flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default())
+}
