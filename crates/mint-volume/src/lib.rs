@@ -30,6 +30,7 @@
 
 mod decode;
 mod dicom;
+pub mod dicom_lengths;
 pub mod error;
 mod metaimage;
 mod nifti;

@@ -43,6 +43,12 @@ pub const TARGETS: &[Target] = &[
     ("discretize", discretize),
     ("resample", resample),
     ("simplify", simplify),
+    ("read_nrrd", read_nrrd),
+    ("read_metaimage", read_metaimage),
+    ("read_nifti", read_nifti),
+    ("read_dicom_volume", read_dicom_volume),
+    ("read_tiff_volume", read_tiff_volume),
+    ("volume", volume),
 ];
 
 /// The target named `name`.
@@ -1068,4 +1074,94 @@ pub fn simplify(data: &[u8]) {
         let after = mint_mesh::check(&p, &f);
         assert!(after.watertight, "coloured, {blocks} blocks, target {target}: a watertight input lost it: {after:?}");
     }
+}
+
+// ---------------------------------------------------------------- volumes
+
+/// The most samples a volume target reads (a header may claim any size).
+const MAX_FUZZ_SAMPLES: u64 = 1 << 20;
+
+/// Opens `path` as a volume and reads every slice when it is small: an
+/// error keeps the contract, a volume reads as finite or NaN values.
+fn volume_at(path: &Path) {
+    match mint_volume::Volume::open(path, &mint_volume::OpenOptions::default()) {
+        Err(e) => one_line_naming(&e, path),
+        Ok(mut v) => {
+            let info = v.info().clone();
+            let n = info.slice_len() as u64;
+            assert!(n > 0 && info.dims[2] > 0, "an open volume of {:?} samples", info.dims);
+            if n * info.dims[2] <= MAX_FUZZ_SAMPLES {
+                let mut s = vec![0f32; (n * info.dims[2]) as usize];
+                match v.read_slices(0, info.dims[2], &mut s) {
+                    Err(e) => {
+                        let s = e.to_string();
+                        assert!(!s.trim().is_empty() && !s.contains('\n'), "error of more than one line: {s:?}");
+                    }
+                    Ok(()) => assert!(s.iter().all(|x| !x.is_infinite() || info.sample.is_float()), "an integer volume read an infinity"),
+                }
+            }
+        }
+    }
+}
+
+/// NRRD headers (attached data after the blank line).
+pub fn read_nrrd(data: &[u8]) {
+    volume_at(&input_file("nrrd", data));
+}
+
+/// MetaImage headers (`.mha`, data `LOCAL` or named).
+pub fn read_metaimage(data: &[u8]) {
+    volume_at(&input_file("mha", data));
+}
+
+/// NIfTI-1 headers and data (`.nii`).
+pub fn read_nifti(data: &[u8]) {
+    volume_at(&input_file("nii", data));
+}
+
+/// A DICOM series of one file (a folder holding `data` as `1.dcm`).
+pub fn read_dicom_volume(data: &[u8]) {
+    let dir = scratch().join("dicom");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("a scratch folder");
+    let f = dir.join("1.dcm");
+    std::fs::write(&f, data).expect("write the fuzz input");
+    match mint_volume::Volume::open(&dir, &mint_volume::OpenOptions::default()) {
+        Err(e) => {
+            let s = e.to_string();
+            assert!(!s.trim().is_empty() && !s.contains('\n'), "error of more than one line: {s:?}");
+        }
+        Ok(_) => volume_at(&dir),
+    }
+}
+
+/// TIFF files (one or more pages).
+pub fn read_tiff_volume(data: &[u8]) {
+    volume_at(&input_file("tif", data));
+}
+
+/// A tiny volume from the bytes (dims 1..=5 each, u8 samples, an iso or a
+/// label, the own grid or a coarser or finer one) through the engine's
+/// core: crossings, then the robust reconstruction. The surface must be
+/// closed, 2-manifold and oriented, whatever the samples.
+pub fn volume(data: &[u8]) {
+    use mint_core::grid::{Grid, GridSize};
+    use mint_core::volume::{volume_planes, Field, Placement};
+    if data.len() < 5 {
+        return;
+    }
+    let dims = [0, 1, 2].map(|d| (data[d] % 5) as u64 + 1);
+    let n = (dims[0] * dims[1] * dims[2]) as usize;
+    let samples: Vec<f32> = (0..n).map(|i| data.get(5 + i).copied().unwrap_or(0) as f32).collect();
+    let field = if data[3] & 1 == 0 { Field::Iso((data[3] >> 1) as f32 * 2.0) } else { Field::Label(((data[3] >> 1) % 4) as f32) };
+    let cell = [1.0, 0.7, 1.6, 2.5][(data[4] & 3) as usize];
+    let (lo, hi) = if cell == 1.0 { ([0.0; 3], dims.map(|n| (n - 1) as f64)) } else { ([-0.5; 3], dims.map(|n| n as f64 - 0.5)) };
+    let g = Grid::around(lo, hi, GridSize::CellSize(cell), [0.0; 3], Some(2)).expect("a small grid");
+    let [na, nb, ns] = g.local_dims();
+    let p = Placement { axis: [0, 1, 2], start: g.origin, step: [cell; 3], dims, nodes: [na + 1, nb + 1, ns + 1] };
+    let planes = volume_planes(&p, field, &samples);
+    let (r, _) = mint_core::robust::reconstruct_slab_robust(&g, 0, planes, mint_core::signs::SignRule::Union);
+    let c = mint_mesh::check(&r.vertices, &r.faces);
+    assert_eq!((c.boundary_edges, c.non_manifold_edges, c.inconsistently_oriented_edges), (0, 0, 0), "dims {dims:?} {field:?} cell {cell}: {c:?}");
+    assert!(c.signed_volume >= -1e-9, "inside out: {}", c.signed_volume);
 }

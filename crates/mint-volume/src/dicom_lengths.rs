@@ -1,0 +1,178 @@
+//! DICOM files as bytes, before any parser sees them: their layout
+//! ([`layout`]: preamble, bare meta group, or a bare data set) and a walk
+//! of their element headers that checks every declared length against
+//! what holds it ([`check_lengths`]). dicom-parser zero-fills a buffer of
+//! each value's claimed length before reading it, so a damaged or crafted
+//! length (4 GB in a 500 KB file) would cost minutes and gigabytes before
+//! the read fails; every DICOM reader of mint (RT structure sets in
+//! mint-contour, image series here) runs this walk first, so that every
+//! allocation is bounded by the file's size.
+
+/// How a DICOM file is laid out, from its first bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Layout {
+    /// A 128-byte preamble, then `DICM` and the file meta group.
+    Preamble,
+    /// `DICM` and the file meta group at the start (no preamble).
+    Meta,
+    /// A bare data set, no meta group: little endian, explicit VR or not.
+    Bare {
+        /// The two bytes after the first tag are VR letters.
+        explicit: bool,
+    },
+}
+
+/// The DICOM layout of a file starting with `head` (give at least its
+/// first 132 bytes), or `None` if it is not DICOM. A bare data set is
+/// recognised by a first tag in group 0008 (no text file starts with the
+/// bytes `08 00`).
+pub fn layout(head: &[u8]) -> Option<Layout> {
+    if head.len() >= 132 && &head[128..132] == b"DICM" {
+        Some(Layout::Preamble)
+    } else if head.starts_with(b"DICM") {
+        Some(Layout::Meta)
+    } else if head.len() >= 8 && head[0] == 0x08 && head[1] == 0x00 {
+        Some(Layout::Bare { explicit: head[4].is_ascii_uppercase() && head[5].is_ascii_uppercase() })
+    } else {
+        None
+    }
+}
+
+const UNDEFINED: u32 = 0xFFFF_FFFF;
+
+/// Explicit VRs whose length takes 4 bytes (after 2 reserved ones).
+fn long_vr(vr: &[u8]) -> bool {
+    matches!(vr, b"OB" | b"OD" | b"OF" | b"OL" | b"OV" | b"OW" | b"SQ" | b"SV" | b"UC" | b"UN" | b"UR" | b"UT" | b"UV")
+}
+
+fn u16_at(b: &[u8], i: usize) -> u16 {
+    u16::from_le_bytes([b[i], b[i + 1]])
+}
+
+fn u32_at(b: &[u8], i: usize) -> u32 {
+    u32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
+}
+
+/// Walks the element headers of a little-endian file and checks that every
+/// defined length fits in what encloses it (the file, or a defined-length
+/// sequence or item), without interpreting values. Sequences are entered:
+/// in explicit VR by their VR `SQ`, in implicit VR when the value starts
+/// with an item tag. Stops, content, at encapsulated pixel data and for
+/// transfer syntaxes it does not walk (big endian, deflated); the parser
+/// has the last word there. The message names the element and the byte.
+pub fn check_lengths(b: &[u8], lay: Layout) -> Result<(), String> {
+    let (mut pos, explicit) = match lay {
+        Layout::Bare { explicit } => (0, explicit),
+        Layout::Preamble | Layout::Meta => {
+            // The file meta group: explicit VR little endian, group 0002.
+            let mut pos = if lay == Layout::Preamble { 132 } else { 4 };
+            let mut ts = String::new();
+            while pos + 8 <= b.len() && u16_at(b, pos) == 0x0002 {
+                let elem = u16_at(b, pos + 2);
+                let (len, hdr) = if long_vr(&b[pos + 4..pos + 6]) {
+                    if pos + 12 > b.len() {
+                        return Err(format!("the file meta group is cut short at byte {pos}"));
+                    }
+                    (u32_at(b, pos + 8) as usize, 12)
+                } else {
+                    (u16_at(b, pos + 6) as usize, 8)
+                };
+                if len > b.len() - pos - hdr {
+                    return Err(format!("element (0002,{elem:04X}) at byte {pos} claims {len} bytes but {} remain", b.len() - pos - hdr));
+                }
+                if elem == 0x0010 {
+                    ts = String::from_utf8_lossy(&b[pos + hdr..pos + hdr + len]).trim_matches(|c: char| c == '\0' || c.is_whitespace()).to_string();
+                }
+                pos += hdr + len;
+            }
+            match ts.as_str() {
+                "1.2.840.10008.1.2" => (pos, false),
+                "1.2.840.10008.1.2.2" | "1.2.840.10008.1.2.1.99" => return Ok(()),
+                _ => (pos, true),
+            }
+        }
+    };
+    // Ends of the defined-length sequences and items we are in.
+    let mut ends: Vec<usize> = vec![b.len()];
+    while pos < b.len() {
+        while ends.len() > 1 && pos >= *ends.last().unwrap() {
+            if pos > ends.pop().unwrap() {
+                return Err(format!("the element at byte {pos} overruns the sequence or item that holds it"));
+            }
+        }
+        let end = *ends.last().unwrap();
+        if end - pos < 8 {
+            return Err(format!("an element header at byte {pos} is cut short"));
+        }
+        let (group, elem) = (u16_at(b, pos), u16_at(b, pos + 2));
+        if group == 0xFFFE {
+            let len = u32_at(b, pos + 4);
+            pos += 8;
+            match elem {
+                0xE000 if len != UNDEFINED => {
+                    if len as usize > end - pos {
+                        return Err(format!("an item at byte {} claims {len} bytes but {} remain", pos - 8, end - pos));
+                    }
+                    ends.push(pos + len as usize);
+                }
+                0xE000 | 0xE00D | 0xE0DD => {}
+                _ => return Err(format!("unknown delimiter (FFFE,{elem:04X}) at byte {}", pos - 8)),
+            }
+            continue;
+        }
+        let (len, hdr, sq, bulk) = if explicit {
+            let vr = &b[pos + 4..pos + 6];
+            if long_vr(vr) {
+                if end - pos < 12 {
+                    return Err(format!("an element header at byte {pos} is cut short"));
+                }
+                (u32_at(b, pos + 8), 12, vr == b"SQ", matches!(vr, b"OB" | b"OW"))
+            } else {
+                (u16_at(b, pos + 6) as u32, 8, false, false)
+            }
+        } else {
+            (u32_at(b, pos + 4), 8, false, false)
+        };
+        let at = pos;
+        pos += hdr;
+        if len == UNDEFINED {
+            if bulk {
+                return Ok(()); // encapsulated pixel data: fragments, not elements
+            }
+            continue; // a sequence: its items follow
+        }
+        let len = len as usize;
+        if len > end - pos {
+            return Err(format!("element ({group:04X},{elem:04X}) at byte {at} claims {len} bytes but {} remain", end - pos));
+        }
+        let items_follow = len >= 8 && u16_at(b, pos) == 0xFFFE && u16_at(b, pos + 2) == 0xE000;
+        if sq || (!explicit && items_follow) {
+            ends.push(pos + len);
+        } else {
+            pos += len;
+        }
+    }
+    Ok(())
+}
+
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_shared_series_passes_and_damage_is_named() {
+        let f = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/volumes/ct-chest-dicom-series-lungpetctdx/1-01.dcm");
+        let bytes = std::fs::read(&f).unwrap();
+        assert_eq!(layout(&bytes), Some(Layout::Preamble));
+        assert_eq!(check_lengths(&bytes, Layout::Preamble), Ok(()));
+        let e = check_lengths(&bytes[..bytes.len() - 1000], Layout::Preamble).unwrap_err();
+        assert!(e.contains("(7FE0,0010)") && e.contains("claims 524288 bytes"), "{e}");
+        // A huge length anywhere before the pixels: refused, never a panic.
+        for i in (132..3000).step_by(7) {
+            let mut b = bytes.clone();
+            b[i..i + 4].copy_from_slice(&0x7FFF_FFF0u32.to_le_bytes());
+            let _ = check_lengths(&b, Layout::Preamble);
+        }
+    }
+}
