@@ -244,45 +244,92 @@ fn crossing(n: u32, f0: f32, f1: f32, iso: f32, (lo, hi): (f64, f64)) -> f64 {
     x + t.clamp(MARGIN, 1.0 - MARGIN)
 }
 
+/// The inside bits of one node plane, a row of `words` u64 per line of
+/// nodes along b (bit `i % 64` of word `i / 64` is node `i` along a).
+fn inside_bits(nodes: &[f32], na1: usize, nb1: usize, iso: f32, out: &mut Vec<u64>) {
+    let words = na1.div_ceil(64);
+    out.clear();
+    out.resize(words * nb1, 0);
+    for (row, bits) in nodes.chunks_exact(na1).zip(out.chunks_exact_mut(words)) {
+        for (chunk, w) in row.chunks(64).zip(bits.iter_mut()) {
+            let mut x = 0u64;
+            for (b, &v) in chunk.iter().enumerate() {
+                x |= ((v >= iso) as u64) << b;
+            }
+            *w = x;
+        }
+    }
+}
+
+/// Calls `f(i)` for every set bit `i` of `bits` below `n`, in order.
+#[inline]
+fn each_bit(bits: &[u64], n: usize, mut f: impl FnMut(usize)) {
+    for (w, &x) in bits.iter().enumerate() {
+        let mut x = x;
+        if (w + 1) * 64 > n {
+            let keep = n - w * 64;
+            if keep < 64 {
+                x &= (1u64 << keep) - 1;
+            }
+        }
+        while x != 0 {
+            f(w * 64 + x.trailing_zeros() as usize);
+            x &= x - 1;
+        }
+    }
+}
+
 /// The crossings of plane `k`: families A and B within the plane, from its
 /// node values `nodes` (see [`PlaneSampler::sample`]), and with `next`
 /// (plane `k + 1`'s node values) family S between the two. Appends them to
-/// `out`.
+/// `out`, by family, line and position. The edges that change state are
+/// found on bit planes of the nodes' inside states, 64 nodes a word.
 pub fn plane_crossings(p: &Placement, field: Field, k: u32, nodes: &[f32], next: Option<&[f32]>, out: &mut Vec<Intercept>) {
-    let [na1, nb1, _] = p.nodes;
+    let [na1, nb1, _] = p.nodes.map(|n| n as usize);
     let iso = field.iso();
     let (da, db, ds) = (p.domain(0), p.domain(1), p.domain(2));
-    let inside = |v: f32| v >= iso;
+    let words = na1.div_ceil(64);
+    let mut cur = Vec::new();
+    inside_bits(nodes, na1, nb1, iso, &mut cur);
+    let mut diff = vec![0u64; words];
+    // A: node i against node i + 1 of the same row.
     for j in 0..nb1 {
-        let row = &nodes[(j * na1) as usize..((j + 1) * na1) as usize];
-        for i in 0..na1 - 1 {
-            let (f0, f1) = (row[i as usize], row[i as usize + 1]);
-            let (s0, s1) = (inside(f0), inside(f1));
-            if s0 != s1 {
-                out.push(Intercept::new(k, FAMILY_A, j, crossing(i, f0, f1, iso, da), s1));
-            }
+        let bits = &cur[j * words..(j + 1) * words];
+        for w in 0..words {
+            let carry = if w + 1 < words { bits[w + 1] << 63 } else { 0 };
+            diff[w] = bits[w] ^ ((bits[w] >> 1) | carry);
         }
+        let row = &nodes[j * na1..(j + 1) * na1];
+        each_bit(&diff, na1 - 1, |i| {
+            let (f0, f1) = (row[i], row[i + 1]);
+            out.push(Intercept::new(k, FAMILY_A, j as u32, crossing(i as u32, f0, f1, iso, da), f1 >= iso));
+        });
     }
-    for j in 0..nb1 - 1 {
-        let (r0, r1) = (&nodes[(j * na1) as usize..((j + 1) * na1) as usize], &nodes[((j + 1) * na1) as usize..((j + 2) * na1) as usize]);
-        for i in 0..na1 {
-            let (f0, f1) = (r0[i as usize], r1[i as usize]);
-            let (s0, s1) = (inside(f0), inside(f1));
-            if s0 != s1 {
-                out.push(Intercept::new(k, FAMILY_B, i, crossing(j, f0, f1, iso, db), s1));
-            }
+    // B: row j against row j + 1.
+    for j in 0..nb1.saturating_sub(1) {
+        let (b0, b1) = (&cur[j * words..(j + 1) * words], &cur[(j + 1) * words..(j + 2) * words]);
+        for w in 0..words {
+            diff[w] = b0[w] ^ b1[w];
         }
+        let (r0, r1) = (&nodes[j * na1..(j + 1) * na1], &nodes[(j + 1) * na1..(j + 2) * na1]);
+        each_bit(&diff, na1, |i| {
+            let (f0, f1) = (r0[i], r1[i]);
+            out.push(Intercept::new(k, FAMILY_B, i as u32, crossing(j as u32, f0, f1, iso, db), f1 >= iso));
+        });
     }
     let Some(next) = next else { return };
+    // S: this plane against the next, node by node.
+    let mut nxt = Vec::new();
+    inside_bits(next, na1, nb1, iso, &mut nxt);
     for j in 0..nb1 {
-        for i in 0..na1 {
-            let at = (j * na1 + i) as usize;
-            let (f0, f1) = (nodes[at], next[at]);
-            let (s0, s1) = (inside(f0), inside(f1));
-            if s0 != s1 {
-                out.push(Intercept::new(k, FAMILY_S, i * nb1 + j, crossing(k, f0, f1, iso, ds), s1));
-            }
+        for w in 0..words {
+            diff[w] = cur[j * words + w] ^ nxt[j * words + w];
         }
+        each_bit(&diff, na1, |i| {
+            let at = j * na1 + i;
+            let (f0, f1) = (nodes[at], next[at]);
+            out.push(Intercept::new(k, FAMILY_S, (i * nb1 + j) as u32, crossing(k, f0, f1, iso, ds), f1 >= iso));
+        });
     }
 }
 
