@@ -235,24 +235,25 @@ pub fn discretize_planes(
         let end = (k + batch).min(k1);
         // Slices read by planes k ..= end (the last for the S lines only).
         let (z0, z1) = p.slice_range(k, end.min(ns));
+        let mut fresh = 0..0;
         if z1 > z0 && (z0, z1) != have {
-            // Keep the slices this batch shares with the last one.
-            let mut next = vec![0f32; ((z1 - z0) as usize) * slice_len];
+            // Keep the slices this batch shares with the last one (moved to
+            // the front of the one buffer, which is reused, never zeroed again).
             let mut from = z0;
             if have.0 <= z0 && z0 < have.1 {
                 let keep = (have.1.min(z1) - z0) as usize * slice_len;
                 let at = (z0 - have.0) as usize * slice_len;
-                next[..keep].copy_from_slice(&slices[at..at + keep]);
+                slices.copy_within(at..at + keep, 0);
                 from = have.1.min(z1);
             }
+            slices.resize(((z1 - z0) as usize) * slice_len, 0.0);
             if from < z1 {
                 let at = (from - z0) as usize * slice_len;
-                volume.read_slices(from, z1 - from, &mut next[at..])?;
+                volume.read_slices(from, z1 - from, &mut slices[at..])?;
                 stats.slices += z1 - from;
-                sample_stats(&next[at..], &mut stats);
                 stats.samples += (z1 - from) * slice_len as u64;
+                fresh = at..slices.len();
             }
-            slices = next;
             have = (z0, z1);
         }
         let slice_of = |z: u64| -> &[f32] {
@@ -267,7 +268,14 @@ pub fn discretize_planes(
         // plane and every next one once.
         let count = end - k;
         let runs = (threads as u32).min(count);
-        let results: Vec<Vec<Vec<Intercept>>> = std::thread::scope(|s| {
+        let fresh_values = &slices[fresh];
+        let (results, fresh_stats): (Vec<Vec<Vec<Intercept>>>, VolumeStats) = std::thread::scope(|s| {
+            // The new slices' statistics, beside the planes' work.
+            let st = s.spawn(move || {
+                let mut st = VolumeStats::default();
+                sample_stats(fresh_values, &mut st);
+                st
+            });
             let handles: Vec<_> = (0..runs)
                 .map(|t| {
                     let (a, b) = (k + count * t / runs, k + count * (t + 1) / runs);
@@ -291,8 +299,14 @@ pub fn discretize_planes(
                     })
                 })
                 .collect();
-            handles.into_iter().map(|h| h.join().expect("a volume worker panicked")).collect()
+            let planes = handles.into_iter().map(|h| h.join().expect("a volume worker panicked")).collect();
+            (planes, st.join().expect("a volume worker panicked"))
         });
+        stats.nan += fresh_stats.nan;
+        stats.range = match (stats.range, fresh_stats.range) {
+            (Some(a), Some(b)) => Some([a[0].min(b[0]), a[1].max(b[1])]),
+            (a, b) => a.or(b),
+        };
         for plane in results.into_iter().flatten() {
             stats.records += plane.len() as u64;
             writer.append(&plane)?;
