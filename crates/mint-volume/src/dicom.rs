@@ -26,6 +26,9 @@
 //! physical value, the inversion is a display convention only.
 //! Multi-frame files (NumberOfFrames > 1) are refused.
 //!
+//! Every file's element lengths are walked first (`crate::dicom_lengths`),
+//! so no declared length larger than the file reaches the parser.
+//!
 //! Memory: one parsed file at a time (the header pass keeps only a few
 //! numbers per slice; a slice read parses one file and its PixelData).
 //! Every value read from a file is checked: bad input is a one-line
@@ -200,6 +203,13 @@ fn text_of(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
 /// Reads the header of the DICOM file `path` (up to PixelData); `None`
 /// when it holds no image (a DICOMDIR, a structure set, a report).
 fn read_header(path: &Path) -> Result<Option<Header>, VolumeError> {
+    // Every declared length against the file, before dicom-object sizes a
+    // buffer by one (see `crate::dicom_lengths`).
+    let bytes = std::fs::read(path).map_err(|e| VolumeError::io(path, "reading", e))?;
+    if let Some(layout) = crate::dicom_lengths::layout(&bytes) {
+        crate::dicom_lengths::check_lengths(&bytes, layout).map_err(|m| VolumeError::format(path, format!("{m}: truncated or corrupted")))?;
+    }
+    drop(bytes);
     let obj = match OpenFileOptions::new().read_until(tags::PIXEL_DATA).open_file(path) {
         Ok(o) => o,
         Err(e) => {
@@ -659,5 +669,118 @@ impl SliceSource for DicomSlices {
 
     fn try_clone(&self) -> Result<Box<dyn SliceSource>, VolumeError> {
         Ok(Box::new(DicomSlices { layout: self.layout, slices: self.slices.clone() }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{OpenOptions, Volume};
+
+    fn shared() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/volumes/ct-chest-dicom-series-lungpetctdx")
+    }
+
+    fn slice(n: usize) -> Vec<u8> {
+        std::fs::read(shared().join(format!("1-{n:02}.dcm"))).unwrap()
+    }
+
+    /// `bytes` with the explicit-VR (short length) element `tag` of the
+    /// data set set to `value` (its length changed as needed).
+    fn edit(bytes: &[u8], tag: (u16, u16), value: &[u8]) -> Vec<u8> {
+        let t = [tag.0.to_le_bytes(), tag.1.to_le_bytes()].concat();
+        let i = (132..bytes.len() - 8).find(|&i| bytes[i..i + 4] == t[..] && bytes[i + 4..i + 6].iter().all(u8::is_ascii_uppercase)).unwrap();
+        let len = u16::from_le_bytes([bytes[i + 6], bytes[i + 7]]) as usize;
+        let mut v = value.to_vec();
+        if v.len() % 2 == 1 {
+            v.push(if &bytes[i + 4..i + 6] == b"UI" { 0 } else { b' ' });
+        }
+        let mut out = bytes[..i + 6].to_vec();
+        out.extend((v.len() as u16).to_le_bytes());
+        out.extend(&v);
+        out.extend(&bytes[i + 8 + len..]);
+        out
+    }
+
+    fn folder(files: &[(&str, Vec<u8>)]) -> tempfile::TempDir {
+        let d = tempfile::tempdir().unwrap();
+        for (name, b) in files {
+            std::fs::write(d.path().join(name), b).unwrap();
+        }
+        d
+    }
+
+    fn open_err(d: &tempfile::TempDir) -> String {
+        Volume::open(d.path(), &OpenOptions::default()).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn the_shared_series_is_placed_where_its_headers_say() {
+        let mut v = Volume::open(&shared(), &OpenOptions::default()).unwrap();
+        let i = v.info().clone();
+        assert_eq!((i.dims, i.sample, i.frame, i.slope, i.intercept), ([512, 512, 30], Sample::U16, Frame::Lps, 1.0, -1024.0));
+        assert!((i.spacing(2) - 8.0).abs() < 1e-9 && (i.spacing(0) - 0.646484375).abs() < 1e-12);
+        // The lowest slice (z = 80) is the first; 1-01.dcm is at z = 312, the last.
+        assert_eq!(i.world([0.0, 0.0, 0.0]), [-173.1767578125, -294.1767578125, 80.0]);
+        assert_eq!(i.world([0.0, 0.0, 29.0])[2], 312.0);
+        assert!(i.files[29].ends_with("1-01.dcm"));
+        let mut s = vec![0.0; 512 * 512];
+        v.read_slices(29, 1, &mut s).unwrap();
+        let (lo, hi) = s.iter().fold((f32::MAX, f32::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+        assert!(lo >= -1024.0 && hi <= 3071.0 && hi > 500.0, "{lo} .. {hi}");
+    }
+
+    #[test]
+    fn an_oblique_series_in_any_file_order() {
+        // Three slices turned 30 degrees about z, saved under names that do not sort by position.
+        let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+        let iop = format!("{c:.6}\\{s:.6}\\0\\{:.6}\\{c:.6}\\0", -s);
+        let files: Vec<(&str, Vec<u8>)> = [("b.dcm", 2), ("c.dcm", 1), ("a.dcm", 3)].iter().map(|&(n, k)| (n, edit(&slice(k), (0x0020, 0x0037), iop.as_bytes()))).collect();
+        let d = folder(&files);
+        let v = Volume::open(d.path(), &OpenOptions::default()).unwrap();
+        let i = v.info();
+        assert_eq!(i.dims[2], 3);
+        // Slice 1-03 is the lowest (z = 296); voxel (i, j, k) = IPP + i·ps·row + j·ps·col + k·step.
+        let ps = 0.646484375;
+        let (ipp, row, col) = ([-173.1767578125, -294.1767578125, 296.0], [c, s, 0.0], [-s, c, 0.0]);
+        let w = i.world([10.0, 20.0, 2.0]);
+        let want: [f64; 3] = std::array::from_fn(|r| ipp[r] + 10.0 * ps * row[r] + 20.0 * ps * col[r] + [0.0, 0.0, 16.0][r]);
+        for r in 0..3 {
+            assert!((w[r] - want[r]).abs() < 1e-4, "{w:?} vs {want:?}");
+        }
+        assert!(i.files[0].ends_with("a.dcm") && i.files[1].ends_with("b.dcm") && i.files[2].ends_with("c.dcm"));
+    }
+
+    #[test]
+    fn series_that_are_not_one_grid_are_named() {
+        // A missing slice.
+        let d = folder(&[("1.dcm", slice(1)), ("2.dcm", slice(2)), ("4.dcm", slice(4)), ("5.dcm", slice(5))]);
+        let e = open_err(&d);
+        assert!(e.contains("slice missing between") && e.contains("about 1 slice missing"), "{e}");
+        // Mixed sizes.
+        let d = folder(&[("1.dcm", slice(1)), ("2.dcm", edit(&slice(2), (0x0028, 0x0010), &256u16.to_le_bytes())), ("3.dcm", slice(3))]);
+        let e = open_err(&d);
+        assert!(e.contains("2.dcm") && e.contains("not the same grid"), "{e}");
+        // Mixed orientations.
+        let d = folder(&[("1.dcm", slice(1)), ("2.dcm", edit(&slice(2), (0x0020, 0x0037), b"0\\1\\0\\-1\\0\\0")), ("3.dcm", slice(3))]);
+        assert!(open_err(&d).contains("not the same grid"), "{}", open_err(&d));
+        // Two series.
+        let d = folder(&[("1.dcm", slice(1)), ("2.dcm", edit(&slice(2), (0x0020, 0x000E), b"1.2.3.4")), ("3.dcm", slice(3))]);
+        let e = open_err(&d);
+        assert!(e.contains("holds 2 series"), "{e}");
+        // A truncated slice, and a length claiming more than the file: one line, no panic.
+        let b = slice(1);
+        let d = folder(&[("1.dcm", b[..b.len() - 5000].to_vec()), ("2.dcm", slice(2))]);
+        let e = open_err(&d);
+        assert!(e.contains("1.dcm") && e.contains("truncated"), "{e}");
+        let mut huge = slice(2);
+        let at = 2552; // inside the element headers before PixelData
+        huge[at..at + 2].copy_from_slice(&0xFFF0u16.to_le_bytes());
+        let d = folder(&[("1.dcm", slice(1)), ("2.dcm", huge)]);
+        let e = open_err(&d);
+        assert!(!e.contains('\n') && e.contains("2.dcm"), "{e}");
+        // Non-DICOM files beside the series are skipped.
+        let d = folder(&[("1.dcm", slice(1)), ("2.dcm", slice(2)), ("notes.txt", b"hello".to_vec())]);
+        assert_eq!(Volume::open(d.path(), &OpenOptions::default()).unwrap().info().dims[2], 2);
     }
 }
