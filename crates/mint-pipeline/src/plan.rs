@@ -449,6 +449,13 @@ impl Plan {
     }
 }
 
+/// The part of `n` items that part `i` of `parts` takes, in whole chunks.
+pub fn part_range(n: u64, parts: u32, i: u32, chunk: u64) -> (u64, u64) {
+    let chunks = n.div_ceil(chunk);
+    let at = |j: u32| (chunks * j as u64 / parts as u64 * chunk).min(n);
+    (at(i), at(i + 1))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -26,6 +26,7 @@
 
 use mint_core::primitives::{Primitive, Shape, Transform};
 use mint_core::expr::{BoolOp, Expr};
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// A parsed scene: an expression over numbered operands.
@@ -43,7 +44,7 @@ pub enum Operand {
     Mesh { paths: Vec<PathBuf>, transform: Transform },
     /// A voxel volume's iso-surface (`mint volume`), in the volume's own
     /// frame (see `crate::volume`).
-    Volume(Box<crate::spec::VolumeJob>),
+    Volume(Box<VolumeJob>),
 }
 
 /// A scene error: `file:line: message`.
@@ -452,6 +453,58 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene, SceneError> {
     };
     let expr = b.node(node_line, &node, &Transform::default())?;
     Ok(Scene { expr, operands: b.operands })
+}
+
+/// A voxel volume read as a surface (`mint volume`): which file, which
+/// surface, and on which grid.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VolumeJob {
+    /// A header file, a DICOM or TIFF folder, or raw samples (`raw`).
+    pub input: PathBuf,
+    /// The raw layout, for a file without a header.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub raw: Option<RawLayout>,
+    pub surface: VolumeSurface,
+    /// `true`: the grid is the volume's own (a node on every voxel centre,
+    /// in index units; the run's grid size is ignored). `false`: cubic
+    /// cells of the run's grid size in the volume's physical axes (index ×
+    /// spacing), samples interpolated trilinearly.
+    pub own_grid: bool,
+}
+
+/// Which surface of a volume.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
+pub enum VolumeSurface {
+    /// Where the values cross `iso` (values `>= iso` inside).
+    Iso(f32),
+    /// The boundary of the voxels whose value is this label.
+    Label(f32),
+}
+
+impl VolumeSurface {
+    /// The core's field.
+    pub fn field(self) -> mint_core::volume::Field {
+        match self {
+            VolumeSurface::Iso(v) => mint_core::volume::Field::Iso(v),
+            VolumeSurface::Label(v) => mint_core::volume::Field::Label(v),
+        }
+    }
+}
+
+/// A raw volume's layout (`--raw-dims`, `--raw-type`, …).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawLayout {
+    pub dims: [u64; 3],
+    /// `u8`, `i16`, `f32`, …
+    pub sample: String,
+    #[serde(default)]
+    pub big_endian: bool,
+    pub spacing: [f64; 3],
+    #[serde(default)]
+    pub header_bytes: u64,
 }
 
 #[cfg(test)]

@@ -17,6 +17,7 @@
 use crate::deref::Deref;
 use crate::error::PipelineError;
 use crate::scene::{parse_scene, Operand, Scene};
+pub use crate::scene::{RawLayout, VolumeJob, VolumeSurface};
 use mint_core::expr::{BoolOp, Expr};
 use mint_core::grid::{Axis, GridSize};
 use mint_core::signs::SignRule;
@@ -75,73 +76,6 @@ pub enum Job {
     Csg { scene: PathBuf },
     /// The iso-surface (or a label's boundary) of a voxel volume.
     Volume(VolumeJob),
-}
-
-/// A voxel volume read as a surface (`mint volume`): which file, which
-/// surface, and on which grid.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct VolumeJob {
-    /// A header file, a DICOM or TIFF folder, or raw samples (`raw`).
-    pub input: PathBuf,
-    /// The raw layout, for a file without a header.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub raw: Option<RawLayout>,
-    pub surface: VolumeSurface,
-    /// `true`: the grid is the volume's own (a node on every voxel centre,
-    /// in index units; the run's grid size is ignored). `false`: cubic
-    /// cells of the run's grid size in the volume's physical axes (index ×
-    /// spacing), samples interpolated trilinearly.
-    pub own_grid: bool,
-}
-
-/// Which surface of a volume.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase", deny_unknown_fields)]
-pub enum VolumeSurface {
-    /// Where the values cross `iso` (values `>= iso` inside).
-    Iso(f32),
-    /// The boundary of the voxels whose value is this label.
-    Label(f32),
-}
-
-impl VolumeSurface {
-    /// The core's field.
-    pub fn field(self) -> mint_core::volume::Field {
-        match self {
-            VolumeSurface::Iso(v) => mint_core::volume::Field::Iso(v),
-            VolumeSurface::Label(v) => mint_core::volume::Field::Label(v),
-        }
-    }
-}
-
-/// A raw volume's layout (`--raw-dims`, `--raw-type`, …).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RawLayout {
-    pub dims: [u64; 3],
-    /// `u8`, `i16`, `f32`, …
-    pub sample: String,
-    #[serde(default)]
-    pub big_endian: bool,
-    pub spacing: [f64; 3],
-    #[serde(default)]
-    pub header_bytes: u64,
-}
-
-impl VolumeJob {
-    /// Opens the volume (header only).
-    pub fn open(&self) -> Result<mint_volume::Volume, PipelineError> {
-        let raw = match &self.raw {
-            Some(r) => {
-                let sample = mint_volume::Sample::parse(&r.sample)
-                    .ok_or_else(|| PipelineError::stage(&self.input, format!("--raw-type {}: one of u8, i8, u16, i16, u32, i32, u64, i64, f32, f64", r.sample)))?;
-                Some(mint_volume::RawSpec { dims: r.dims, sample, big_endian: r.big_endian, spacing: r.spacing, header_bytes: r.header_bytes })
-            }
-            None => None,
-        };
-        Ok(mint_volume::Volume::open(&self.input, &mint_volume::OpenOptions { raw })?)
-    }
 }
 
 impl Job {

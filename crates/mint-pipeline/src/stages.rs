@@ -35,7 +35,7 @@ use crate::bounds::bounds;
 use crate::discretize::{discretize_all, discretize_direct, discretize_direct_coloured, CornerColours, discretize_direct_many, DirectPiece, CHUNK_TRIANGLES};
 use crate::progress::check_cancel;
 use crate::slabs::{bytes_per_plane, plan_slabs, reconstruct_ordered, Done, BYTES_PER_RECORD_IN_SLAB, COLOUR_BYTES_PER_RECORD_IN_SLAB};
-use crate::plan::{MeshFile, OperandPlan, Plan, Stage};
+use crate::plan::{part_range, MeshFile, OperandPlan, Plan, Stage};
 use crate::error::in_file_list;
 use crate::spec::{Job, Tuning};
 use crate::progress::Progress;
@@ -180,19 +180,13 @@ pub struct Ctx<'a> {
     parts: OnceCell<Vec<DiscretizeResult>>,
     rules: OnceCell<(Vec<SignRule>, Vec<Census>)>,
     open: OnceCell<(Option<OpenCells>, HoleStats)>,
-    volume: OnceCell<Option<(crate::spec::VolumeJob, mint_volume::VolumeInfo)>>,
+    volume: OnceCell<Option<(crate::scene::VolumeJob, mint_volume::VolumeInfo)>>,
 }
 
 fn identity(t: &Transform) -> bool {
     t.m == [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] && t.t == [0.0; 3]
 }
 
-/// The part of `n` items that part `i` of `parts` takes, in whole chunks.
-pub fn part_range(n: u64, parts: u32, i: u32, chunk: u64) -> (u64, u64) {
-    let chunks = n.div_ceil(chunk);
-    let at = |j: u32| (chunks * j as u64 / parts as u64 * chunk).min(n);
-    (at(i), at(i + 1))
-}
 
 /// The tasks `[s, e)` of `parts` that read file `i` of a surface: each
 /// file gets a share of the tasks by its size, at least one, in file
@@ -254,7 +248,7 @@ impl<'a> Ctx<'a> {
     }
 
     /// The volume operand of a volume job and its header (read once).
-    pub fn volume(&self) -> Result<Option<&(crate::spec::VolumeJob, mint_volume::VolumeInfo)>, PipelineError> {
+    pub fn volume(&self) -> Result<Option<&(crate::scene::VolumeJob, mint_volume::VolumeInfo)>, PipelineError> {
         if let Some(v) = self.volume.get() {
             return Ok(v.as_ref());
         }

@@ -18,13 +18,29 @@
 
 use crate::error::PipelineError;
 use crate::progress::{check_cancel, Progress};
-use crate::spec::VolumeJob;
+use crate::scene::VolumeJob;
 use mint_core::grid::{Grid, GridSize};
 use mint_core::volume::{plane_crossings, Placement, PlaneSampler};
 use mint_core::Intercept;
 use mint_store::ShardWriter;
 use mint_volume::{Volume, VolumeInfo};
 use serde::{Deserialize, Serialize};
+
+impl VolumeJob {
+    /// Opens the volume (header only).
+    pub fn open(&self) -> Result<mint_volume::Volume, PipelineError> {
+        let raw = match &self.raw {
+            Some(r) => {
+                let sample = mint_volume::Sample::parse(&r.sample)
+                    .ok_or_else(|| PipelineError::stage(&self.input, format!("--raw-type {}: one of u8, i8, u16, i16, u32, i32, u64, i64, f32, f64", r.sample)))?;
+                Some(mint_volume::RawSpec { dims: r.dims, sample, big_endian: r.big_endian, spacing: r.spacing, header_bytes: r.header_bytes })
+            }
+            None => None,
+        };
+        Ok(mint_volume::Volume::open(&self.input, &mint_volume::OpenOptions { raw })?)
+    }
+}
+
 
 /// What one discretize task saw of the volume.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -178,7 +194,7 @@ impl OutputMap {
 /// The node planes `[k0, k1)` that discretize task `task` of `parts` takes.
 pub fn task_planes(grid: &Grid, parts: u32, task: u32) -> (u32, u32) {
     let planes = grid.local_dims()[2] as u64 + 1;
-    let (a, b) = crate::stages::part_range(planes, parts.max(1), task, 1);
+    let (a, b) = crate::plan::part_range(planes, parts.max(1), task, 1);
     (a as u32, b as u32)
 }
 
@@ -322,7 +338,7 @@ pub fn discretize_planes(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spec::VolumeSurface;
+    use crate::scene::VolumeSurface;
 
     fn job(own: bool) -> VolumeJob {
         VolumeJob { input: "v.nrrd".into(), raw: None, surface: VolumeSurface::Iso(0.5), own_grid: own }

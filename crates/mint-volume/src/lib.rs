@@ -232,6 +232,23 @@ impl Volume {
     }
 }
 
+/// Checks the data files a header names (`header`, line `line`): names
+/// without control characters, each an existing file. A missing data file
+/// is the header's fault, so the error names the header and its line.
+pub(crate) fn check_data_files(header: &Path, line: usize, files: &[PathBuf]) -> Result<(), VolumeError> {
+    for f in files {
+        let name = f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        if f.as_os_str().to_string_lossy().chars().any(char::is_control) {
+            return Err(VolumeError::format(header, format!("line {line}: data file {:?} holds a control character", f.as_os_str())));
+        }
+        if !f.is_file() {
+            let what = if f.is_dir() { "is a folder" } else { "does not exist" };
+            return Err(VolumeError::format(header, format!("line {line}: data file `{name}` {what} ({})", f.display())));
+        }
+    }
+    Ok(())
+}
+
 /// The world frame for an axis-aligned affine built from spacing and an
 /// origin (NRRD without directions, MetaImage without a matrix, raw).
 pub(crate) fn diagonal_affine(spacing: [f64; 3], origin: [f64; 3]) -> [[f64; 4]; 3] {

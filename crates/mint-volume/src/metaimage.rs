@@ -115,6 +115,9 @@ pub(crate) fn open(path: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vo
                 } else {
                     data = Some((vec![dir.join(value)], 0));
                 }
+                if let Some((files, _)) = &data {
+                    crate::check_data_files(path, lineno, files)?;
+                }
                 break; // ElementDataFile is the header's last line
             }
             _ => {}

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 use crate::decode::{Decoder, Sample};
 use crate::source::{sample_count, Compression, FileSlices, Skip, SliceSource};
-use crate::{diagonal_affine, Frame, VolumeError, VolumeInfo};
+use crate::{check_data_files, diagonal_affine, Frame, VolumeError, VolumeInfo};
 
 /// The most header bytes read before giving up (a header is a few hundred).
 const MAX_HEADER: usize = 1 << 20;
@@ -200,6 +200,7 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(Header, usize), VolumeError> {
     let mut lineno = 0usize;
     let mut dimension: Option<usize> = None;
     let mut list_files: Option<Vec<PathBuf>> = None;
+    let mut data_line = 0;
     loop {
         let rest = &bytes[at..];
         let Some(nl) = rest.iter().position(|&b| b == b'\n') else {
@@ -328,6 +329,7 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(Header, usize), VolumeError> {
             "byte skip" => h.byte_skip = value.parse().map_err(|_| err(lineno, format!("byte skip: `{value}`")))?,
             "line skip" => h.line_skip = value.parse().map_err(|_| err(lineno, format!("line skip: `{value}`")))?,
             "data file" | "datafile" => {
+                data_line = lineno;
                 let toks: Vec<&str> = value.split_whitespace().collect();
                 if toks.first().is_some_and(|t| t.eq_ignore_ascii_case("LIST")) {
                     list_files = Some(Vec::new());
@@ -358,6 +360,9 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(Header, usize), VolumeError> {
             return Err(VolumeError::format(path, "data file: LIST names no file"));
         }
         h.data = Some(DataFiles::Files(files));
+    }
+    if let Some(DataFiles::Files(files)) = &h.data {
+        check_data_files(path, data_line, files)?;
     }
     if h.dims.is_empty() {
         return Err(VolumeError::format(path, "no `sizes` field"));
