@@ -271,7 +271,7 @@ fn scanned_torus_merges_on_the_grid_into_a_closed_genus_one_surface() {
 /// out of the output set; the others are written; the exit code is 0.
 /// A malformed pose fails with one line naming the set file and line.
 #[test]
-fn align_leaves_out_a_scan_with_no_overlap_and_goes_on() {
+fn align_flags_a_scan_with_no_overlap_keeps_it_and_merge_leaves_it_out() {
     let d = tempfile::tempdir().unwrap();
     let torus = d.path().join("torus.ply");
     ok(&["gen", "torus", p(&torus), "--faces", "20000"]);
@@ -300,8 +300,37 @@ fn align_leaves_out_a_scan_with_no_overlap_and_goes_on() {
     assert!(statuses[3].contains("no overlap"), "{statuses:?}");
     assert_eq!((j["scans"][3]["moved_deg"].as_f64(), j["scans"][3]["moved"].as_f64()), (Some(0.0), Some(0.0)), "a scan left out keeps its initial pose");
     let written = std::fs::read_to_string(&out).unwrap();
-    assert_eq!(written.lines().filter(|l| l.starts_with("bmesh")).count(), 5);
-    assert!(!written.contains("view_03.ply"));
+    // Every scan is written; the failed one at its initial pose, after a
+    // line that flags it.
+    assert_eq!(written.lines().filter(|l| l.starts_with("bmesh")).count(), 6);
+    let lines: Vec<&str> = written.lines().collect();
+    let at = lines.iter().position(|l| l.starts_with("bmesh view_03.ply")).unwrap();
+    assert!(lines[at - 1].starts_with("# mint: failed:") && lines[at - 1].contains("no overlap"), "{written}");
+    assert_eq!(written.matches("# mint: failed:").count(), 1, "{written}");
+    let (given, back) = (mint_range::ScanSet::read(&bad_set).unwrap(), mint_range::ScanSet::read(&out).unwrap());
+    let (m, n) = (back.entries[3].pose.to_matrix4(), given.entries[3].pose.to_matrix4());
+    assert!((0..4).all(|r| (0..4).all(|k| (m[r][k] - n[r][k]).abs() < 1e-12)), "the flagged scan keeps its pose: {m:?} vs {n:?}");
+    assert!(back.entries[3].failed.is_some() && back.entries.iter().filter(|e| e.failed.is_some()).count() == 1);
+    assert_eq!(j["failed"], serde_json::json!(["view_03.ply"]), "{}", j["failed"]);
+    // The agreement of the registered scans, and `--evaluate` measuring the
+    // written poses (the flagged scan left out) to the same figure.
+    let g = &j["agreement"];
+    let (rms, npairs) = (g["rms"].as_f64().unwrap(), g["pairs"].as_array().unwrap().len());
+    assert!(npairs >= 5 && rms > 0.0 && rms < g["distance"].as_f64().unwrap() / 4.0, "{g}");
+    assert!(g["pairs"].as_array().unwrap().iter().all(|q| q["a"] != "view_03.ply" && q["b"] != "view_03.ply"), "{g}");
+    let e: serde_json::Value = serde_json::from_str(&ok(&["align", p(&out), "--evaluate", "--json"])).unwrap();
+    assert_eq!(e["flagged_failed"], serde_json::json!(["view_03.ply"]));
+    let rms_back = e["agreement"]["rms"].as_f64().unwrap();
+    assert!((rms_back - rms).abs() <= 1e-6 * rms, "{rms_back} vs {rms}");
+    assert_eq!(e["agreement"]["pairs"].as_array().unwrap().len(), npairs);
+    // Merging leaves the flagged scan out, with a warning, unless asked.
+    let merged = d.path().join("merged.ply");
+    let m: serde_json::Value = serde_json::from_str(&ok(&["zipper", p(&out), p(&merged), "--method", "grid", "--cells", "20000", "--json"])).unwrap();
+    assert_eq!((m["skipped_failed"].clone(), m["grid"]["scans"].as_u64()), (serde_json::json!(["view_03.ply"]), Some(5)), "{m}");
+    let o = run(&["zipper", p(&out), p(&merged), "--method", "grid", "--cells", "20000"]);
+    assert!(o.status.success() && String::from_utf8_lossy(&o.stderr).contains("warning: left out 1 scans the set flags as failed: view_03.ply"), "{}", String::from_utf8_lossy(&o.stderr));
+    let m: serde_json::Value = serde_json::from_str(&ok(&["zipper", p(&out), p(&merged), "--method", "grid", "--cells", "20000", "--include-failed", "--json"])).unwrap();
+    assert_eq!((m["skipped_failed"].clone(), m["grid"]["scans"].as_u64()), (serde_json::json!([]), Some(6)), "{m}");
     // The output's extension names its convention: an .aln beside the
     // input is MeshLab's (a count, then per scan its name, a comment line
     // and a 4x4 matrix), with the same poses as the .conf; elsewhere it
@@ -309,7 +338,7 @@ fn align_leaves_out_a_scan_with_no_overlap_and_goes_on() {
     let aln = scans.join("aligned.aln");
     ok(&["align", p(&bad_set), p(&aln)]);
     let text = std::fs::read_to_string(&aln).unwrap();
-    assert_eq!(text.lines().next(), Some("5"), "{text}");
+    assert_eq!(text.lines().next(), Some("6"), "{text}");
     assert!(text.lines().nth(1) == Some("view_00.ply") && !text.contains("bmesh"), "{text}");
     let (c, a) = (mint_range::ScanSet::read(&out).unwrap(), mint_range::ScanSet::read(&aln).unwrap());
     for (x, y) in c.entries.iter().zip(&a.entries) {

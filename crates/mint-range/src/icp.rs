@@ -214,7 +214,8 @@ pub enum Status {
     Anchor,
     /// Registered.
     Registered,
-    /// Not registered (the reason); left out of the output set.
+    /// Not registered (the reason); kept at its initial pose and flagged in
+    /// the output set.
     Failed(String),
 }
 
@@ -242,12 +243,16 @@ pub struct ScanReport {
     /// largest displacement of its bounding-box corners.
     pub moved_deg: f64,
     pub moved: f64,
+    /// Multiview: registrations tried again after the scan first failed (0:
+    /// it did not fail), and the start that succeeded.
+    pub retries: usize,
+    pub retried_from: Option<String>,
 }
 
 impl ScanReport {
     /// A scan not (yet) reached.
     pub(crate) fn new(name: &str) -> ScanReport {
-        ScanReport { name: name.to_string(), status: Status::Failed("not reached".into()), pairs: 0, rms: 0.0, rms_rel: 0.0, iterations: 0, converged: true, partners: Vec::new(), moved_deg: 0.0, moved: 0.0 }
+        ScanReport { name: name.to_string(), status: Status::Failed("not reached".into()), pairs: 0, rms: 0.0, rms_rel: 0.0, iterations: 0, converged: true, partners: Vec::new(), moved_deg: 0.0, moved: 0.0, retries: 0, retried_from: None }
     }
 }
 
@@ -279,6 +284,11 @@ impl<'a> Targets<'a> {
     /// Scans with their BVHs and face normals (built by the caller).
     pub(crate) fn new(scans: &'a [ScanMesh], symmetric: bool, max_samples: usize, bvhs: &'a [TriangleBvh], face_normals: &'a [Vec<DVec3>]) -> Targets<'a> {
         Targets { scans, symmetric, max_samples, bvhs, face_normals }
+    }
+
+    /// Samples paired per direction at most.
+    pub(crate) fn max_samples(&self) -> usize {
+        self.max_samples
     }
 
     /// The same scans, pairing at most `max_samples` per direction.

@@ -31,6 +31,7 @@
 //! [`scanset`], [`range_image`], [`depth_grid`] and [`scan_mesh::load_scan`] touch files,
 //! through mint-io's atomic writers.
 
+pub mod agreement;
 pub mod align;
 pub mod consensus;
 pub mod depth_grid;
@@ -69,6 +70,11 @@ pub mod phases {
     pub const REGISTER: mint_core::progress::Phase = mint_core::progress::Phase::named("register");
     /// Multiview refinement: pairwise alignments of one round (units: pairs).
     pub const REFINE: mint_core::progress::Phase = mint_core::progress::Phase::named("refine");
+    /// Multiview: failed scans registered again from other starts (units:
+    /// scans).
+    pub const RETRY: mint_core::progress::Phase = mint_core::progress::Phase::named("retry");
+    /// Measuring how well registered scans agree (units: pairs).
+    pub const AGREEMENT: mint_core::progress::Phase = mint_core::progress::Phase::named("agreement");
     /// Zippering scans into the model (units: scans).
     pub const ZIPPER: mint_core::progress::Phase = mint_core::progress::Phase::named("zipper");
     /// Consensus geometry, two passes over the scans (units: scan passes).

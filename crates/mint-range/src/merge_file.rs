@@ -1,7 +1,9 @@
 //! `mint zipper` as a library call: [`merge_file`] reads a scan set (`.conf`
 //! or `.aln`), opens its scans within a memory budget, merges them by
 //! zippering or on a grid, writes the mesh (temporary file beside it,
-//! renamed at the end) and judges it. The CLI only parses, calls and prints.
+//! renamed at the end) and judges it. Scans the set flags as failed (`mint
+//! align` could not register them) are left out unless the options include
+//! them. The CLI only parses, calls and prints.
 
 use crate::error::RangeError;
 use crate::grid_merge::{grid_merge_with, GridMergeOptions, GridMergeReport};
@@ -31,6 +33,9 @@ pub struct MergeFileOptions {
     pub scan_mem: usize,
     /// How the output is encoded.
     pub write: mint_io::WriteOptions,
+    /// Merge scans the set flags as failed ([`crate::ScanEntry::failed`])
+    /// too, at their poses; by default they are left out.
+    pub include_failed: bool,
 }
 
 /// The report of either method.
@@ -54,7 +59,11 @@ impl MergeReport {
 /// What [`merge_file`] did.
 #[derive(Debug, Clone, Serialize)]
 pub struct MergeSummary {
+    /// Scans merged.
     pub scans: usize,
+    /// Scans left out because the set flags them as failed (their file
+    /// names as the set writes them).
+    pub skipped_failed: Vec<String>,
     pub report: MergeReport,
     /// The output judged as `mint check` judges it.
     pub check: mint_mesh::CheckReport,
@@ -69,7 +78,16 @@ pub struct MergeSummary {
 /// the module docs.
 pub fn merge_file(set_path: &Path, output: &Path, opts: &MergeFileOptions, progress: &dyn Progress) -> Result<MergeSummary, RangeError> {
     let t = std::time::Instant::now();
-    let set = ScanSet::read(set_path)?;
+    let mut set = ScanSet::read(set_path)?;
+    let mut skipped_failed = Vec::new();
+    if !opts.include_failed {
+        let (kept, flagged) = set.split_failed();
+        skipped_failed = flagged.into_iter().map(|e| e.file).collect();
+        set = kept;
+        if set.entries.is_empty() {
+            return Err(RangeError::Output { path: set_path.to_path_buf(), message: format!("every scan of the set is flagged as failed ({}); nothing to merge (--include-failed merges them anyway)", skipped_failed.len()) });
+        }
+    }
     let scans = ScanFiles::open_with(&set, set_path, &MeshOptions::default(), opts.scan_mem, progress)?;
     let poses: Vec<_> = set.entries.iter().map(|e| e.pose).collect();
     let (positions, faces, report) = match &opts.method {
@@ -93,5 +111,5 @@ pub fn merge_file(set_path: &Path, output: &Path, opts: &MergeFileOptions, progr
     w.finish()?;
     let check = mint_mesh::check(&positions, &faces);
     let (scan_reads, peak_scan_bytes) = scans.loads();
-    Ok(MergeSummary { scans: set.entries.len(), report, check, scan_reads, peak_scan_bytes, seconds: t.elapsed().as_secs_f64() })
+    Ok(MergeSummary { scans: set.entries.len(), skipped_failed, report, check, scan_reads, peak_scan_bytes, seconds: t.elapsed().as_secs_f64() })
 }

@@ -41,6 +41,16 @@
 //!      scan to the anchor, and the solve repeats;
 //!    - the rounds stop when no scan moves by more than a quarter of its
 //!      sampling distance ([`STILL`]).
+//! 4. **Retries.** Every scan still failed is registered again against the
+//!    placed scans at their refined poses ([`retry`]): from the pose its
+//!    best-covered registered neighbours predict (their correction applied
+//!    to it, right when scans started off by about the same motion), then
+//!    from its own initial pose; each with the defaults, the robust
+//!    settings and a coarser search; at most 12 tries. A retry is judged
+//!    like any registration; one that passes joins the last round's
+//!    solution and the rounds of stage 3 run again from there. A scan no
+//!    retry brings back keeps its initial pose and is reported (with its
+//!    tries); `mint align` writes it flagged, so no scan is lost.
 //!
 //! The result does not depend on the thread count: pairs are aligned in
 //! parallel but each alignment is deterministic, and everything is
@@ -218,7 +228,96 @@ pub(crate) fn register(t: &Targets, initial: &[Rigid], dists: &[f64], opts: &Ali
 
     // 3. Rounds of pairwise alignments between all partners and the
     //    global solve.
-    let center = model_center(scans, &poses, &placed);
+    let mut state = State { poses, placed, reports };
+    let (mut pair_reports, mut rounds) = run_rounds(t, initial, &mut state, d0, d, opts, progress)?;
+
+    // 4. Retries of the scans that failed, from where their registered
+    //    neighbours say they are; then the rounds again with the ones that
+    //    came back.
+    let failed: Vec<usize> = (0..n).filter(|&k| !state.placed[k]).collect();
+    if !failed.is_empty() {
+        let reference = median(&pair_reports.iter().filter(|p| p.status == PairStatus::Accepted).map(|p| p.rms_rel).collect::<Vec<_>>());
+        progress.start(crate::phases::RETRY, failed.len() as u64);
+        let mut back = Vec::new();
+        for &k in &failed {
+            let (outcome, tries) = retry(t, k, initial, &state, dists, opts, reference);
+            state.reports[k].retries = tries;
+            match outcome {
+                Ok((f, from)) => back.push((k, f, from)),
+                Err(why) => {
+                    if let Status::Failed(first) = &mut state.reports[k].status {
+                        first.push_str(&format!("; retried from {tries} starts, none accepted ({why})"));
+                    }
+                }
+            }
+            crate::error::advance(progress)?;
+        }
+        progress.finish();
+        if !back.is_empty() {
+            for (k, f, from) in back {
+                state.poses[k] = f.pose;
+                state.placed[k] = true;
+                let r = &mut state.reports[k];
+                r.iterations += f.report.iterations;
+                r.status = Status::Registered;
+                r.retried_from = Some(from);
+            }
+            let (p, more) = run_rounds(t, initial, &mut state, d0, d, opts, progress)?;
+            pair_reports = p;
+            rounds += more;
+            for r in state.reports.iter_mut().filter(|r| matches!(r.status, Status::Failed(_))) {
+                r.retried_from = None;
+            }
+        }
+    }
+    let State { mut poses, placed, mut reports } = state;
+
+    // Final statistics of each registered scan against its partners.
+    let names: Vec<&str> = scans.iter().map(|s| s.name.as_str()).collect();
+    let finals: Vec<Option<(usize, f64)>> = (0..n)
+        .into_par_iter()
+        .map(|k| {
+            if !placed[k] {
+                return None;
+            }
+            let partners: Vec<usize> = reports[k].partners.iter().filter_map(|p| names.iter().position(|q| q == p)).collect();
+            let p = weighed(pairs(t, k, scans[k].levels.len() - 1, &partners, &poses, d), opts.reject, opts.kernel);
+            let rms = (p.iter().map(|q| q.src.distance_squared(q.dst)).sum::<f64>() / p.len().max(1) as f64).sqrt();
+            Some((p.len(), rms))
+        })
+        .collect();
+    for (k, f) in finals.into_iter().enumerate() {
+        if let Some((np, rms)) = f {
+            reports[k].pairs = np;
+            reports[k].rms = rms;
+            reports[k].rms_rel = rms / scans[k].sampling;
+        } else {
+            poses[k] = initial[k];
+        }
+    }
+    Ok(Registration { poses, reports, pairs: pair_reports, rounds })
+}
+
+/// What the rounds change: the poses, which scans are placed (registered),
+/// and the scans' reports.
+struct State {
+    poses: Vec<Rigid>,
+    placed: Vec<bool>,
+    reports: Vec<ScanReport>,
+}
+
+/// Stage 3 of the module docs on the placed scans of `state`: rounds of
+/// pairwise alignments between all partners and the global solve, until
+/// the poses stop moving. A scan left with no accepted pair goes back to
+/// its `initial` pose and fails. Returns the last round's pair reports and
+/// the rounds run.
+#[allow(clippy::too_many_arguments)]
+fn run_rounds(t: &Targets, initial: &[Rigid], state: &mut State, d0: f64, d: f64, opts: &AlignOptions, progress: &dyn Progress) -> Result<(Vec<PairReport>, usize), RangeError> {
+    let scans = t.scans;
+    let n = scans.len();
+    let anchor = opts.anchor;
+    let State { poses, placed, reports } = state;
+    let center = model_center(scans, poses, placed);
     // Pairing distances of the rounds: from the tree's poses the pairs are
     // within a few sampling distances of their optimum; from a solved pose
     // within one.
@@ -332,7 +431,7 @@ pub(crate) fn register(t: &Targets, initial: &[Rigid], dists: &[f64], opts: &Ali
             }
         }
         let moved = (0..n).filter(|&k| placed[k]).map(|k| crate::geom::pose_error(&poses[k], &solved[k], &scans[k].bbox_corners()).1 / scans[k].sampling).fold(0.0, f64::max);
-        poses = solved;
+        *poses = solved;
         for r in reports.iter_mut() {
             r.partners.clear();
         }
@@ -350,30 +449,87 @@ pub(crate) fn register(t: &Targets, initial: &[Rigid], dists: &[f64], opts: &Ali
         }
     }
 
-    // Final statistics of each registered scan against its partners.
-    let names: Vec<&str> = scans.iter().map(|s| s.name.as_str()).collect();
-    let finals: Vec<Option<(usize, f64)>> = (0..n)
-        .into_par_iter()
-        .map(|k| {
-            if !placed[k] {
-                return None;
-            }
-            let partners: Vec<usize> = reports[k].partners.iter().filter_map(|p| names.iter().position(|q| q == p)).collect();
-            let p = weighed(pairs(t, k, scans[k].levels.len() - 1, &partners, &poses, d), opts.reject, opts.kernel);
-            let rms = (p.iter().map(|q| q.src.distance_squared(q.dst)).sum::<f64>() / p.len().max(1) as f64).sqrt();
-            Some((p.len(), rms))
+    Ok((pair_reports, rounds))
+}
+
+/// Neighbours whose prediction a retry starts from, at most.
+const RETRY_NEIGHBOURS: usize = 3;
+
+/// Stage 4: failed scan `k` registered again against the placed scans of
+/// `state`, from each start in turn until one passes the judge (against
+/// `reference`, the median RMS of the last round's accepted pairs):
+/// - the poses its registered neighbours predict: neighbour `p`'s
+///   correction applied to `k`, `poses[p] · initial[p]⁻¹ · initial[k]`
+///   (right when the two started off by about the same motion, as scans
+///   of one turntable sweep or one tracker do), best covered first, at
+///   most [`RETRY_NEIGHBOURS`] distinct ones;
+/// - its initial pose, now against every placed partner at its refined
+///   pose;
+///
+/// each with the defaults, then the robust settings, then a coarser
+/// search (the robust settings from four times the start distance). The
+/// partners of a start are the placed scans that cover at least
+/// `min_overlap` of it at the start distance (else the best one).
+/// Returns the accepted fit and a description of its start, or why the
+/// last try failed; and the number of registrations tried.
+fn retry(t: &Targets, k: usize, initial: &[Rigid], state: &State, dists: &[f64], opts: &AlignOptions, reference: Option<f64>) -> (Result<(Fit, String), String>, usize) {
+    let scans = t.scans;
+    let n = scans.len();
+    let d0 = dists[0];
+    let d = *dists.last().expect("at least one distance");
+    let placed: Vec<usize> = (0..n).filter(|&p| p != k && state.placed[p]).collect();
+    let corners = scans[k].bbox_corners();
+    let same = |a: &Rigid, b: &Rigid| {
+        let (deg, shift) = crate::geom::pose_error(a, b, &corners);
+        deg < 0.1 && shift < 0.25 * d
+    };
+    // The starts, with how well the placed scans cover each.
+    let at = |start: Rigid| {
+        let mut p = state.poses.clone();
+        p[k] = start;
+        p
+    };
+    let cover = |start: Rigid| coverage(t, k, 0, &placed, &at(start), d0);
+    let mut predicted: Vec<(f64, Rigid, String)> = placed
+        .iter()
+        .map(|&p| {
+            let s = state.poses[p].after(&initial[p].inverse()).after(&initial[k]).orthonormalized();
+            (cover(s), s, format!("the pose {} predicts", scans[p].name))
         })
         .collect();
-    for (k, f) in finals.into_iter().enumerate() {
-        if let Some((np, rms)) = f {
-            reports[k].pairs = np;
-            reports[k].rms = rms;
-            reports[k].rms_rel = rms / scans[k].sampling;
-        } else {
-            poses[k] = initial[k];
+    predicted.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut starts: Vec<(Rigid, String)> = Vec::new();
+    for (_, s, why) in predicted {
+        if starts.len() < RETRY_NEIGHBOURS && !starts.iter().any(|(q, _)| same(q, &s)) {
+            starts.push((s, why));
         }
     }
-    Ok(Registration { poses, reports, pairs: pair_reports, rounds })
+    if !starts.iter().any(|(q, _)| same(q, &initial[k])) {
+        starts.push((initial[k], "its initial pose".to_string()));
+    }
+    let coarse = distance_levels(2.0 * d0, d);
+    let mut tries = 0;
+    let mut last = "no start overlaps a registered scan".to_string();
+    for (start, from) in starts {
+        let poses = at(start);
+        let cov: Vec<(f64, usize)> = placed.iter().map(|&p| (coverage(t, k, 0, &[p], &poses, d0), p)).collect();
+        let mut against: Vec<usize> = cov.iter().filter(|c| c.0 >= opts.min_overlap).map(|c| c.1).collect();
+        if against.is_empty() {
+            match cov.iter().filter(|c| c.0 > 0.0).max_by(|a, b| a.0.total_cmp(&b.0)) {
+                Some(&(_, p)) => against.push(p),
+                None => continue,
+            }
+        }
+        for (how, levels, robust) in [("", dists, false), (", robust", dists, true), (", coarse search", &coarse[..], true)] {
+            tries += 1;
+            let f = fit(t, k, &against, &poses, start, levels, opts, robust, tries);
+            match judge(&f, opts, reference, d) {
+                Ok(()) => return (Ok((f, format!("{from}{how}"))), tries),
+                Err(why) => last = format!("from {from}{how}: {why}"),
+            }
+        }
+    }
+    (Err(last), tries)
 }
 
 /// Registers scan `k` against `against` from `start` (the others at

@@ -104,7 +104,7 @@ pub fn scan_file(
             }
             w.finish()?;
         }
-        set.entries.push(ScanEntry { file, path: PathBuf::new(), pose: sc.pose, line: 0 });
+        set.entries.push(ScanEntry { file, path: PathBuf::new(), pose: sc.pose, line: 0, failed: None });
     }
     set.write(&out_dir.join("scans.conf"), SetFormat::Conf)?;
     let perturbed = opts.perturb_deg > 0.0 || opts.perturb_frac > 0.0;

@@ -21,7 +21,15 @@
 //!   `p_world = M·p`; a final `0` line.
 //!
 //! Paths in the file are relative to the set file's directory. Blank lines
-//! and lines starting with `#` are ignored in `.conf` files.
+//! and lines starting with `#` are ignored in `.conf` files, except one:
+//!
+//! **Flagged scans.** `mint align` keeps a scan it could not register in the
+//! set, at its initial pose, with the reason ([`ScanEntry::failed`]): in a
+//! `.conf` as a comment line `# mint: failed: REASON` right before the
+//! scan's `bmesh` record, in an `.aln` as the scan's `#` comment line
+//! (`# mint: failed: REASON`). Other programs read both as comments; mint
+//! reads the flag back, and `mint zipper` skips flagged scans unless told
+//! otherwise.
 
 use crate::error::RangeError;
 use crate::geom::Rigid;
@@ -58,6 +66,23 @@ pub struct ScanEntry {
     pub pose: Rigid,
     /// 1-based line of the entry in the set file (0 if not read from one).
     pub line: usize,
+    /// `Some(reason)`: `mint align` could not register this scan; its pose
+    /// is the one it started from (see the module docs).
+    pub failed: Option<String>,
+}
+
+/// The comment that flags a scan (see the module docs).
+const FAILED: &str = "# mint: failed:";
+
+/// The reason of a flag comment line, if `line` is one.
+fn flag_of(line: &str) -> Option<String> {
+    line.trim().strip_prefix(FAILED).map(|r| r.trim().to_string())
+}
+
+/// The flag comment for `reason`, on one line.
+fn flag_line(reason: &str) -> String {
+    let one: String = reason.chars().map(|c| if c.is_control() { ' ' } else { c }).collect();
+    format!("{FAILED} {}", one.trim())
 }
 
 /// A scan set; see the module docs.
@@ -119,12 +144,19 @@ impl ScanSet {
 
     fn parse_conf(path: &Path, text: &str, dir: &Path) -> Result<ScanSet, RangeError> {
         let mut set = ScanSet::new(dir);
+        // A flag comment applies to the record right after it.
+        let mut flag: Option<String> = None;
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
             let l = raw.trim();
-            if l.is_empty() || l.starts_with('#') {
+            if l.is_empty() {
                 continue;
             }
+            if l.starts_with('#') {
+                flag = flag_of(l);
+                continue;
+            }
+            let failed = flag.take();
             let toks: Vec<&str> = l.split_whitespace().collect();
             match toks[0] {
                 "bmesh" => {
@@ -137,7 +169,7 @@ impl ScanSet {
                     if !(0.99..=1.01).contains(&n) {
                         return Err(RangeError::syntax(path, line, format!("quaternion ({}, {}, {}, {}) has length {n:.4}, not 1", q[0], q[1], q[2], q[3])));
                     }
-                    set.entries.push(ScanEntry { file: toks[1].to_string(), path: dir.join(toks[1]), pose: pose_from_conf([v[0], v[1], v[2]], q), line });
+                    set.entries.push(ScanEntry { file: toks[1].to_string(), path: dir.join(toks[1]), pose: pose_from_conf([v[0], v[1], v[2]], q), line, failed });
                 }
                 "camera" | "mesh" => set.other_lines.push(l.to_string()),
                 other => {
@@ -161,10 +193,16 @@ impl ScanSet {
                 .ok_or_else(|| RangeError::syntax(path, last, format!("the file ends before mesh {} of {n}", k + 1)))?;
             let mut m = [[0.0; 4]; 4];
             let mut last_row = line;
+            let mut failed = None;
             for (r, row) in m.iter_mut().enumerate() {
                 let (rl, rt) = lines
                     .by_ref()
-                    .find(|(_, l)| !l.starts_with('#'))
+                    .find(|(_, l)| {
+                        if r == 0 && failed.is_none() {
+                            failed = flag_of(l);
+                        }
+                        !l.starts_with('#')
+                    })
                     .ok_or_else(|| RangeError::syntax(path, last_row, format!("the file ends inside the matrix of '{name}' (row {} of 4)", r + 1)))?;
                 let toks: Vec<&str> = rt.split_whitespace().collect();
                 if toks.len() != 4 {
@@ -179,10 +217,16 @@ impl ScanSet {
             if !bottom_ok || pose.orthogonality_error() > 1e-3 {
                 return Err(RangeError::syntax(path, last_row, format!("the matrix of '{name}' is not a rigid motion")));
             }
-            set.entries.push(ScanEntry { file: name.to_string(), path: dir.join(name), pose: pose.orthonormalized(), line });
+            set.entries.push(ScanEntry { file: name.to_string(), path: dir.join(name), pose: pose.orthonormalized(), line, failed });
             last = last_row;
         }
         Ok(set)
+    }
+
+    /// The entries not flagged as failed, and the flagged ones apart.
+    pub fn split_failed(&self) -> (ScanSet, Vec<ScanEntry>) {
+        let (failed, ok): (Vec<ScanEntry>, Vec<ScanEntry>) = self.entries.iter().cloned().partition(|e| e.failed.is_some());
+        (ScanSet { entries: ok, ..self.clone() }, failed)
     }
 
     /// The set as text in `format`.
@@ -195,6 +239,10 @@ impl ScanSet {
                     s.push('\n');
                 }
                 for e in &self.entries {
+                    if let Some(why) = &e.failed {
+                        s.push_str(&flag_line(why));
+                        s.push('\n');
+                    }
                     let (t, q) = pose_to_conf(&e.pose);
                     s.push_str(&format!("bmesh {} {} {} {} {} {} {} {}\n", e.file, t[0], t[1], t[2], q[0], q[1], q[2], q[3]));
                 }
@@ -202,7 +250,8 @@ impl ScanSet {
             SetFormat::Aln => {
                 s.push_str(&format!("{}\n", self.entries.len()));
                 for e in &self.entries {
-                    s.push_str(&format!("{}\n#\n", e.file));
+                    let comment = e.failed.as_deref().map_or_else(|| "#".to_string(), flag_line);
+                    s.push_str(&format!("{}\n{comment}\n", e.file));
                     for row in e.pose.to_matrix4() {
                         s.push_str(&format!("{} {} {} {}\n", row[0], row[1], row[2], row[3]));
                     }
@@ -264,6 +313,34 @@ mod tests {
             let (ang, shift) = crate::geom::pose_error(&a.pose, &b.pose, &[[0.0; 3], [1.0, 1.0, 1.0]]);
             assert!(ang < 1e-9 && shift < 1e-12, "{ang} {shift}");
         }
+    }
+
+    /// A flagged scan keeps its flag through `.conf` and `.aln`, and in
+    /// both directions between them; other comments flag nothing.
+    #[test]
+    fn failed_flags_round_trip_through_conf_and_aln() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.conf");
+        std::fs::write(&p, "# a comment\nbmesh a.ply 0 0 0 0 0 0 1\n# mint: failed: no overlap\nbmesh b.ply 1 2 3 0 0 0 1\n# mint: failed: stale\n\nbmesh c.ply 0 0 0 0 0 0 1\n").unwrap();
+        let s = ScanSet::read(&p).unwrap();
+        let flags: Vec<Option<&str>> = s.entries.iter().map(|e| e.failed.as_deref()).collect();
+        assert_eq!(flags, [None, Some("no overlap"), Some("stale")]);
+        let mut s = s;
+        s.entries[2].failed = Some("two\nlines\tand tabs".into());
+        for (name, format) in [("b.aln", SetFormat::Aln), ("b.conf", SetFormat::Conf)] {
+            let out = dir.path().join(name);
+            s.write(&out, format).unwrap();
+            let back = ScanSet::read(&out).unwrap();
+            let flags: Vec<Option<&str>> = back.entries.iter().map(|e| e.failed.as_deref()).collect();
+            assert_eq!(flags, [None, Some("no overlap"), Some("two lines and tabs")], "{name}");
+            assert_eq!(back.entries[1].pose, s.entries[1].pose, "{name}");
+            let again = dir.path().join(format!("again-{name}"));
+            back.write(&again, SetFormat::from_path(&again)).unwrap();
+            assert_eq!(std::fs::read_to_string(&again).unwrap(), std::fs::read_to_string(&out).unwrap());
+        }
+        let (ok, failed) = s.split_failed();
+        assert_eq!(ok.entries.len(), 1);
+        assert_eq!(failed.len(), 2);
     }
 
     #[test]

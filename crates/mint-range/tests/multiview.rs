@@ -108,6 +108,50 @@ fn dragon_stand_from_ten_starts() {
     }
 }
 
+/// Issue 31's target: 20 starts of 5°/5 mm and 10 of 8°/8 mm (seeds 100..):
+/// every scan registered on every start (retried where it first failed),
+/// and all starts within 0.05° and 0.5 mm of each other. Several minutes
+/// on two cores; run with `--ignored` (`scripts/bench/align_peers.sh`
+/// measures the same starts against a peer).
+#[test]
+#[ignore]
+fn dragon_stand_from_thirty_starts_registers_every_scan() {
+    let Some(d) = dragon() else { return };
+    let mut all: Vec<Vec<Rigid>> = Vec::new();
+    for (deg, mm, seeds) in [(5.0, 5.0, 100..120), (8.0, 8.0, 200..210)] {
+        for seed in seeds {
+            let (poses, retried) = dragon_start(&d, deg, mm, seed);
+            eprintln!("{deg}°/{mm} mm seed {seed}: retried {retried:?}");
+            all.push(poses);
+        }
+    }
+    let (mut deg, mut shift) = (0.0f64, 0.0f64);
+    for a in &all {
+        for b in &all {
+            for i in 0..a.len() {
+                let (x, y) = relative_error(a, b, i, d.center);
+                deg = deg.max(x);
+                shift = shift.max(y);
+            }
+        }
+    }
+    eprintln!("spread between the 30 starts: {deg:.4}° {:.4} mm", shift * 1e3);
+    assert!(deg < 0.05 && shift < 0.5e-3, "spread {deg}° {shift} m");
+}
+
+/// One start of `deg`/`mm` (seed `seed`, as [`dragon_from_starts`]):
+/// asserts that every scan ends registered; returns the poses and the
+/// scans that were retried.
+fn dragon_start(d: &Dragon, deg: f64, mm: f64, seed: u64) -> (Vec<Rigid>, Vec<String>) {
+    let mut rng = mint_mesh::SplitMix64::new(1000 + seed);
+    let initial: Vec<Rigid> = d.conf.iter().enumerate().map(|(i, p)| if i == 0 { *p } else { mint_range::synth::move_exactly(p, d.center, deg, mm * 1e-3, &mut rng) }).collect();
+    let r = align(&d.scans, &initial, &AlignOptions::default()).unwrap();
+    for rep in &r.reports {
+        assert!(!matches!(rep.status, Status::Failed(_)), "{deg}°/{mm} mm seed {seed}: {} failed: {:?}", rep.name, rep.status);
+    }
+    (r.poses, r.reports.iter().filter(|r| r.retries > 0).map(|r| format!("{} ({} tries, from {:?})", r.name, r.retries, r.retried_from)).collect())
+}
+
 /// Started at the `.conf`, every scan is registered and judged sound, and
 /// moves to the same poses as from the perturbed starts (see the module
 /// docs for why that is 0.58° and not under 0.2°).
@@ -130,31 +174,76 @@ fn dragon_stand_started_at_the_conf() {
     }
 }
 
-/// One scan turned 30° about the turntable's axis (the world's y) from its
-/// `.conf` pose, the others moved by 3°/3 mm: it is reported failed and
-/// keeps its initial pose, and the others end as well as without it.
-/// (`dragonStandRight_72`, the smallest scan: registered against `_96` it
-/// ends with an RMS six times the median and under 5% overlap. Most
-/// other plantings come back instead: `_168` or `_288` turned the same
-/// way, or `_72`, `_120`, `_168`, `_240`, `_288` turned 30° about a random
-/// axis, even `_168` turned 90°, end within 0.52° of their `.conf` poses.)
-#[test]
-fn dragon_stand_planted_failure_is_reported_and_spoils_nothing() {
-    let Some(d) = dragon() else { return };
+/// The dragon stand with scan `bad` turned `deg` about the turntable's axis
+/// (the world's y) from its `.conf` pose and the others moved by 3°/3 mm.
+fn dragon_planted(d: &Dragon, bad: usize, deg: f64) -> (Vec<Rigid>, mint_range::align::AlignResult) {
     let mut rng = mint_mesh::SplitMix64::new(1000);
     let mut initial: Vec<Rigid> = d.conf.iter().enumerate().map(|(i, p)| if i == 0 { *p } else { mint_range::synth::move_exactly(p, d.center, 3.0, 3e-3, &mut rng) }).collect();
-    let bad = 3;
-    let turn = Rigid::from_axis_angle(DVec3::Y, 30f64.to_radians());
+    let turn = Rigid::from_axis_angle(DVec3::Y, deg.to_radians());
     initial[bad] = Rigid { r: turn.r, t: (d.center - turn.rotate(d.center)).to_array() }.after(&d.conf[bad]);
     let r = align(&d.scans, &initial, &AlignOptions::default()).unwrap();
-    eprintln!("{}: {:?}", r.reports[bad].name, r.reports[bad].status);
-    assert!(matches!(r.reports[bad].status, Status::Failed(_)), "{:?}", r.reports[bad]);
-    assert_eq!(r.poses[bad], initial[bad], "a failed scan keeps its initial pose");
-    assert!(r.reports.iter().all(|rep| !rep.partners.contains(&r.reports[bad].name)), "the failed scan is nobody's partner");
+    eprintln!("{} turned {deg}°: {:?}, {} retries, from {:?}", r.reports[bad].name, r.reports[bad].status, r.reports[bad].retries, r.reports[bad].retried_from);
+    (initial, r)
+}
+
+/// The others end as well as without the planted scan.
+fn others_within_bounds(d: &Dragon, r: &mint_range::align::AlignResult, bad: usize) {
     for (i, rep) in r.reports.iter().enumerate().filter(|&(i, _)| i != bad) {
         assert!(!matches!(rep.status, Status::Failed(_)), "{} failed: {:?}", rep.name, rep.status);
         let (a, s) = relative_error(&d.conf, &r.poses, i, d.center);
         assert!(a < 0.65 && s < 1.5e-3, "{}: {a}° {s} m", rep.name);
+    }
+}
+
+/// `dragonStandRight_72` (the smallest scan) turned 60°: registered
+/// against `_96` from there it ends with an RMS far above the median
+/// (before retries, even 30° was reported failed); retried from its
+/// registered neighbours' predictions with the coarse search it comes back
+/// to its `.conf` pose. (Measured: 30° and 60° come back, 90°, 120° and
+/// 180° do not.)
+#[test]
+fn dragon_stand_planted_60_degrees_comes_back_on_a_retry() {
+    let Some(d) = dragon() else { return };
+    let bad = 3;
+    let (_, r) = dragon_planted(&d, bad, 60.0);
+    let rep = &r.reports[bad];
+    assert!(rep.retries > 0 && rep.retried_from.is_some(), "it was retried: {rep:?}");
+    assert!(!matches!(rep.status, Status::Failed(_)), "{rep:?}");
+    let (a, s) = relative_error(&d.conf, &r.poses, bad, d.center);
+    assert!(a < 0.65 && s < 1.5e-3, "{}: {a}° {s} m", rep.name);
+    others_within_bounds(&d, &r, bad);
+}
+
+/// The same scan turned 90°, where its initial pose overlaps nothing: it
+/// is retried (from its neighbours' predictions and its own start, each
+/// three ways), still fails, keeps its initial pose, is nobody's partner,
+/// and the others end as well as without it.
+#[test]
+fn dragon_stand_planted_90_degrees_is_retried_flagged_and_spoils_nothing() {
+    let Some(d) = dragon() else { return };
+    let bad = 3;
+    let (initial, r) = dragon_planted(&d, bad, 90.0);
+    let rep = &r.reports[bad];
+    assert!(rep.retries > 0, "it was retried: {rep:?}");
+    let Status::Failed(why) = &rep.status else { panic!("{rep:?}") };
+    assert!(why.contains("retried from"), "{why}");
+    assert_eq!(r.poses[bad], initial[bad], "a failed scan keeps its initial pose");
+    assert!(r.reports.iter().all(|x| !x.partners.contains(&rep.name)), "the failed scan is nobody's partner");
+    others_within_bounds(&d, &r, bad);
+}
+
+/// A start of 8°/8 mm (seed 206) on which `dragonStandRight_168` failed
+/// before retries existed: it is retried and every scan ends registered,
+/// within the bounds of the other starts.
+#[test]
+fn dragon_stand_start_that_failed_before_retries_registers_every_scan() {
+    let Some(d) = dragon() else { return };
+    let (poses, retried) = dragon_start(&d, 8.0, 8.0, 206);
+    eprintln!("retried: {retried:?}");
+    assert!(!retried.is_empty(), "seed 206 needs a retry: it no longer tests them");
+    for i in 0..poses.len() {
+        let (a, s) = relative_error(&d.conf, &poses, i, d.center);
+        assert!(a < 0.65 && s < 1.5e-3, "scan {i}: {a}° {s} m");
     }
 }
 
@@ -178,6 +267,7 @@ fn a_view_planted_far_away_fails_alone() {
         eprintln!("{:<8} {:?} -> {a:.3}° {:.2e}", rep.name, rep.status, sh / s.diag);
     }
     assert!(matches!(r.reports[bad].status, Status::Failed(_)), "{:?}", r.reports[bad]);
+    assert!(r.reports[bad].retries > 0, "a failed view is retried: {:?}", r.reports[bad]);
     assert_eq!(r.poses[bad], initial[bad]);
     for (i, rep) in r.reports.iter().enumerate().filter(|&(i, _)| i != bad) {
         let (a, sh) = common::pose_errors(&s.scans[i].pose, &r.poses[i], s.center);
@@ -219,3 +309,4 @@ fn three_synthetic_shapes_register_to_a_fifth_of_a_degree() {
         assert!(worst <= 0.2, "{name}: worst view {worst}° from its true pose");
     }
 }
+

@@ -1,12 +1,15 @@
 //! `mint align`: registers range scans to each other by constrained ICP
 //! (multiview by default) and writes the refined poses in the output set's
 //! convention (Stanford .conf or MeshLab .aln, by extension; scan paths are
-//! relative to the set file). Calls `mint_range::align::align_file`.
+//! relative to the set file), then reports how well the registered scans
+//! agree. `--evaluate` measures that agreement for a set's own poses and
+//! writes nothing. Calls `mint_range::align::{align_file, evaluate_file}`.
 
 use crate::jobs::{JsonArg};
 use anyhow::Result;
 use clap::{Args, ValueEnum};
-use mint_range::align::align_file;
+use mint_range::agreement::Agreement;
+use mint_range::align::{align_file, evaluate_file};
 use mint_range::icp::{AlignOptions, Metric, Status, Strategy};
 use mint_range::ScanSet;
 use std::path::PathBuf;
@@ -32,9 +35,18 @@ pub struct AlignArgs {
     /// Output scan set with the refined poses, in the convention its
     /// extension names: .aln is MeshLab's (it opens as a project), anything
     /// else a Stanford .conf. Scan files keep their names when it is in the
-    /// input's directory, else are written as absolute paths. Scans that
-    /// could not be registered are left out (and reported).
-    pub out_set: PathBuf,
+    /// input's directory, else are written as absolute paths. A scan that
+    /// could not be registered is still written, at its initial pose, with
+    /// a `# mint: failed: REASON` line before it; `mint zipper` and
+    /// `mint merge` leave flagged scans out unless --include-failed.
+    #[arg(required_unless_present = "evaluate")]
+    pub out_set: Option<PathBuf>,
+    /// Register nothing: measure how well the set's scans agree at its own
+    /// poses (RMS point-to-plane distance of every overlapping pair, within
+    /// the final pairing distance) and write nothing. Compares two pose
+    /// sets of the same scans, e.g. a published .conf and mint's output.
+    #[arg(long, conflicts_with = "out_set")]
+    pub evaluate: bool,
     /// Final pairing distance d [default: 2 x the largest sampling distance].
     #[arg(long)]
     pub distance: Option<f64>,
@@ -102,10 +114,6 @@ pub enum OnOff {
 }
 
 pub fn cmd_align(a: AlignArgs) -> Result<()> {
-    let set = ScanSet::read(&a.set)?;
-    let mut inputs: Vec<&std::path::Path> = vec![&a.set];
-    inputs.extend(set.entries.iter().map(|e| e.path.as_path()));
-    crate::paths::check_output(&a.out_set, &inputs)?;
     let opts = AlignOptions {
         distance: a.distance,
         start_distance: a.start_distance,
@@ -126,20 +134,44 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
         global_rounds: a.global_rounds,
         ..Default::default()
     };
-    let s = align_file(&a.set, &a.out_set, &opts, &crate::progress::Bars::new(a.json.json))?;
+    let bars = crate::progress::Bars::new(a.json.json);
+    let Some(out_set) = &a.out_set else {
+        let e = evaluate_file(&a.set, &opts, &bars)?;
+        if a.json.json {
+            let v = serde_json::json!({ "set": a.set.display().to_string(), "scans": e.scans, "flagged_failed": e.flagged, "seconds": e.seconds, "agreement": e.agreement });
+            crate::out::json(&v)?;
+        } else {
+            eprintln!("evaluated {} scans of {} in {:.2}s (poses as given)", e.scans, a.set.display(), e.seconds);
+            if !e.flagged.is_empty() {
+                eprintln!("  left out, flagged as failed in the set: {}", e.flagged.join(" "));
+            }
+            print_agreement(&e.agreement, true);
+        }
+        return Ok(());
+    };
+    let set = ScanSet::read(&a.set)?;
+    let mut inputs: Vec<&std::path::Path> = vec![&a.set];
+    inputs.extend(set.entries.iter().map(|e| e.path.as_path()));
+    crate::paths::check_output(out_set, &inputs)?;
+    let s = align_file(&a.set, out_set, &opts, &bars)?;
     let (r, secs, register_secs) = (&s.result, s.seconds, s.register_seconds);
+    let failed: Vec<&str> = r.reports.iter().filter(|s| matches!(s.status, Status::Failed(_))).map(|s| s.name.as_str()).collect();
     if a.json.json {
-        let v = serde_json::json!({ "set": a.set.display().to_string(), "out_set": a.out_set.display().to_string(), "global": opts.global, "distance": r.distance, "start_distance": r.start_distance, "seconds": secs, "register_seconds": register_secs, "peak_heap_bytes": crate::alloc::peak_heap(), "rounds": r.rounds, "scans": r.reports, "pairs": r.pairs });
+        let v = serde_json::json!({ "set": a.set.display().to_string(), "out_set": out_set.display().to_string(), "global": opts.global, "distance": r.distance, "start_distance": r.start_distance, "seconds": secs, "register_seconds": register_secs, "peak_heap_bytes": crate::alloc::peak_heap(), "rounds": r.rounds, "scans": r.reports, "pairs": r.pairs, "failed": failed, "agreement": r.agreement });
         crate::out::json(&v)?;
     } else {
         let how = if opts.global { format!("multiview, {} rounds", r.rounds) } else { "growing model".to_string() };
-        eprintln!("aligned {} scans of {} ({how}; d = {:.4e}, start {:.4e}) in {secs:.2}s -> {}", s.scans, a.set.display(), r.distance, r.start_distance, a.out_set.display());
+        eprintln!("aligned {} scans of {} ({how}; d = {:.4e}, start {:.4e}) in {secs:.2}s -> {}", s.scans, a.set.display(), r.distance, r.start_distance, out_set.display());
         eprintln!("  {:<24} {:<10} {:>10} {:>6} {:>8} {:>6} {:>9}  partners", "scan", "status", "rms", "rms/s", "pairs", "iters", "moved deg");
         for s in &r.reports {
             match &s.status {
-                Status::Failed(why) => eprintln!("  {:<24} FAILED, kept its initial pose and left out: {why}", s.name),
+                Status::Failed(why) => eprintln!(
+                    "  {:<24} FAILED{}, kept its initial pose and flagged in the output set: {why}",
+                    s.name,
+                    if s.retries > 0 { format!(" after {} retries", s.retries) } else { String::new() }
+                ),
                 st => eprintln!(
-                    "  {:<24} {:<10} {:>10.4e} {:>6.3} {:>8} {:>6} {:>9.3}  {}{}",
+                    "  {:<24} {:<10} {:>10.4e} {:>6.3} {:>8} {:>6} {:>9.3}  {}{}{}",
                     s.name,
                     format!("{st:?}"),
                     s.rms,
@@ -148,7 +180,11 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
                     s.iterations,
                     s.moved_deg,
                     s.partners.join(" "),
-                    if s.converged { "" } else { " (hit the iteration cap)" }
+                    if s.converged { "" } else { " (hit the iteration cap)" },
+                    match &s.retried_from {
+                        Some(from) => format!(" (registered on retry {} of its start: {from})", s.retries),
+                        None => String::new(),
+                    }
                 ),
             }
         }
@@ -167,6 +203,24 @@ pub fn cmd_align(a: AlignArgs) -> Result<()> {
         for l in rejected {
             eprintln!("{l}");
         }
+        print_agreement(&r.agreement, false);
+        if !failed.is_empty() {
+            eprintln!("warning: {} of {} scans could not be registered ({}); they are flagged in {} and left out of zipper and merge unless --include-failed", failed.len(), r.reports.len(), failed.join(" "), out_set.display());
+        }
     }
     Ok(())
+}
+
+/// The agreement lines of the text summary; `all_pairs` lists every pair.
+fn print_agreement(g: &Agreement, all_pairs: bool) {
+    if g.pairs.is_empty() {
+        eprintln!("  agreement: no pair of scans overlaps by {:.0}% within d = {:.4e}", 100.0 * g.min_overlap, g.distance);
+        return;
+    }
+    eprintln!("  agreement: rms {:.4e} over {} overlapping pairs (median pair rms {:.4e}; point to plane within d = {:.4e})", g.rms, g.pairs.len(), g.median_rms, g.distance);
+    if all_pairs {
+        for p in &g.pairs {
+            eprintln!("    {:<24} {:<24} overlap {:>5.1}%  {:>8} pairs  rms {:.4e}", p.a, p.b, 100.0 * p.overlap, p.pairs, p.rms);
+        }
+    }
 }

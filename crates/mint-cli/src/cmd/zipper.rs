@@ -58,6 +58,11 @@ pub struct ZipperArgs {
     pub preview: bool,
     #[command(flatten)]
     pub preview_up: crate::preview::PreviewUp,
+    /// Also merge scans the set flags as failed (`mint align` writes them at
+    /// their initial pose with a `# mint: failed:` line); by default they
+    /// are left out, with a warning naming them.
+    #[arg(long)]
+    pub include_failed: bool,
     #[command(flatten)]
     pub json: JsonArg,
 }
@@ -81,15 +86,18 @@ pub fn cmd_zipper(a: ZipperArgs) -> Result<()> {
             mint_range::MergeMethod::Grid(GridMergeOptions { size, band: a.band, ..Default::default() })
         }
     };
-    let opts = mint_range::MergeFileOptions { method, scan_mem: a.mem.bytes() as usize, write: Default::default() };
+    let opts = mint_range::MergeFileOptions { method, scan_mem: a.mem.bytes() as usize, write: Default::default(), include_failed: a.include_failed };
     let s = mint_range::merge_file(&a.set, &a.output, &opts, &bars)?;
     let (report, check, secs) = (&s.report, &s.check, s.seconds);
     if a.preview {
         crate::preview::write_preview(&[vec![a.output.clone()]], &a.output, a.preview_up.up, a.json.json, &bars)?;
     }
+    if !s.skipped_failed.is_empty() && !a.json.json {
+        eprintln!("warning: left out {} scans the set flags as failed: {} (--include-failed merges them)", s.skipped_failed.len(), s.skipped_failed.join(" "));
+    }
     if a.json.json {
         let key = report.method();
-        let v = serde_json::json!({ "set": a.set.display().to_string(), "output": a.output.display().to_string(), "seconds": secs, key: report, "check": check, "scan_reads": s.scan_reads, "peak_scan_bytes": s.peak_scan_bytes, "peak_heap_bytes": crate::alloc::peak_heap() });
+        let v = serde_json::json!({ "set": a.set.display().to_string(), "output": a.output.display().to_string(), "seconds": secs, key: report, "check": check, "skipped_failed": s.skipped_failed, "scan_reads": s.scan_reads, "peak_scan_bytes": s.peak_scan_bytes, "peak_heap_bytes": crate::alloc::peak_heap() });
         crate::out::json(&v)?;
         return Ok(());
     }
