@@ -183,3 +183,94 @@ proptest! {
         prop_assert_eq!(r.unreferenced_vertices, 0);
     }
 }
+
+/// `--open-border` on a random voxel volume at its own resolution: the
+/// closed surface, the cap's faces left out (`on_border`), and the bowtie
+/// vertices split (`fan_splits`), composed here as the engine's write
+/// stage composes them.
+fn open_border_mesh(dims: [u64; 3], inside: &[bool]) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, [(f64, f64); 3]) {
+    use mint_core::robust::reconstruct_slab_robust;
+    use mint_core::signs::SignRule;
+    use mint_core::volume::{border_mask, fan_splits, on_border, volume_planes, Field, Placement};
+    let hi = dims.map(|n| (n - 1) as f64);
+    let g = Grid::around([0.0; 3], hi, GridSize::CellSize(1.0), [0.0; 3], Some(2)).unwrap();
+    let [na, nb, ns] = g.local_dims();
+    let p = Placement { axis: [0, 1, 2], start: g.origin, step: [1.0; 3], dims, nodes: [na + 1, nb + 1, ns + 1] };
+    let samples: Vec<f32> = inside.iter().map(|&b| b as u8 as f32).collect();
+    let r = reconstruct_slab_robust(&g, 0, volume_planes(&p, Field::Iso(0.5), &samples), SignRule::Union).0;
+    let domain: [(f64, f64); 3] = std::array::from_fn(|d| (-0.5, dims[d] as f64 - 0.5));
+    let masks: Vec<u8> = r.vertices.iter().map(|&v| border_mask(v, domain, 1.0)).collect();
+    let kept: Vec<[u32; 3]> = r.faces.iter().copied().filter(|f| !on_border(f.map(|v| masks[v as usize]))).collect();
+    let mut incident = Vec::new();
+    for f in &kept {
+        for k in 0..3 {
+            if masks[f[k] as usize] != 0 {
+                let (a, b) = (f[(k + 1) % 3], f[(k + 2) % 3]);
+                incident.push((f[k], a.min(b), a.max(b)));
+            }
+        }
+    }
+    let mut vertices = r.vertices.clone();
+    let mut copy = std::collections::HashMap::new();
+    let mut made = std::collections::HashMap::new();
+    for (v, a, b, k) in fan_splits(incident) {
+        let id = *made.entry((v, k)).or_insert_with(|| {
+            vertices.push(r.vertices[v as usize]);
+            vertices.len() as u32 - 1
+        });
+        copy.insert((v, a, b), id);
+    }
+    let faces: Vec<[u32; 3]> = kept
+        .iter()
+        .map(|f| std::array::from_fn(|k| {
+            let (a, b) = (f[(k + 1) % 3], f[(k + 2) % 3]);
+            *copy.get(&(f[k], a.min(b), a.max(b))).unwrap_or(&f[k])
+        }))
+        .collect();
+    // Drop the vertices no face uses, as the write stage does.
+    let mut id = vec![u32::MAX; vertices.len()];
+    let mut out = Vec::new();
+    let faces: Vec<[u32; 3]> = faces
+        .iter()
+        .map(|f| f.map(|v| {
+            if id[v as usize] == u32::MAX {
+                id[v as usize] = out.len() as u32;
+                out.push(vertices[v as usize]);
+            }
+            id[v as usize]
+        }))
+        .collect();
+    (out, faces, domain)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 300, .. ProptestConfig::default() })]
+
+    /// Random voxel volumes with `--open-border`: the surface left is an
+    /// oriented 2-manifold with boundary (no non-manifold edge or vertex,
+    /// no unused vertex) whose boundary lies on the volume's border, and no
+    /// face is left out of a surface the border does not touch.
+    #[test]
+    fn open_border_volumes_are_manifolds_with_their_boundary_on_the_border(
+        dims in prop::array::uniform3(1u64..6),
+        bits in prop::collection::vec(any::<bool>(), 125),
+    ) {
+        let n = (dims[0] * dims[1] * dims[2]) as usize;
+        let (v, f, domain) = open_border_mesh(dims, &bits[..n]);
+        let r = mint_mesh::check(&v, &f);
+        prop_assert_eq!((r.non_manifold_edges, r.non_manifold_vertices, r.inconsistently_oriented_edges, r.unreferenced_vertices), (0, 0, 0, 0), "{:?}", r);
+        let on = |q: [f64; 3]| (0..3).any(|d| (q[d] - domain[d].0).abs() < 1e-2 || (q[d] - domain[d].1).abs() < 1e-2);
+        let mut count = std::collections::HashMap::new();
+        for t in &f {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                *count.entry((a.min(b), a.max(b))).or_insert(0u32) += 1;
+            }
+        }
+        for (&(a, b), &c) in &count {
+            if c == 1 {
+                prop_assert!(on(v[a as usize]) && on(v[b as usize]), "boundary edge {:?}-{:?} off the border", v[a as usize], v[b as usize]);
+            }
+        }
+    }
+}

@@ -102,6 +102,83 @@ fn the_border_closes_the_surface_and_the_checkerboard_is_two_manifold() {
     }
 }
 
+/// The boundary edges of `faces` (edges one face uses), as vertex pairs.
+fn boundary_edges(faces: &[[u32; 3]]) -> Vec<(u32, u32)> {
+    let mut n = std::collections::HashMap::new();
+    for f in faces {
+        for k in 0..3 {
+            let (a, b) = (f[k], f[(k + 1) % 3]);
+            *n.entry((a.min(b), a.max(b))).or_insert(0u32) += 1;
+        }
+    }
+    let mut e: Vec<(u32, u32)> = n.into_iter().filter(|&(_, c)| c == 1).map(|(e, _)| e).collect();
+    e.sort_unstable();
+    e
+}
+
+#[test]
+fn open_border_leaves_the_surface_open_exactly_on_the_border() {
+    let d = tempfile::tempdir().unwrap();
+    // Layers z = 3..=4 of 6x5x8 voxels inside: a slab cut by the x and y
+    // borders, plus a lone voxel well inside whose surface the border
+    // never touches.
+    let dims = [6u64, 5, 8];
+    let mut s: Vec<f32> = (0..240).map(|i| if (3..=4).contains(&(i / 30)) { 10.0 } else { 0.0 }).collect();
+    s[30 + 2 * 6 + 2] = 10.0;
+    let vol = d.path().join("slab.nrrd");
+    write(&vol, dims, Sample::U8, IDENTITY, Frame::Scanner, &s);
+    let closed = d.path().join("closed.ply");
+    ok(&["volume", p(&vol), p(&closed), "--iso", "5", "-q"]);
+    watertight(&closed);
+    let open = d.path().join("open.ply");
+    let json: serde_json::Value = serde_json::from_str(&ok(&["volume", p(&vol), p(&open), "--iso", "5", "--open-border", "--json"])).unwrap();
+    let (v, f) = mint_io::read_mesh(&open).unwrap();
+    let (_, fc) = mint_io::read_mesh(&closed).unwrap();
+    assert!(f.len() < fc.len() && !f.is_empty());
+    assert_eq!(json["output_faces"].as_u64(), Some(f.len() as u64), "{json}");
+    assert_eq!(json["output_vertices"].as_u64(), Some(v.len() as u64), "{json}");
+    assert_eq!(json["volume"]["border_faces_removed"].as_u64(), Some((fc.len() - f.len()) as u64), "{json}");
+    // Every vertex is used, and the boundary lies on the x and y border planes.
+    let mut used = vec![false; v.len()];
+    f.iter().flatten().for_each(|&i| used[i as usize] = true);
+    assert!(used.iter().all(|&u| u), "an unused vertex is left");
+    let b = boundary_edges(&f);
+    assert_eq!(json["output_boundary_edges"].as_u64(), Some(b.len() as u64), "{json}");
+    // Two sheets (top and bottom of the slab), each bounded by one loop.
+    assert_eq!(json["output_boundary_loops"].as_u64(), Some(2), "{json}");
+    let on_border = |q: [f64; 3]| (q[0] + 0.5).abs() < 1e-3 || (q[0] - 5.5).abs() < 1e-3 || (q[1] + 0.5).abs() < 1e-3 || (q[1] - 4.5).abs() < 1e-3;
+    for &(a, c) in &b {
+        assert!(on_border(v[a as usize]) && on_border(v[c as usize]), "boundary edge {:?}-{:?} off the border", v[a as usize], v[c as usize]);
+    }
+    let c = check(&open, &["--no-weld"]);
+    assert_eq!((c["non_manifold_edges"].as_u64(), c["degenerate_faces"].as_u64(), c["duplicate_faces"].as_u64()), (Some(0), Some(0), Some(0)), "{c}");
+    // The same bytes under other slabs, parts and threads.
+    let want = std::fs::read(&open).unwrap();
+    for extra in [&["--threads", "1"][..], &["--parts", "3", "--slab", "2", "--mem", "70M"][..]] {
+        let o = d.path().join("open2.ply");
+        let mut args = vec!["volume", p(&vol), p(&o), "--iso", "5", "--open-border", "-q"];
+        args.extend(extra);
+        ok(&args);
+        assert!(std::fs::read(&o).unwrap() == want, "{extra:?}: other bytes");
+    }
+    // A real CT cut by its border: open there, still a 2-manifold (the
+    // cap touches the body at points, whose vertices are split).
+    let chest = d.path().join("chest.ply");
+    let json: serde_json::Value = serde_json::from_str(&ok(&["volume", p(&shared("ct-chest-dicom-series-lungpetctdx")), p(&chest), "--iso", "300", "--open-border", "--json"])).unwrap();
+    let c = check(&chest, &["--no-weld"]);
+    assert_eq!((c["non_manifold_edges"].as_u64(), c["non_manifold_vertices"].as_u64(), c["inconsistently_oriented_edges"].as_u64(), c["unreferenced_vertices"].as_u64()), (Some(0), Some(0), Some(0), Some(0)), "{c}");
+    assert!(json["volume"]["border_vertices_split"].as_u64().unwrap() > 0, "{json}");
+    assert_eq!((c["boundary_edges"].as_u64(), c["boundary_loops"].as_u64()), (json["output_boundary_edges"].as_u64(), json["output_boundary_loops"].as_u64()), "{json}");
+    assert_eq!(c["faces"].as_u64(), json["output_faces"].as_u64());
+    // A surface the border never touches is the same with or without it.
+    let mut t = vec![0.0f32; 240];
+    t[30 * 4 + 2 * 6 + 2] = 10.0;
+    write(&vol, dims, Sample::U8, IDENTITY, Frame::Scanner, &t);
+    ok(&["volume", p(&vol), p(&closed), "--iso", "5", "-q"]);
+    ok(&["volume", p(&vol), p(&open), "--iso", "5", "-q", "--open-border"]);
+    assert!(std::fs::read(&open).unwrap() == std::fs::read(&closed).unwrap());
+}
+
 #[test]
 fn labels_share_their_boundary_without_gaps() {
     let d = tempfile::tempdir().unwrap();

@@ -89,7 +89,8 @@ How it works: the volume is read slice by slice (never whole; memory follows --m
 surface crosses where two neighbouring samples fall on either side of the iso value, at the linear crossing \
 between them; those crossings go through the same staged engine as `mint resample`, whose consistent rules decide \
 every ambiguous cell, so the output is closed and 2-manifold. The volume's border counts as outside: a surface cut \
-by the border is closed on it. A sample equal to the iso value is inside; NaN is outside.\n\n\
+by the border is closed on it (--open-border leaves it open there, its boundary on the border, as marching cubes \
+does). A sample equal to the iso value is inside; NaN is outside.\n\n\
 The grid: by default the volume's own (a node on every voxel centre: the crossings are marching cubes' vertices); \
 --cells N or --cell-size H give cubic cells in the volume's units, sampled trilinearly.\n\n\
 Coordinates: the output is in the frame the file declares (DICOM and MetaImage: LPS patient coordinates; NIfTI: \

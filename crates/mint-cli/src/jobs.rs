@@ -288,6 +288,12 @@ pub struct VolumeArgs {
     /// Cubic cells of edge H in the volume's units (mm for medical formats).
     #[arg(long, value_name = "H", value_parser = parse_cell_size)]
     pub cell_size: Option<f64>,
+    /// Leave the surface open where it meets the volume's border (its
+    /// boundary then lies on the border), as marching cubes does, instead
+    /// of closing it there [default: the border counts as outside, and a
+    /// surface cut by it is closed on it].
+    #[arg(long)]
+    pub open_border: bool,
     /// Raw samples: dimensions X,Y,Z (X fastest in the file).
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_dims, requires = "raw_type")]
     pub raw_dims: Option<[u64; 3]>,
@@ -337,7 +343,7 @@ impl VolumeArgs {
             spacing: self.raw_spacing.unwrap_or([1.0; 3]),
             header_bytes: self.raw_header,
         });
-        mint_pipeline::VolumeJob { input: self.input.clone(), raw, surface, own_grid: self.cells.is_none() && self.cell_size.is_none() }
+        mint_pipeline::VolumeJob { input: self.input.clone(), raw, surface, own_grid: self.cells.is_none() && self.cell_size.is_none(), open_border: self.open_border }
     }
 
     /// The run's spec for `surface`, written to `output`.

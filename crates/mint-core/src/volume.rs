@@ -365,6 +365,100 @@ pub fn volume_planes(p: &Placement, field: Field, samples: &[f32]) -> Vec<Vec<In
     planes
 }
 
+/// `--open-border`: which of the domain's six border planes a vertex lies
+/// on, as bits (bit `2d` the low side of axis `d`, bit `2d + 1` the high
+/// side), for a domain `[lo, hi]` per axis in the vertices' frame. A
+/// crossing between a node inside the domain and one outside sits on the
+/// border (see [`crossing`]), moved at most [`MARGIN`] cells, hence the
+/// tolerance of two margins.
+pub fn border_mask(v: [f64; 3], domain: [(f64, f64); 3], cell: f64) -> u8 {
+    let tol = 2.0 * MARGIN * cell;
+    let mut m = 0u8;
+    for d in 0..3 {
+        let (lo, hi) = domain[d];
+        m |= (((v[d] - lo).abs() <= tol) as u8) << (2 * d);
+        m |= (((v[d] - hi).abs() <= tol) as u8) << (2 * d + 1);
+    }
+    m
+}
+
+/// `--open-border`: a face belongs to the cap that closes the surface on
+/// the volume's border when its three vertices lie on the border (each
+/// [`border_mask`] non-zero; not necessarily one plane: where two border
+/// planes meet, the cap turns the corner with faces across it). Such a face
+/// lies in a cell between the outermost nodes and the padding beyond, and
+/// only closes the surface there; leaving those faces out opens the surface
+/// exactly where it meets the border, its boundary on the border.
+#[inline]
+pub fn on_border(masks: [u8; 3]) -> bool {
+    masks[0] != 0 && masks[1] != 0 && masks[2] != 0
+}
+
+/// `--open-border`: where the cap meets the rest of the surface at a
+/// vertex only (the faces left around a border vertex fall into more than
+/// one fan: a "bowtie"), that vertex is split, one copy per fan, so that
+/// the open surface is a 2-manifold with boundary.
+///
+/// `incident` holds, for every kept face and each of its vertices `v` on
+/// the border, `(v, a, b)` with `a < b` the face's two other vertices.
+/// Faces around `v` are in one fan when they are linked through shared
+/// edges `v`–`w`. Returns, for the faces that must use a copy of their
+/// vertex, `(v, a, b, k)`: copy `k` (1-based; fan 0 keeps `v`), fans
+/// ordered by their smallest `(a, b)`; sorted by `v`, then `k`.
+pub fn fan_splits(mut incident: Vec<(u32, u32, u32)>) -> Vec<(u32, u32, u32, u32)> {
+    incident.sort_unstable();
+    incident.dedup();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < incident.len() {
+        let v = incident[i].0;
+        let mut j = i;
+        while j < incident.len() && incident[j].0 == v {
+            j += 1;
+        }
+        let group = &incident[i..j];
+        if group.len() > 1 {
+            // Union-find over the group's faces, linked by shared neighbours.
+            let mut parent: Vec<usize> = (0..group.len()).collect();
+            fn root(p: &mut [usize], mut x: usize) -> usize {
+                while p[x] != x {
+                    p[x] = p[p[x]];
+                    x = p[x];
+                }
+                x
+            }
+            let mut by_neighbour: Vec<(u32, usize)> = group.iter().enumerate().flat_map(|(n, &(_, a, b))| [(a, n), (b, n)]).collect();
+            by_neighbour.sort_unstable();
+            for w in by_neighbour.windows(2) {
+                if w[0].0 == w[1].0 {
+                    let (x, y) = (root(&mut parent, w[0].1), root(&mut parent, w[1].1));
+                    parent[x.max(y)] = x.min(y);
+                }
+            }
+            // Fans in order of their smallest face (the group is sorted, so
+            // a fan's first face in group order is its smallest).
+            let mut fan_of_root: Vec<(usize, u32)> = Vec::new();
+            for n in 0..group.len() {
+                let r = root(&mut parent, n);
+                let k = match fan_of_root.iter().find(|e| e.0 == r) {
+                    Some(e) => e.1,
+                    None => {
+                        let k = fan_of_root.len() as u32;
+                        fan_of_root.push((r, k));
+                        k
+                    }
+                };
+                if k > 0 {
+                    out.push((v, group[n].1, group[n].2, k));
+                }
+            }
+        }
+        i = j;
+    }
+    out.sort_unstable_by_key(|&(v, a, b, k)| (v, k, a, b));
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -430,6 +524,44 @@ mod tests {
             let far = p.iter().map(|x| x.abs()).fold(0.0, f64::max);
             assert!((far - 0.5).abs() < 1e-3, "{p:?}");
         }
+    }
+
+    #[test]
+    fn open_border_leaves_out_exactly_the_cap_on_the_border() {
+        // A 5x4x6 volume whose layers z = 2..=3 are inside: a slab cut by
+        // the x and y borders. Closed, it is a box; with the cap left out,
+        // two sheets (its top and bottom) remain, each open on the border.
+        let dims = [5u64, 4, 6];
+        let s: Vec<f32> = (0..120).map(|i| ((2..=3).contains(&(i / 20)) as u8) as f32).collect();
+        let r = mesh(dims, Field::Iso(0.5), &s);
+        assert_eq!(counts(&r).3, 0, "closed before");
+        let domain: [(f64, f64); 3] = std::array::from_fn(|d| (-0.5, dims[d] as f64 - 0.5));
+        let masks: Vec<u8> = r.vertices.iter().map(|&v| border_mask(v, domain, 1.0)).collect();
+        let kept: Vec<[u32; 3]> = r.faces.iter().copied().filter(|f| !on_border(f.map(|v| masks[v as usize]))).collect();
+        assert!(kept.len() < r.faces.len());
+        // Every face left has a vertex off the border, and lies
+        // in the slab's top or bottom half-voxel band (z within 0.5 of 1.5 or 3.5).
+        for f in &kept {
+            for &v in f {
+                let z = r.vertices[v as usize][2];
+                assert!((z - 1.5).abs() <= 0.5 + 1e-9 || (z - 3.5).abs() <= 0.5 + 1e-9, "{z}");
+            }
+        }
+        // The boundary edges are those the cap shared, on the border.
+        let open = crate::cells::SlabResult { vertices: r.vertices.clone(), faces: kept, ..Default::default() };
+        let (_, _, _, b, n) = counts(&open);
+        assert_eq!(n, 0);
+        assert!(b > 0);
+        // The border of a 5x4 sheet crossed by one line per node at the
+        // border: 2 sheets x 2 x (5 + 4) edges.
+        assert_eq!(b, 2 * 2 * (5 + 4), "boundary edges");
+        // Nothing inside the border changes: no face at all is left out of
+        // a surface that does not reach it.
+        let mut t = vec![0.0f32; 27];
+        t[13] = 1.0;
+        let r = mesh([3, 3, 3], Field::Iso(0.5), &t);
+        let domain = [(-0.5, 2.5); 3];
+        assert!(r.faces.iter().all(|f| !on_border(f.map(|v| border_mask(r.vertices[v as usize], domain, 1.0)))));
     }
 
     #[test]

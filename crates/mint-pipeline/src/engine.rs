@@ -402,6 +402,9 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
             frame: info.frame.name().to_string(),
             surface,
             own_grid: job.own_grid,
+            open_border: job.open_border,
+            border_faces_removed: 0,
+            border_vertices_split: 0,
             slices_read: st.slices,
             samples_read: st.samples,
             nan_samples: st.nan,
@@ -444,6 +447,14 @@ pub fn summarize(ctx: &Ctx) -> Result<ResampleSummary, PipelineError> {
     (s.output_boundary_edges, s.output_boundary_loops) = crate::stages::boundary_of(&loose);
     if let Ok(w) = crate::workdir::read_result::<crate::stages::WriteResult>(&ctx.dir, Stage::Write, 0) {
         s.output_precision = w.precision;
+        // --open-border: the write stage left the cap out; its counts stand.
+        if let (Some(o), Some(v)) = (w.open_border, s.volume.as_mut()) {
+            v.border_faces_removed = o.faces_removed;
+            v.border_vertices_split = o.vertices_split;
+            s.output_vertices = w.vertices;
+            s.output_faces = w.faces;
+            (s.output_boundary_edges, s.output_boundary_loops) = (o.boundary_edges, o.boundary_loops);
+        }
     }
     if plan.strict() || rules.first() == Some(&SignRule::Orient) {
         s.intercepts_kept = kept;

@@ -471,6 +471,11 @@ pub struct VolumeJob {
     /// cells of the run's grid size in the volume's physical axes (index ×
     /// spacing), samples interpolated trilinearly.
     pub own_grid: bool,
+    /// `--open-border`: leave the surface open where it meets the volume's
+    /// border (the faces of the cap on the border are left out) instead of
+    /// closing it there.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub open_border: bool,
 }
 
 /// Which surface of a volume.

@@ -160,6 +160,9 @@ pub struct WriteResult {
     /// Coordinates written as f64, and why (or "f32").
     pub double: bool,
     pub precision: String,
+    /// `--open-border` of a volume: what leaving the cap out did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub open_border: Option<crate::volume::OpenBorder>,
 }
 
 /// Everything a task needs: the plan, its scene, this process's tuning
@@ -1258,20 +1261,54 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
     let coloured = ctx.plan.coloured();
     let write = mint_io::WriteOptions { double, ..ctx.plan.spec.write.options(Some(ctx.dir.clone()), coloured) };
     let slabs: Vec<(Stage, ReconstructResult)> = (0..ctx.plan.tasks(Stage::Reconstruct)).map(|t| ctx.final_slab(t)).collect::<Result<_, _>>()?;
-    let total_faces: u64 = slabs.iter().map(|(_, s)| s.faces).sum();
+    let mut total_faces: u64 = slabs.iter().map(|(_, s)| s.faces).sum();
+    let no_file = FileSum { len: 0, crc32: 0 };
+    // --open-border: the cap on the volume's border is left out, and with
+    // it the vertices only the cap used (two more passes over the slabs).
+    let cut = match ctx.volume()? {
+        Some((job, info)) if job.open_border => {
+            let files: Vec<crate::volume::SlabFiles> = slabs
+                .iter()
+                .enumerate()
+                .map(|(t, (stage, s))| {
+                    let dir = crate::workdir::task_dir(&ctx.dir, *stage, t as u32);
+                    crate::volume::SlabFiles { vertices: dir.join("vertices.bin"), vertices_sum: s.vertices_file.unwrap_or(no_file), faces: dir.join("faces.bin"), faces_sum: s.faces_file.unwrap_or(no_file), count: s.vertices }
+                })
+                .collect();
+            let bytes = if coloured { VERTEX_BYTES + 4 } else { VERTEX_BYTES };
+            let c = crate::volume::BorderCut::new(&files, bytes, crate::volume::domain(job, info), grid.cell, ctx.budget.total() / 2, &ctx.name(), boundary_of)?;
+            total_faces -= c.counts.faces_removed;
+            Some(c)
+        }
+        _ => None,
+    };
     let mut writer = MeshWriter::create(output, format, write)?;
+    let mut global = 0u64;
+    // --open-border: the split vertices' copies, written after the rest.
+    let mut copies: Vec<([f64; 3], Option<[u8; 4]>)> = Vec::new();
+    let mut next_copy = 0usize;
     ctx.progress.start(crate::progress::WRITE, total_faces);
     for (t, (stage, s)) in slabs.iter().enumerate() {
         let path = crate::workdir::task_dir(&ctx.dir, *stage, t as u32).join("vertices.bin");
         let sum = s.vertices_file.unwrap_or(FileSum { len: 0, crc32: 0 });
         let mut vertex = |b: &[u8], rgba: Option<[u8; 4]>| -> Result<(), PipelineError> {
             let c = |d: usize| f64::from_le_bytes(b[8 * d..8 * d + 8].try_into().unwrap());
+            global += 1;
+            if cut.as_ref().is_some_and(|c| !c.keeps(global - 1)) {
+                return Ok(());
+            }
             let mut v = [c(0), c(1), c(2)];
             if let Some(m) = &map {
                 v = m.apply(v);
             }
             if !v.iter().all(|x| x.is_finite()) {
                 return Err(PipelineError::NonFiniteResult { path: ctx.name(), x: v[0], y: v[1], z: v[2] });
+            }
+            if let Some(c) = &cut {
+                while c.copies.get(next_copy) == Some(&(global - 1)) {
+                    copies.push((v, rgba));
+                    next_copy += 1;
+                }
             }
             match rgba {
                 Some(c) => writer.write_vertex_rgba(v, c)?,
@@ -1286,6 +1323,12 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
         }
         check_cancel(ctx.progress)?;
     }
+    for (v, rgba) in copies {
+        match rgba {
+            Some(c) => writer.write_vertex_rgba(v, c)?,
+            None => writer.write_vertex(v)?,
+        }
+    }
     let total_vertices: u64 = slabs.iter().map(|(_, s)| s.vertices).sum();
     let mut offset = 0u64;
     let mut written = 0u64;
@@ -1293,11 +1336,17 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
         let path = crate::workdir::task_dir(&ctx.dir, *stage, t as u32).join("faces.bin");
         read_records::<12>(&path, s.faces_file.unwrap_or(FileSum { len: 0, crc32: 0 }), |b| {
             let id = |d: usize| u32::from_le_bytes(b[4 * d..4 * d + 4].try_into().unwrap()) as u64 + offset;
-            let f = if flip { [id(0), id(2), id(1)] } else { [id(0), id(1), id(2)] };
+            let mut f = if flip { [id(0), id(2), id(1)] } else { [id(0), id(1), id(2)] };
             // A damaged slab result is blamed on itself, before its
             // checksum (checked at its end) could say so: never on the output.
             if f.iter().any(|&v| v >= total_vertices) {
                 return Err(PipelineError::stage(&path, format!("damaged slab result: a face names vertex {} of {total_vertices}; remove its task directory and run the task again", f.iter().max().unwrap())));
+            }
+            if let Some(c) = &cut {
+                match c.face(f) {
+                    Some(g) => f = g,
+                    None => return Ok(()),
+                }
             }
             writer.write_face(f.map(|v| v as u32))?;
             written += 1;
@@ -1309,13 +1358,13 @@ fn write_task(ctx: &Ctx) -> Result<WriteResult, PipelineError> {
         })?;
         offset += s.vertices;
     }
-    let vertices = offset;
+    let vertices = cut.as_ref().map_or(offset, |c| c.kept_vertices);
     if vertices > u32::MAX as u64 + 1 {
         return Err(PipelineError::stage(output, format!("{vertices} output vertices do not fit 32-bit indices; use a coarser grid")));
     }
     writer.finish()?;
     ctx.progress.finish();
-    Ok(WriteResult { output: output.clone(), vertices, faces: total_faces, double, precision })
+    Ok(WriteResult { output: output.clone(), vertices, faces: total_faces, double, precision, open_border: cut.map(|c| c.counts) })
 }
 
 #[cfg(test)]

@@ -124,6 +124,16 @@ pub struct VolumeSummary {
     pub surface: String,
     /// True: one grid node per voxel centre (the volume's own resolution).
     pub own_grid: bool,
+    /// `--open-border`: the surface is left open on the volume's border;
+    /// the faces of the cap there that were left out.
+    #[serde(default)]
+    pub open_border: bool,
+    #[serde(default)]
+    pub border_faces_removed: u64,
+    /// Border vertices split in two or more where the cap touched the rest
+    /// of the surface at a vertex only (so that it stays a 2-manifold).
+    #[serde(default)]
+    pub border_vertices_split: u64,
     /// Slices and samples read (over all parts; neighbouring parts share
     /// slices), NaN samples, and the finite samples' range.
     pub slices_read: u64,

@@ -191,6 +191,188 @@ impl OutputMap {
     }
 }
 
+/// The domain of the field in the engine frame, per axis: the voxels'
+/// extent, half a voxel beyond the outer centres (see `mint_core::volume`).
+pub fn domain(job: &VolumeJob, info: &VolumeInfo) -> [(f64, f64); 3] {
+    let s = scale(job, info);
+    std::array::from_fn(|d| (-0.5 * s[d], (info.dims[d] as f64 - 0.5) * s[d]))
+}
+
+/// `--open-border`: which output faces and vertices the write stage keeps
+/// when the cap on the volume's border is left out, and which border
+/// vertices it splits so that the open surface stays a 2-manifold
+/// (`mint_core::volume::fan_splits`). Built in two passes over the slabs'
+/// results (each slab: its `vertices.bin`, `faces.bin`, their sums and its
+/// vertex count); holds 1.25 bytes per vertex and a few words per face
+/// that touches the border.
+pub struct BorderCut {
+    masks: Vec<u8>,
+    used: Vec<u64>,
+    /// Vertices kept before each word of `used`.
+    rank: Vec<u64>,
+    /// `(v, a, b)` of a face around border vertex `v` (`a < b` its other
+    /// vertices, ids before the cut) → the id of the copy of `v` it uses.
+    split: std::collections::HashMap<(u32, u32, u32), u64>,
+    /// The copies, written after the kept vertices: the vertex each copies,
+    /// in order.
+    pub copies: Vec<u64>,
+    /// Kept vertices, copies included.
+    pub kept_vertices: u64,
+    pub counts: OpenBorder,
+}
+
+/// The write stage's `--open-border` counts.
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize)]
+pub struct OpenBorder {
+    pub faces_removed: u64,
+    pub vertices_removed: u64,
+    /// Border vertices split where the cap touched the rest at a vertex
+    /// only (copies added).
+    #[serde(default)]
+    pub vertices_split: u64,
+    pub boundary_edges: u64,
+    pub boundary_loops: u64,
+}
+
+/// One slab's result files, for [`BorderCut::new`].
+pub struct SlabFiles {
+    pub vertices: std::path::PathBuf,
+    pub vertices_sum: crate::workdir::FileSum,
+    pub faces: std::path::PathBuf,
+    pub faces_sum: crate::workdir::FileSum,
+    pub count: u64,
+}
+
+#[inline]
+fn sorted(a: u32, b: u32) -> (u32, u32) {
+    (a.min(b), a.max(b))
+}
+
+impl BorderCut {
+    /// Reads the slabs' results; `boundary` turns the kept faces' edges
+    /// along the border (new ids) into the output's boundary counts
+    /// (edges, loops).
+    pub fn new(
+        slabs: &[SlabFiles],
+        vertex_bytes: usize,
+        domain: [(f64, f64); 3],
+        cell: f64,
+        budget: u64,
+        name: &std::path::Path,
+        boundary: impl Fn(&[(u32, u32)]) -> (u64, u64),
+    ) -> Result<BorderCut, PipelineError> {
+        use crate::workdir::read_records;
+        let total: u64 = slabs.iter().map(|s| s.count).sum();
+        if total > u32::MAX as u64 {
+            return Err(PipelineError::stage(name, format!("{total} output vertices do not fit 32-bit indices; use a coarser grid")));
+        }
+        let need = total + total.div_ceil(64) * 16;
+        if need > budget {
+            return Err(PipelineError::budget(name, format!("--open-border needs {} MiB for {total} output vertices, more than the memory budget ({} MiB): use more --mem or larger cells", need >> 20, budget >> 20)));
+        }
+        let mut masks = Vec::with_capacity(total as usize);
+        for s in slabs {
+            let mut each = |b: &[u8]| {
+                let c = |d: usize| f64::from_le_bytes(b[8 * d..8 * d + 8].try_into().unwrap());
+                masks.push(mint_core::volume::border_mask([c(0), c(1), c(2)], domain, cell));
+                Ok(())
+            };
+            match vertex_bytes {
+                24 => read_records::<24>(&s.vertices, s.vertices_sum, |b| each(b))?,
+                _ => read_records::<28>(&s.vertices, s.vertices_sum, |b| each(b))?,
+            }
+        }
+        let mut used = vec![0u64; total.div_ceil(64) as usize];
+        // Kept faces at the border: (v, a, b) per border vertex, and their
+        // edges along the border (u, w, the face's third vertex).
+        let mut incident: Vec<(u32, u32, u32)> = Vec::new();
+        let mut edges: Vec<(u32, u32, u32)> = Vec::new();
+        let mut counts = OpenBorder::default();
+        let mut offset = 0u64;
+        for s in slabs {
+            read_records::<12>(&s.faces, s.faces_sum, |b| {
+                let f: [u64; 3] = std::array::from_fn(|d| u32::from_le_bytes(b[4 * d..4 * d + 4].try_into().unwrap()) as u64 + offset);
+                if f.iter().any(|&v| v >= total) {
+                    return Err(PipelineError::stage(&s.faces, format!("damaged slab result: a face names vertex {} of {total}; remove its task directory and run the task again", f.iter().max().unwrap())));
+                }
+                let m = f.map(|v| masks[v as usize]);
+                if mint_core::volume::on_border(m) {
+                    counts.faces_removed += 1;
+                    return Ok(());
+                }
+                let f = f.map(|v| v as u32);
+                for k in 0..3 {
+                    used[(f[k] / 64) as usize] |= 1 << (f[k] % 64);
+                    let (a, b) = (f[(k + 1) % 3], f[(k + 2) % 3]);
+                    if m[k] != 0 {
+                        let (lo, hi) = sorted(a, b);
+                        incident.push((f[k], lo, hi));
+                        // The edges the cap may have shared: both ends on the border.
+                        if m[(k + 1) % 3] != 0 {
+                            edges.push((f[k], a, b));
+                        }
+                    }
+                }
+                Ok(())
+            })?;
+            offset += s.count;
+        }
+        let mut rank = Vec::with_capacity(used.len());
+        let mut n = 0u64;
+        for w in &used {
+            rank.push(n);
+            n += w.count_ones() as u64;
+        }
+        counts.vertices_removed = total - n;
+        let mut cut = BorderCut { masks, used, rank, split: Default::default(), copies: Vec::new(), kept_vertices: n, counts };
+        // Copies of split vertices, after the kept ones, by vertex and fan.
+        let mut last: Option<(u32, u32)> = None;
+        for (v, a, b, k) in mint_core::volume::fan_splits(incident) {
+            if last != Some((v, k)) {
+                cut.copies.push(v as u64);
+                if last.map(|l| l.0) != Some(v) {
+                    cut.counts.vertices_split += 1;
+                }
+                last = Some((v, k));
+            }
+            cut.split.insert((v, a, b), n + cut.copies.len() as u64 - 1);
+        }
+        cut.kept_vertices = n + cut.copies.len() as u64;
+        let renamed: Vec<(u32, u32)> = edges.iter().map(|&(u, w, x)| (cut.id_in_face(u, w, x) as u32, cut.id_in_face(w, u, x) as u32)).collect();
+        (cut.counts.boundary_edges, cut.counts.boundary_loops) = boundary(&renamed);
+        Ok(cut)
+    }
+
+    /// Whether output vertex `v` (a global id before the cut) is kept.
+    #[inline]
+    pub fn keeps(&self, v: u64) -> bool {
+        self.used[(v / 64) as usize] >> (v % 64) & 1 == 1
+    }
+
+    /// The new id of vertex `v` in a face whose other vertices are `a`, `b`.
+    #[inline]
+    fn id_in_face(&self, v: u32, a: u32, b: u32) -> u64 {
+        if !self.split.is_empty() && self.masks[v as usize] != 0 {
+            let (lo, hi) = sorted(a, b);
+            if let Some(&c) = self.split.get(&(v, lo, hi)) {
+                return c;
+            }
+        }
+        let (w, bit) = ((v / 64) as usize, v % 64);
+        self.rank[w] + (self.used[w] & ((1u64 << bit) - 1)).count_ones() as u64
+    }
+
+    /// A face's new ids, or `None` when the face is part of the cap.
+    #[inline]
+    pub fn face(&self, f: [u64; 3]) -> Option<[u64; 3]> {
+        if mint_core::volume::on_border(f.map(|v| self.masks[v as usize])) {
+            return None;
+        }
+        let f = f.map(|v| v as u32);
+        Some(std::array::from_fn(|k| self.id_in_face(f[k], f[(k + 1) % 3], f[(k + 2) % 3])))
+    }
+}
+
 /// The node planes `[k0, k1)` that discretize task `task` of `parts` takes.
 pub fn task_planes(grid: &Grid, parts: u32, task: u32) -> (u32, u32) {
     let planes = grid.local_dims()[2] as u64 + 1;
@@ -341,7 +523,7 @@ mod tests {
     use crate::scene::VolumeSurface;
 
     fn job(own: bool) -> VolumeJob {
-        VolumeJob { input: "v.nrrd".into(), raw: None, surface: VolumeSurface::Iso(0.5), own_grid: own }
+        VolumeJob { input: "v.nrrd".into(), raw: None, surface: VolumeSurface::Iso(0.5), own_grid: own, open_border: false }
     }
 
     fn info(dims: [u64; 3], m: [[f64; 4]; 3]) -> VolumeInfo {

@@ -144,7 +144,15 @@ fn print(a: &VolumeArgs, summaries: &[ResampleSummary]) -> Result<()> {
             );
             eprintln!("  frame        {} (the output's coordinates)", v.frame);
             let grid = if v.own_grid { "the volume's own: one node per voxel centre".to_string() } else { format!("cubic cells of {:.6}, sampled trilinearly", s.cell_size) };
-            eprintln!("  grid         {}x{}x{} cells, {grid}; the border counts as outside", s.grid_cells[0], s.grid_cells[1], s.grid_cells[2]);
+            let border = if v.open_border {
+                format!(
+                    "left open on the volume's border ({} faces of the cap there left out, {} vertices split where it touched the rest at a point; {} boundary edges in {} loops)",
+                    v.border_faces_removed, v.border_vertices_split, s.output_boundary_edges, s.output_boundary_loops
+                )
+            } else {
+                "the border counts as outside (closed on it)".to_string()
+            };
+            eprintln!("  grid         {}x{}x{} cells, {grid}; {border}", s.grid_cells[0], s.grid_cells[1], s.grid_cells[2]);
             eprintln!("  intercepts   {} found ({} of shards), {} slices read", s.intercepts_found, human_bytes(s.shard_bytes), v.slices_read);
             eprintln!("  output       {} vertices, {} faces, coordinates {}", s.output_vertices, s.output_faces, s.output_precision);
             eprintln!("  time         {:.2}s; peak heap {}", s.seconds_total, human_bytes(crate::alloc::peak_heap()));
