@@ -77,6 +77,39 @@ impl Sample {
     pub fn is_float(self) -> bool {
         matches!(self, Sample::F32 | Sample::F64)
     }
+
+    /// The smallest and largest stored value of an integer type (`None`
+    /// for floats).
+    pub fn int_range(self) -> Option<(f64, f64)> {
+        Some(match self {
+            Sample::U8 => (0.0, u8::MAX as f64),
+            Sample::I8 => (i8::MIN as f64, i8::MAX as f64),
+            Sample::U16 => (0.0, u16::MAX as f64),
+            Sample::I16 => (i16::MIN as f64, i16::MAX as f64),
+            Sample::U32 => (0.0, u32::MAX as f64),
+            Sample::I32 => (i32::MIN as f64, i32::MAX as f64),
+            Sample::U64 => (0.0, u64::MAX as f64),
+            Sample::I64 => (i64::MIN as f64, i64::MAX as f64),
+            Sample::F32 | Sample::F64 => return None,
+        })
+    }
+}
+
+/// Whether the rescale `v · slope + intercept` keeps every stored value of
+/// an integer `sample` type finite as an f32 (a header with an absurd
+/// slope would otherwise turn integers into infinities). `Err` says why,
+/// for the caller's one line.
+pub(crate) fn check_rescale(sample: Sample, slope: f64, intercept: f64) -> Result<(), String> {
+    if !slope.is_finite() || !intercept.is_finite() {
+        return Err(format!("rescale slope {slope} and intercept {intercept} are not finite"));
+    }
+    if let Some((lo, hi)) = sample.int_range() {
+        let max = f32::MAX as f64;
+        if [lo, hi].iter().any(|&v| (v * slope + intercept).abs() > max) {
+            return Err(format!("rescale slope {slope} and intercept {intercept} take {} values beyond the range of 32-bit floats", sample.name()));
+        }
+    }
+    Ok(())
 }
 
 /// How stored bytes become values.

@@ -210,6 +210,11 @@ fn read_header(path: &Path) -> Result<Option<Header>, VolumeError> {
         crate::dicom_lengths::check_lengths(&bytes, layout).map_err(|m| VolumeError::format(path, format!("{m}: truncated or corrupted")))?;
     }
     drop(bytes);
+    // A syntax mint does not read is named before any parser inflates or
+    // decodes the file.
+    if let Some(uid) = meta_transfer_syntax(path) {
+        check_transfer_syntax(path, &uid)?;
+    }
     let obj = match OpenFileOptions::new().read_until(tags::PIXEL_DATA).open_file(path) {
         Ok(o) => o,
         Err(e) => {
@@ -290,6 +295,8 @@ fn read_header(path: &Path) -> Result<Option<Header>, VolumeError> {
     if slope == 0.0 {
         return Err(VolumeError::format(path, format!("{}: 0", place(tags::RESCALE_SLOPE, "RescaleSlope"))));
     }
+    // Judged on the widest stored samples read (32 bits, either sign).
+    crate::decode::check_rescale(crate::Sample::I32, slope, intercept).and_then(|_| crate::decode::check_rescale(crate::Sample::U32, slope, intercept)).map_err(|m| VolumeError::format(path, format!("{}: {m}", place(tags::RESCALE_SLOPE, "RescaleSlope"))))?;
     let thickness = one(tags::SLICE_THICKNESS, "SliceThickness")?.filter(|&t| t > 0.0);
     let between = one(tags::SPACING_BETWEEN_SLICES, "SpacingBetweenSlices")?.filter(|&t| t > 0.0);
     let series = text_of(&obj, tags::SERIES_INSTANCE_UID).unwrap_or_default();

@@ -57,11 +57,11 @@ fn u32_at(b: &[u8], i: usize) -> u32 {
 /// defined length fits in what encloses it (the file, or a defined-length
 /// sequence or item), without interpreting values. Sequences are entered:
 /// in explicit VR by their VR `SQ`, in implicit VR when the value starts
-/// with an item tag. Stops, content, at encapsulated pixel data and for
-/// transfer syntaxes it does not walk (big endian, deflated); the parser
-/// has the last word there. The message names the element and the byte.
+/// with an item tag. Walks Explicit VR Big Endian data sets too. Stops,
+/// content, at encapsulated pixel data and for Deflated data sets (their
+/// readers refuse them).  The message names the element and the byte.
 pub fn check_lengths(b: &[u8], lay: Layout) -> Result<(), String> {
-    let (mut pos, explicit) = match lay {
+    let (pos, explicit) = match lay {
         Layout::Bare { explicit } => (0, explicit),
         Layout::Preamble | Layout::Meta => {
             // The file meta group: explicit VR little endian, group 0002.
@@ -87,11 +87,20 @@ pub fn check_lengths(b: &[u8], lay: Layout) -> Result<(), String> {
             }
             match ts.as_str() {
                 "1.2.840.10008.1.2" => (pos, false),
-                "1.2.840.10008.1.2.2" | "1.2.840.10008.1.2.1.99" => return Ok(()),
+                "1.2.840.10008.1.2.2" => return walk(b, pos, true, true),
+                "1.2.840.10008.1.2.1.99" => return Ok(()),
                 _ => (pos, true),
             }
         }
     };
+    walk(b, pos, explicit, false)
+}
+
+/// The data set's walk from byte `pos`: explicit or implicit VR, little or
+/// big endian (Explicit VR Big Endian: every number after the meta group).
+fn walk(b: &[u8], mut pos: usize, explicit: bool, big: bool) -> Result<(), String> {
+    let u16_at = |b: &[u8], i: usize| if big { u16::from_be_bytes([b[i], b[i + 1]]) } else { u16_at(b, i) };
+    let u32_at = |b: &[u8], i: usize| if big { u32::from_be_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]]) } else { u32_at(b, i) };
     // Ends of the defined-length sequences and items we are in.
     let mut ends: Vec<usize> = vec![b.len()];
     while pos < b.len() {
@@ -168,6 +177,33 @@ mod tests {
         assert_eq!(check_lengths(&bytes, Layout::Preamble), Ok(()));
         let e = check_lengths(&bytes[..bytes.len() - 1000], Layout::Preamble).unwrap_err();
         assert!(e.contains("(7FE0,0010)") && e.contains("claims 524288 bytes"), "{e}");
+        // The same file's data set in Explicit VR Big Endian: walked, and a
+        // huge length there refused (found by fuzzing: it went to the
+        // parser, which sized a 1.8 GB buffer by it).
+        let mut be = bytes[..132].to_vec();
+        let mut meta = 132;
+        while u16_at(&bytes, meta) == 0x0002 {
+            let long = long_vr(&bytes[meta + 4..meta + 6]);
+            meta += if long { 12 + u32_at(&bytes, meta + 8) as usize } else { 8 + u16_at(&bytes, meta + 6) as usize };
+        }
+        be.extend_from_slice(&bytes[132..meta]);
+        let mut set = vec![0x00u8, 0x08, 0x00, 0x16, b'U', b'I', 0x00, 0x04];
+        set.extend_from_slice(b"1.2\0");
+        set.extend_from_slice(&[0x53, 0x65, 0x6E, 0x73, b'U', b'N', 0, 0, 0x6E, 0x20, 0x31, 0x30]);
+        set.extend_from_slice(&[0u8; 16]);
+        let ts_at = (132..meta).find(|&i| u16_at(&bytes, i) == 0x0002 && u16_at(&bytes, i + 2) == 0x0010).unwrap();
+        let old = u16_at(&bytes, ts_at + 6) as usize;
+        let mut fixed = be[..ts_at].to_vec();
+        fixed.extend_from_slice(&[0x02, 0x00, 0x10, 0x00, b'U', b'I', 20, 0]);
+        fixed.extend_from_slice(b"1.2.840.10008.1.2.2\0");
+        fixed.extend_from_slice(&be[ts_at + 8 + old..]);
+        // (The meta group's length element is now stale; the walk does not read it.)
+        let mut ok = fixed.clone();
+        ok.extend_from_slice(&set[..12]);
+        assert_eq!(check_lengths(&ok, Layout::Preamble), Ok(()));
+        fixed.extend_from_slice(&set);
+        let e = check_lengths(&fixed, Layout::Preamble).unwrap_err();
+        assert!(e.contains("(5365,6E73)") && e.contains("claims 1847603504 bytes"), "{e}");
         // A huge length anywhere before the pixels: refused, never a panic.
         for i in (132..3000).step_by(7) {
             let mut b = bytes.clone();

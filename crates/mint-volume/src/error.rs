@@ -21,19 +21,29 @@ pub enum VolumeErrorKind {
     Value,
 }
 
-/// One line: `<file>: <where>: <what>`.
+/// One line: `<file>: <where>: <what>`. Control characters in the file's
+/// name or in the text an error quotes from a header (a `\r`, a NUL) are
+/// shown escaped, so that the error stays one line.
 #[derive(Debug, thiserror::Error)]
-#[error("{}: {message}", path.display())]
+#[error("{}: {message}", one_line(&path.display().to_string()))]
 pub struct VolumeError {
     kind: VolumeErrorKind,
     path: PathBuf,
     message: String,
 }
 
+/// `s` with its control characters escaped (`\r`, `\n`, `\t`, `\u{0}`).
+fn one_line(s: &str) -> String {
+    if !s.chars().any(char::is_control) {
+        return s.to_string();
+    }
+    s.chars().map(|c| if c.is_control() { c.escape_default().to_string() } else { c.to_string() }).collect()
+}
+
 impl VolumeError {
     /// A new error about `path`.
     pub fn new(kind: VolumeErrorKind, path: &Path, message: impl Into<String>) -> VolumeError {
-        VolumeError { kind, path: path.to_path_buf(), message: message.into() }
+        VolumeError { kind, path: path.to_path_buf(), message: one_line(&message.into()) }
     }
 
     /// A format error about `path`.
@@ -50,7 +60,7 @@ impl VolumeError {
     pub fn io(path: &Path, what: &str, err: std::io::Error) -> VolumeError {
         let kind = if err.kind() == std::io::ErrorKind::UnexpectedEof { VolumeErrorKind::Format } else { VolumeErrorKind::Io };
         let msg = if kind == VolumeErrorKind::Format { format!("{what}: the file ends early (truncated)") } else { format!("{what}: {err}") };
-        VolumeError { kind, path: path.to_path_buf(), message: msg }
+        VolumeError { kind, path: path.to_path_buf(), message: one_line(&msg) }
     }
 
     /// The kind.
@@ -61,5 +71,20 @@ impl VolumeError {
     /// The file the error is about.
     pub fn path(&self) -> &Path {
         &self.path
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Found by fuzzing: a header line with a carriage return and NULs,
+    /// quoted in the error, made it two lines.
+    #[test]
+    fn quoted_control_characters_keep_the_error_on_one_line() {
+        let e = VolumeError::format(Path::new("a\nb.nrrd"), "line 4: `dim\r\0\0 3` is not a `field: value` line");
+        let s = e.to_string();
+        assert!(!s.contains('\n') && !s.contains('\r') && !s.contains('\0'), "{s:?}");
+        assert_eq!(s, "a\\nb.nrrd: line 4: `dim\\r\\u{0}\\u{0} 3` is not a `field: value` line");
     }
 }

@@ -94,6 +94,7 @@ pub(crate) fn open(path: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vo
     if !inter.is_finite() {
         inter = 0.0;
     }
+    crate::decode::check_rescale(sample, slope, inter).map_err(|m| VolumeError::format(path, format!("scl_slope, scl_inter: {m}")))?;
     let (qform_code, sform_code) = (i16_at(252), i16_at(254));
     let (m, frame) = if sform_code > 0 {
         let mut m = [[0.0; 4]; 3];
