@@ -179,6 +179,82 @@ fn open_border_leaves_the_surface_open_exactly_on_the_border() {
     assert!(std::fs::read(&open).unwrap() == std::fs::read(&closed).unwrap());
 }
 
+/// Samples of `R - |world(i, j, k) - c|` for affine `m`: the iso-0 surface
+/// is a world sphere of radius `r` about `c`, whatever the affine.
+fn world_ball(dims: [u64; 3], m: [[f64; 4]; 3], c: [f64; 3], r: f64) -> Vec<f32> {
+    let mut s = Vec::new();
+    for k in 0..dims[2] {
+        for j in 0..dims[1] {
+            for i in 0..dims[0] {
+                let q = [i as f64, j as f64, k as f64];
+                let w: [f64; 3] = std::array::from_fn(|row| m[row][0] * q[0] + m[row][1] * q[1] + m[row][2] * q[2] + m[row][3]);
+                s.push((r - ((w[0] - c[0]).powi(2) + (w[1] - c[1]).powi(2) + (w[2] - c[2]).powi(2)).sqrt()) as f32);
+            }
+        }
+    }
+    s
+}
+
+#[test]
+fn a_volume_is_an_operand_of_csg_scenes_in_its_world_frame() {
+    let d = tempfile::tempdir().unwrap();
+    let (c, r) = ([10.0, -2.0, 9.0], 6.0);
+    // x flipped; then index i along world y and j along world x.
+    let affines = [[[-0.8, 0.0, 0.0, 22.0], [0.0, 0.6, 0.0, -12.0], [0.0, 0.0, 1.25, 0.5]], [[0.0, 0.7, 0.0, 1.0], [0.9, 0.0, 0.0, -11.0], [0.0, 0.0, 1.1, 1.0]]];
+    for (n, m) in affines.iter().enumerate() {
+        let dims = [30u64, 34, 16];
+        let vol = d.path().join(format!("ball{n}.nhdr"));
+        write(&vol, dims, Sample::F32, *m, Frame::Scanner, &world_ball(dims, *m, c, r));
+        // The ball with a box far from it: two closed components, the ball
+        // where the header puts it.
+        let scene = d.path().join(format!("u{n}.json"));
+        std::fs::write(&scene, format!(r#"{{ "union": [ {{ "volume": {{ "file": "ball{n}.nhdr", "iso": 0 }} }}, {{ "box": {{ "size": [2, 2, 2] }}, "translate": [40, 0, 0] }} ] }}"#)).unwrap();
+        let out = d.path().join(format!("u{n}.ply"));
+        ok(&["csg", p(&scene), p(&out), "--cell-size", "0.4", "-q"]);
+        let ch = check(&out, &[]);
+        assert_eq!((ch["watertight"].as_bool(), ch["components"].as_u64()), (Some(true), Some(2)), "{n}: {ch}");
+        let vs = vertices(&out);
+        let ball: Vec<f64> = vs.iter().filter(|v| v[0] < 30.0).map(|v| ((v[0] - c[0]).powi(2) + (v[1] - c[1]).powi(2) + (v[2] - c[2]).powi(2)).sqrt()).collect();
+        assert!(ball.len() > 1000, "{n}: {} ball vertices", ball.len());
+        let worst = ball.iter().fold(0.0f64, |a, &x| a.max((x - r).abs()));
+        assert!(worst < 0.2, "{n}: a ball vertex {worst} from the sphere");
+        // The ball minus the half-space x <= c.x: a closed hemisphere.
+        let scene = d.path().join(format!("h{n}.json"));
+        std::fs::write(&scene, format!(r#"{{ "difference": [ {{ "volume": {{ "file": "ball{n}.nhdr", "iso": 0 }} }}, {{ "halfspace": {{ "normal": [1, 0, 0], "offset": {} }} }} ] }}"#, c[0])).unwrap();
+        let half = d.path().join(format!("h{n}.ply"));
+        ok(&["csg", p(&scene), p(&half), "--cell-size", "0.4", "-q"]);
+        watertight(&half);
+        let left = vertices(&half).iter().fold(f64::INFINITY, |a, v| a.min(v[0]));
+        // (A crossing keeps MARGIN = 1/1024 cell off a grid node; f32 output.)
+        assert!(left >= c[0] - 0.4 / 1024.0 - 1e-5, "{n}: a vertex at x = {left}, left of the cut");
+        // The same bytes under other parts, slabs, threads and memory.
+        let want = std::fs::read(&half).unwrap();
+        for extra in [&["--threads", "1"][..], &["--parts", "3", "--slabs", "4", "--mem", "70M"][..]] {
+            let o = d.path().join("again.ply");
+            let mut args = vec!["csg", p(&scene), p(&o), "--cell-size", "0.4", "-q"];
+            args.extend(extra);
+            ok(&args);
+            assert!(std::fs::read(&o).unwrap() == want, "{n} {extra:?}: other bytes");
+        }
+    }
+    // What a scene cannot place: an oblique volume, a transformed one.
+    let (cs, sn) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let oblique = [[cs, -sn, 0.0, 0.0], [sn, cs, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]];
+    write(&d.path().join("ob.nhdr"), [8, 8, 8], Sample::U8, oblique, Frame::Scanner, &[1.0; 512]);
+    for (json, want) in [
+        (r#"{ "union": [ { "volume": { "file": "ob.nhdr", "iso": 1 } }, { "sphere": { "radius": 1 } } ] }"#, "oblique"),
+        (r#"{ "union": [ { "volume": { "file": "ball0.nhdr", "iso": 0 }, "scale": 2 }, { "sphere": { "radius": 1 } } ] }"#, "placed by its own header"),
+        (r#"{ "volume": { "file": "ball0.nhdr" } }"#, "missing key 'iso'"),
+    ] {
+        let scene = d.path().join("bad.json");
+        std::fs::write(&scene, json).unwrap();
+        let o = run(&["csg", p(&scene), p(&d.path().join("bad.ply")), "--cell-size", "0.5"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(want) && err.trim().lines().count() == 1, "{json}: {err}");
+        assert!(!d.path().join("bad.ply").exists());
+    }
+}
+
 #[test]
 fn labels_share_their_boundary_without_gaps() {
     let d = tempfile::tempdir().unwrap();

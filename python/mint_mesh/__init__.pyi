@@ -216,4 +216,48 @@ def check_file(inputs: Paths, *, strict: bool = ..., self_intersections: bool = 
 def distance_file(a: PathLike, b: PathLike, *, samples: Optional[int] = ..., seed: Optional[int] = ..., progress: Optional[Progress] = ..., **options: Any) -> dict: ...
 def render_file(inputs: Paths, output: PathLike, *, size: Optional[Size] = ..., view: Optional[View] = ..., up: Optional[Literal["x", "y", "z"]] = ..., color: Optional[Literal["vertex", "shading", "distance"]] = ..., wireframe: bool = ..., show_boundary: bool = ..., mem: Optional[Union[str, int]] = ..., threads: Optional[int] = ..., progress: Optional[Progress] = ..., **options: Any) -> dict: ...
 def convert(inputs: Paths, output: PathLike, *, ascii: bool = ..., double: bool = ..., no_color: bool = ..., tmp: Optional[PathLike] = ..., progress: Optional[Progress] = ..., **options: Any) -> None: ...
-def gen(shape: Literal["sphere", "torus", "genus", "components", "scan"], output: PathLike, *, faces: Optional[int] = ..., seed: Optional[int] = ..., genus: Optional[int] = ..., ascii: bool = ..., color: bool = ..., progress: Optional[Progress] = ..., **options: Any) -> dict: ...
+def gen(shape: Literal["sphere", "torus", "genus", "components", "scan", "volume", "labels"], output: PathLike, *, faces: Optional[int] = ..., seed: Optional[int] = ..., genus: Optional[int] = ..., dims: Optional[str] = ..., spacing: Optional[str] = ..., ascii: bool = ..., color: bool = ..., progress: Optional[Progress] = ..., **options: Any) -> dict: ...
+# A 3-D array indexed [k, j, i] (slices first, x fastest), integer or float.
+Samples = npt.ArrayLike
+Triple = Union[float, Sequence[float]]
+def volume(
+    samples: Samples,
+    *,
+    iso: float,
+    spacing: Triple = ...,
+    origin: Triple = ...,
+    cells: Optional[float] = ...,
+    cell_size: Optional[float] = ...,
+    open_border: bool = ...,
+    mem: Optional[Union[str, int]] = ...,
+    threads: Optional[int] = ...,
+    tmp: Optional[PathLike] = ...,
+    progress: Optional[Progress] = ...,
+    **options: Any,
+) -> MeshResult: ...
+def volume_file(
+    input: PathLike,
+    output: PathLike,
+    *,
+    iso: Optional[float] = ...,
+    labels: Union[None, bool, Literal["all"], float, Sequence[float]] = ...,
+    one_file: bool = ...,
+    cells: Optional[float] = ...,
+    cell_size: Optional[float] = ...,
+    open_border: bool = ...,
+    raw_dims: Optional[str] = ...,
+    raw_type: Optional[Literal["u8", "i8", "u16", "i16", "u32", "i32", "u64", "i64", "f32", "f64"]] = ...,
+    raw_spacing: Optional[str] = ...,
+    raw_big_endian: bool = ...,
+    raw_header: Optional[int] = ...,
+    ascii: bool = ...,
+    double: bool = ...,
+    mem: Optional[Union[str, int]] = ...,
+    work: Optional[PathLike] = ...,
+    parts: Optional[int] = ...,
+    slabs: Optional[int] = ...,
+    threads: Optional[int] = ...,
+    tmp: Optional[PathLike] = ...,
+    progress: Optional[Progress] = ...,
+    **options: Any,
+) -> dict: ...

@@ -18,9 +18,11 @@ COMMAND = {
     "check": "check", "distance": "distance", "render": "render", "generate": "gen",
     "resample_file": "resample", "decimate_file": "decimate", "simplify_file": "simplify",
     "boolean_file": "bool", "csg_file": "csg", "check_file": "check", "distance_file": "distance",
-    "render_file": "render", "convert": "convert", "gen": "gen",
+    "render_file": "render", "convert": "convert", "gen": "gen", "volume": "volume", "volume_file": "volume",
 }
 PYTHON_ONLY = {"progress", "colors", "target_faces", "path", "tmp"}
+# An array's placement: `volume` turns them into the raw file's layout.
+PYTHON_ONLY_OF = {"volume": {"spacing", "origin"}}
 
 
 def stub_functions():
@@ -51,7 +53,7 @@ def test_every_stub_option_is_a_command_line_option(mint_exe):
         if command not in helps:
             helps[command] = subprocess.run([mint_exe, command, "--help"], capture_output=True, text=True).stdout
         for a in stubs[name].args.kwonlyargs:
-            if a.arg in PYTHON_ONLY:
+            if a.arg in PYTHON_ONLY or a.arg in PYTHON_ONLY_OF.get(name, ()):
                 continue
             flag = "--" + a.arg.replace("_", "-")
             assert flag in helps[command], f"{name}({a.arg}=): `mint {command}` has no {flag}"

@@ -76,8 +76,11 @@ Examples:\n  mint simplify part.ply part-10k.ply --faces 10000\n  mint simplify 
     Bool(BoolArgs),
     /// Mesh a CSG scene (JSON) of primitives and meshes with transforms.
     #[command(long_about = "Mesh a CSG scene: a JSON tree of analytic primitives (sphere, box, cylinder, cone, \
-torus, halfspace) and meshes, combined by union, intersection and difference, with scale/rotate/translate \
-on any node. Primitives are intersected with the grid lines exactly; nothing is tessellated first.\n\n\
+torus, halfspace), meshes and voxel volumes, combined by union, intersection and difference, with \
+scale/rotate/translate on any node but a volume. Primitives are intersected with the grid lines exactly; nothing \
+is tessellated first. A volume node ({ \"volume\": { \"file\": \"ct.nii.gz\", \"iso\": 300 } }, or \"label\": V) is \
+placed by its own header in its world frame and sampled trilinearly on the scene's grid (axis-aligned volumes; the \
+slabs then run along its slice axis).\n\n\
 Example scene:\n  { \"difference\": [ { \"box\": { \"size\": [2, 2, 2] }, \"rotate\": [0, 0, 30] },\n                   { \"sphere\": { \"radius\": 1.2 } },\n                   { \"mesh\": \"part.ply\", \"scale\": 0.5 } ] }\n\n\
 See crates/mint-pipeline/src/scene.rs for the whole format (defs and refs, halfspace normal/offset).")]
     Csg(CsgArgs),

@@ -114,6 +114,9 @@ pub fn error_kind(e: &anyhow::Error) -> ErrorKind {
                 _ => {}
             }
         }
+        if let Some(v) = cause.downcast_ref::<mint_volume::VolumeError>() {
+            return volume_kind(v);
+        }
         if cause.downcast_ref::<mint_mesh::MeshError>().is_some() {
             return ErrorKind::Input;
         }
@@ -131,6 +134,15 @@ fn io_kind(e: &mint_io::Error) -> ErrorKind {
     }
 }
 
+/// A volume file's error: the operating system's, or the file's (a bad
+/// header or data, an unsupported variant, a bad request).
+fn volume_kind(v: &mint_volume::VolumeError) -> ErrorKind {
+    match v.kind() {
+        mint_volume::VolumeErrorKind::Io => ErrorKind::Io,
+        _ => ErrorKind::Input,
+    }
+}
+
 fn pipeline_kind(p: &mint_pipeline::PipelineError) -> Option<ErrorKind> {
     use mint_pipeline::PipelineError as P;
     match p {
@@ -139,6 +151,7 @@ fn pipeline_kind(p: &mint_pipeline::PipelineError) -> Option<ErrorKind> {
         P::Budget { .. } => Some(ErrorKind::Budget),
         P::Temp { .. } => Some(ErrorKind::Io),
         P::InFile { source, .. } => pipeline_kind(source),
+        P::Volume(v) => Some(volume_kind(v)),
         P::NonFinite { .. } | P::NonFiniteResult { .. } | P::TransformOverflow { .. } | P::Empty { .. } | P::Unbounded { .. } | P::Scene(_) | P::Grid { .. } => Some(ErrorKind::Input),
         _ => None,
     }

@@ -299,7 +299,11 @@ impl Plan {
     /// shard store of a coloured run holds coloured records (files without
     /// colour count as white).
     pub fn coloured(&self) -> bool {
-        !self.spec.write.no_colour && self.input_coloured() && mint_io::Format::from_path(&self.spec.output).is_ok_and(MeshWriter::holds_colour)
+        // A volume operand has no colour to carry: its scene's output is white.
+        !self.spec.write.no_colour
+            && self.input_coloured()
+            && !self.operands.iter().any(|o| matches!(o, OperandPlan::Volume))
+            && mint_io::Format::from_path(&self.spec.output).is_ok_and(MeshWriter::holds_colour)
     }
 
     /// True when some input mesh file has per-vertex colour.

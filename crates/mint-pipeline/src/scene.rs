@@ -19,6 +19,10 @@
 //!   at z = height), `torus {major, minor}` (around z), `halfspace {normal,
 //!   offset}` (the points p with normal·p <= offset);
 //! - `mesh`: a path to a closed mesh file, relative to the scene file;
+//! - `volume {file, iso}` (or `{file, label}`): a voxel volume's iso-surface
+//!   (or a label's boundary), placed by its own header in its world frame
+//!   (axis-aligned volumes only; no transform), sampled trilinearly on the
+//!   scene's grid;
 //! - `ref`: the name of an entry of the top-level `defs` (cycles are errors).
 //! Optional keys on any node, applied in this order: `scale` (a number or
 //! three), `rotate` (degrees about x, then y, then z), `translate`.
@@ -306,7 +310,7 @@ impl Builder<'_> {
                     let t = self.vec3(*l, k, x)?;
                     local = Transform::translate(t).after(&local);
                 }
-                "union" | "intersection" | "difference" | "sphere" | "box" | "cylinder" | "cone" | "torus" | "halfspace" | "mesh" | "ref" => {
+                "union" | "intersection" | "difference" | "sphere" | "box" | "cylinder" | "cone" | "torus" | "halfspace" | "mesh" | "volume" | "ref" => {
                     if let Some((other, _, _)) = kind {
                         return self.err(*l, format!("key '{k}': a node has one shape or operator, already '{other}'"));
                     }
@@ -355,6 +359,36 @@ impl Builder<'_> {
                     return self.err(l, format!("key 'mesh': no such file {}", path.display()));
                 }
                 Operand::Mesh { paths: vec![path], transform: xf }
+            }
+            "volume" => {
+                let Value::Obj(items) = x else { return self.err(l, "key 'volume': expected an object such as {\"file\": \"ct.nii.gz\", \"iso\": 300}") };
+                let (mut file, mut surface) = (None, None);
+                for (k, kl, v) in items {
+                    match (k.as_str(), v) {
+                        ("file", Value::Str(p)) => file = Some((*kl, self.base.join(p))),
+                        ("file", _) => return self.err(*kl, "key 'file': expected a path to a volume (a file, or a DICOM or TIFF folder)"),
+                        ("iso" | "label", v) => {
+                            if surface.is_some() {
+                                return self.err(*kl, "volume: give one of 'iso' and 'label'");
+                            }
+                            let x = self.num(*kl, k, v)?;
+                            if !(x.abs() <= f32::MAX as f64) {
+                                return self.err(*kl, format!("key '{k}': {x} is not a 32-bit float"));
+                            }
+                            surface = Some(if k == "iso" { VolumeSurface::Iso(x as f32) } else { VolumeSurface::Label(x as f32) });
+                        }
+                        _ => return self.err(*kl, format!("key '{k}': unknown parameter of volume (file, iso, label)")),
+                    }
+                }
+                let Some((fl, input)) = file else { return self.err(l, "volume: missing key 'file'") };
+                let Some(surface) = surface else { return self.err(l, "volume: missing key 'iso' (or 'label')") };
+                if !input.exists() {
+                    return self.err(fl, format!("key 'file': no such file or folder {}", input.display()));
+                }
+                if xf != Transform::default() {
+                    return self.err(l, "volume: a volume is placed by its own header; 'scale', 'rotate' and 'translate' on it (or on a node above it) are not supported");
+                }
+                Operand::Volume(Box::new(VolumeJob { input, raw: None, surface, own_grid: false, open_border: false }))
             }
             "sphere" => Operand::Primitive(prim(Shape::Sphere { radius: { let (fl, f) = self.field(l, k, x, "radius")?; self.positive(fl, "radius", f)? } })),
             "box" => {

@@ -260,9 +260,8 @@ impl<'a> Ctx<'a> {
                 let info = job.open()?.info().clone();
                 Some(((**job).clone(), info))
             }
-            ops if ops.iter().any(|o| matches!(o, Operand::Volume(_))) => {
-                return Err(PipelineError::stage(self.name(), "a volume is an operand of `mint volume` only (not yet of bool and csg)"));
-            }
+            // A volume among other operands is placed in the world frame
+            // (`mesh_grid`, `discretize_task`): no engine frame to map from.
             _ => None,
         };
         Ok(self.volume.get_or_init(|| v).as_ref())
@@ -331,7 +330,10 @@ impl<'a> Ctx<'a> {
             boxes.push(match op {
                 Operand::Primitive(p) => p.bounds(),
                 Operand::Mesh { paths, .. } => leaf[j].ok_or_else(|| PipelineError::Empty { path: paths.first().cloned().unwrap_or_default() })?,
-                Operand::Volume(v) => return Err(PipelineError::stage(&v.input, "a volume is an operand of `mint volume` only (not yet of bool and csg)")),
+                Operand::Volume(v) => {
+                    let info = v.open()?.info().clone();
+                    crate::volume::world_box(&info).map_err(|m| PipelineError::stage(&v.input, format!("as an operand of a scene: {m}")))?
+                }
             });
         }
         let (elo, ehi) = expr_bounds(&self.scene.expr, &boxes);
@@ -353,7 +355,24 @@ impl<'a> Ctx<'a> {
             }
         }
         let g = &self.plan.spec.grid;
-        Grid::around(lo, hi, g.size, g.offset, g.axis.index()).map_err(|source| PipelineError::Grid { path: self.name(), source })
+        // Volume operands stream by slices: the slab axis is the world axis
+        // their slices stack along (one for all of them).
+        let mut axis = g.axis.index();
+        for op in &self.scene.operands {
+            if let Operand::Volume(v) = op {
+                let info = v.open()?.info().clone();
+                let a = crate::volume::world_slice_axis(&info).map_err(|m| PipelineError::stage(&v.input, format!("as an operand of a scene: {m}")))?;
+                match axis {
+                    Some(b) if b != a => {
+                        let name = |x: usize| "xyz".as_bytes()[x] as char;
+                        let why = if g.axis.index().is_some() { "--axis".to_string() } else { "another volume operand".to_string() };
+                        return Err(PipelineError::stage(&v.input, format!("its slices stack along {}, but {why} asks for slabs along {}: volumes stream slice by slice, so the slab axis must be theirs", name(a), name(b))));
+                    }
+                    _ => axis = Some(a),
+                }
+            }
+        }
+        Grid::around(lo, hi, g.size, g.offset, axis).map_err(|source| PipelineError::Grid { path: self.name(), source })
     }
 
     /// Refuses a grid whose per-layer tables would not fit the budget.
@@ -853,6 +872,28 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
         return Ok(DiscretizeResult { operands: vec![Vec::new()], shards: vec![Some(writer.finish()?)], volumes: vec![Some(stats)] });
     }
     for (j, op) in ctx.scene.operands.iter().enumerate() {
+        if let Operand::Volume(job) = op {
+            // A volume among other operands: this task's node planes, on
+            // the scene's world grid.
+            let grid = ctx.grid()?;
+            let planes = crate::volume::task_planes(grid, ctx.plan.parts, task);
+            operands.push(Vec::new());
+            volumes.resize(j, None);
+            if planes.0 >= planes.1 {
+                shards.push(None);
+                volumes.push(None);
+                continue;
+            }
+            let mut volume = job.open()?;
+            let info = volume.info().clone();
+            let p = crate::volume::world_placement(&info, grid).map_err(|m| PipelineError::stage(&job.input, format!("as an operand of a scene: {m}")))?;
+            let dir = make_dir(&out.join(format!("op-{j}")))?;
+            let mut writer = ShardWriter::create(&dir, grid.local_dims()[2] + 1);
+            let stats = crate::volume::discretize_placed(job, &mut volume, &p, grid, planes, &mut writer, ctx.threads, ctx.budget.sort() / 2, ctx.progress)?;
+            shards.push(Some(writer.finish()?));
+            volumes.push(Some(stats));
+            continue;
+        }
         let (Operand::Mesh { .. }, OperandPlan::Mesh { files }) = (op, &ctx.plan.operands[j]) else {
             operands.push(Vec::new());
             shards.push(None);

@@ -373,6 +373,66 @@ impl BorderCut {
     }
 }
 
+/// A volume as an operand of a scene (`mint csg`, `mint bool`), in the
+/// world frame its header declares: which index axis runs along each world
+/// axis, and the signed length of one index step there. Only axis-aligned
+/// volumes (direction cosines a signed permutation, within 1e-6) are placed
+/// so; an oblique one is refused with the reason.
+pub fn world_axes(info: &VolumeInfo) -> Result<[(usize, f64); 3], String> {
+    let m = &info.index_to_world;
+    let mut out = [(0usize, 0.0f64); 3];
+    let mut used = [false; 3];
+    for (w, o) in out.iter_mut().enumerate() {
+        let big = (0..3).fold(0.0f64, |a, v| a.max(m[w][v].abs()));
+        let along: Vec<usize> = (0..3).filter(|&v| m[w][v].abs() > 1e-6 * big).collect();
+        if big == 0.0 || along.len() != 1 || used[along[0]] {
+            return Err("its direction cosines are oblique (not along the world axes); as a scene operand only axis-aligned volumes are placed: mesh it alone with `mint volume` and use that mesh".into());
+        }
+        used[along[0]] = true;
+        *o = (along[0], m[w][along[0]]);
+    }
+    Ok(out)
+}
+
+/// The world box of an axis-aligned volume's domain (the voxels' extent).
+pub fn world_box(info: &VolumeInfo) -> Result<([f64; 3], [f64; 3]), String> {
+    let ax = world_axes(info)?;
+    let m = &info.index_to_world;
+    let mut lo = [0.0; 3];
+    let mut hi = [0.0; 3];
+    for w in 0..3 {
+        let (v, step) = ax[w];
+        let (a, b) = (m[w][3] - 0.5 * step, m[w][3] + (info.dims[v] as f64 - 0.5) * step);
+        (lo[w], hi[w]) = (a.min(b), a.max(b));
+    }
+    Ok((lo, hi))
+}
+
+/// The world axis that the volume's slices stack along (its index k).
+pub fn world_slice_axis(info: &VolumeInfo) -> Result<usize, String> {
+    Ok(world_axes(info)?.iter().position(|&(v, _)| v == 2).unwrap())
+}
+
+/// Where the nodes of a world-frame `grid` sit on an axis-aligned volume
+/// whose slices stack along the grid's slab axis.
+pub fn world_placement(info: &VolumeInfo, grid: &Grid) -> Result<Placement, String> {
+    let ax = world_axes(info)?;
+    let m = &info.index_to_world;
+    let local = grid.local_axes();
+    let [na, nb, ns] = grid.local_dims();
+    let axis: [usize; 3] = std::array::from_fn(|d| ax[local[d]].0);
+    if axis[2] != 2 {
+        return Err(format!("its slices stack along world axis {}, not the grid's slab axis {}", "xyz".as_bytes()[world_slice_axis(info)?] as char, "xyz".as_bytes()[local[2]] as char));
+    }
+    Ok(Placement {
+        axis,
+        start: std::array::from_fn(|d| (grid.origin[local[d]] - m[local[d]][3]) / ax[local[d]].1),
+        step: std::array::from_fn(|d| grid.cell / ax[local[d]].1),
+        dims: info.dims,
+        nodes: [na + 1, nb + 1, ns + 1],
+    })
+}
+
 /// The node planes `[k0, k1)` that discretize task `task` of `parts` takes.
 pub fn task_planes(grid: &Grid, parts: u32, task: u32) -> (u32, u32) {
     let planes = grid.local_dims()[2] as u64 + 1;
@@ -396,6 +456,25 @@ pub fn discretize_planes(
 ) -> Result<VolumeStats, PipelineError> {
     let info = volume.info().clone();
     let p = placement(job, &info, grid);
+    discretize_placed(job, volume, &p, grid, (k0, k1), writer, threads, budget, progress)
+}
+
+/// [`discretize_planes`] for a volume placed by `p` on `grid` (its own
+/// engine frame, or the world frame of a scene: [`world_placement`]).
+#[allow(clippy::too_many_arguments)]
+pub fn discretize_placed(
+    job: &VolumeJob,
+    volume: &mut Volume,
+    p: &Placement,
+    grid: &Grid,
+    (k0, k1): (u32, u32),
+    writer: &mut ShardWriter,
+    threads: usize,
+    budget: u64,
+    progress: &dyn Progress,
+) -> Result<VolumeStats, PipelineError> {
+    let info = volume.info().clone();
+    let p = *p;
     let field = job.surface.field();
     let sampler = PlaneSampler::new(p);
     let ns = grid.local_dims()[2];
@@ -422,7 +501,7 @@ pub fn discretize_planes(
     }
     // Planes per batch: as many as the slices in memory allow (a plane
     // reads at most two slices, neighbours share them), at most 64.
-    let per_plane = (grid.cell / scale(job, &info)[2]).max(1.0);
+    let per_plane = p.step[2].abs().max(1.0);
     let batch = (((room - 2) as f64 / per_plane).floor() as u32).clamp(1, 64);
     let mut stats = VolumeStats::default();
     let mut slices: Vec<f32> = Vec::new();
