@@ -89,7 +89,7 @@ pub fn resample(input: &Path, output: &Path, o: &Opts, p: &dyn mint_pipeline::Pr
 
 /// `a op b` into `output` with `o`.
 pub fn boolean(op: mint_core::expr::BoolOp, a: &Path, b: &Path, output: &Path, o: &Opts, p: &dyn mint_pipeline::Progress) -> Result<mint_pipeline::ResampleSummary, mint_pipeline::PipelineError> {
-    mint_pipeline::run(&o.spec(mint_pipeline::Job::Bool { op, a: vec![a.to_path_buf()], b: vec![b.to_path_buf()] }, output), &o.tuning, p)
+    mint_pipeline::run(&o.spec(mint_pipeline::Job::Bool { op, a: vec![a.to_path_buf()], b: vec![b.to_path_buf()], iso_a: None, iso_b: None }, output), &o.tuning, p)
 }
 
 /// The scene `scene` (read from `scene_name`) into `output` with `o`.

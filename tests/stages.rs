@@ -110,7 +110,7 @@ fn staged_bool_and_csg_equal_one_process() {
     let reference = d.path().join("ref.ply");
     boolean(BoolOp::Difference, &a, &b, &reference, &opts(50_000), &NoProgress).unwrap();
     let want = std::fs::read(&reference).unwrap();
-    let job = Job::Bool { op: BoolOp::Difference, a: vec![a.clone()], b: vec![b.clone()] };
+    let job = Job::Bool { op: BoolOp::Difference, a: vec![a.clone()], b: vec![b.clone()], iso_a: None, iso_b: None };
     let o = opts(50_000).with(|o| { o.spec.max_hole = None; });
     let got = staged_bytes(d.path(), "bool", job, &o, 3, 5, Order::Shuffled(5));
     assert!(got == want, "bool: output bytes differ");

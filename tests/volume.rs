@@ -196,7 +196,7 @@ fn world_ball(dims: [u64; 3], m: [[f64; 4]; 3], c: [f64; 3], r: f64) -> Vec<f32>
 }
 
 #[test]
-fn a_volume_is_an_operand_of_csg_scenes_in_its_world_frame() {
+fn a_volume_is_an_operand_of_csg_scenes_and_bool_in_its_world_frame() {
     let d = tempfile::tempdir().unwrap();
     let (c, r) = ([10.0, -2.0, 9.0], 6.0);
     // x flipped; then index i along world y and j along world x.
@@ -237,6 +237,17 @@ fn a_volume_is_an_operand_of_csg_scenes_in_its_world_frame() {
             assert!(std::fs::read(&o).unwrap() == want, "{n} {extra:?}: other bytes");
         }
     }
+    // `mint bool` with a volume side (--iso-a): the same bytes as the
+    // scene of the same two operands.
+    let sphere = d.path().join("s.ply");
+    ok(&["gen", "sphere", p(&sphere), "--faces", "5000"]);
+    let scene = d.path().join("b.json");
+    std::fs::write(&scene, r#"{ "difference": [ { "volume": { "file": "ball0.nhdr", "iso": 0 } }, { "mesh": "s.ply", "translate": [0, 0, 0] } ] }"#).unwrap();
+    let (by_csg, by_bool) = (d.path().join("bc.ply"), d.path().join("bb.ply"));
+    ok(&["csg", p(&scene), p(&by_csg), "--cell-size", "0.4", "-q"]);
+    ok(&["bool", "difference", p(&d.path().join("ball0.nhdr")), p(&sphere), p(&by_bool), "--iso-a", "0", "--cell-size", "0.4", "-q"]);
+    watertight(&by_bool);
+    assert!(std::fs::read(&by_bool).unwrap() == std::fs::read(&by_csg).unwrap(), "bool and csg differ");
     // What a scene cannot place: an oblique volume, a transformed one.
     let (cs, sn) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
     let oblique = [[cs, -sn, 0.0, 0.0], [sn, cs, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]];

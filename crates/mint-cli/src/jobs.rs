@@ -232,14 +232,40 @@ pub struct BoolArgs {
     /// union, intersection or difference (A minus B).
     #[arg(value_parser = choice::<BoolOp>())]
     pub op: BoolOp,
-    /// First mesh (closed): a file, a directory of tiles or @LIST.
+    /// First mesh (closed): a file, a directory of tiles or @LIST; or a
+    /// voxel volume with --iso-a.
     pub a: PathBuf,
-    /// Second mesh (closed): a file, a directory of tiles or @LIST.
+    /// Second mesh (closed): a file, a directory of tiles or @LIST; or a
+    /// voxel volume with --iso-b.
     pub b: PathBuf,
     /// Output mesh.
     pub output: PathBuf,
+    /// A is a voxel volume (any format `mint volume` reads), read as its
+    /// iso-surface at V in the world frame its header declares (axis-aligned
+    /// volumes), sampled trilinearly on the grid.
+    #[arg(long, value_name = "V", allow_hyphen_values = true)]
+    pub iso_a: Option<f32>,
+    /// B is a voxel volume, read as its iso-surface at V (see --iso-a).
+    #[arg(long, value_name = "V", allow_hyphen_values = true)]
+    pub iso_b: Option<f32>,
     #[command(flatten)]
     pub run: RunArgs,
+}
+
+impl BoolArgs {
+    /// The run's job: each side's files (a volume is one file or folder).
+    pub fn job(&self) -> Result<Job> {
+        let side = |p: &PathBuf, iso: Option<f32>| -> Result<Vec<PathBuf>> {
+            match iso {
+                Some(v) if !v.is_finite() => bail!("--iso-a/--iso-b {v}: not a finite number"),
+                Some(_) => Ok(vec![p.clone()]),
+                None => surface_files(std::slice::from_ref(p)),
+            }
+        };
+        let (fa, fb) = (side(&self.a, self.iso_a)?, side(&self.b, self.iso_b)?);
+        crate::paths::check_output(&self.output, &fa.iter().chain(&fb).map(|p| p.as_path()).collect::<Vec<_>>())?;
+        Ok(Job::Bool { op: self.op, a: fa, b: fb, iso_a: self.iso_a, iso_b: self.iso_b })
+    }
 }
 
 #[derive(Args, Debug, Clone)]
@@ -546,11 +572,7 @@ impl JobCommand {
                 let (inputs, _) = resample_inputs(&files, Some(&work), &work)?;
                 r.spec(Job::Resample { inputs }, &a.output, Some(&a.holes))?
             }
-            JobCommand::Bool(a) => {
-                let (fa, fb) = (surface_files(std::slice::from_ref(&a.a))?, surface_files(std::slice::from_ref(&a.b))?);
-                crate::paths::check_output(&a.output, &fa.iter().chain(&fb).map(|p| p.as_path()).collect::<Vec<_>>())?;
-                r.spec(Job::Bool { op: a.op, a: fa, b: fb }, &a.output, None)?
-            }
+            JobCommand::Bool(a) => r.spec(a.job()?, &a.output, None)?,
             JobCommand::Volume(_) => unreachable!("returned above"),
             JobCommand::Csg(a) => {
                 let text = std::fs::read_to_string(&a.scene).with_context(|| format!("{}: cannot read the scene", a.scene.display()))?;

@@ -70,8 +70,17 @@ impl SlabAxis {
 pub enum Job {
     /// Resample one surface, given as one or more files.
     Resample { inputs: Vec<PathBuf> },
-    /// `a op b` for two surfaces, each one or more files.
-    Bool { op: BoolOp, a: Vec<PathBuf>, b: Vec<PathBuf> },
+    /// `a op b` for two surfaces, each one or more files, or a voxel
+    /// volume's iso-surface at `iso_a` / `iso_b` (one file or folder).
+    Bool {
+        op: BoolOp,
+        a: Vec<PathBuf>,
+        b: Vec<PathBuf>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        iso_a: Option<f32>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        iso_b: Option<f32>,
+    },
     /// A CSG scene file.
     Csg { scene: PathBuf },
     /// The iso-surface (or a label's boundary) of a voxel volume.
@@ -84,7 +93,13 @@ impl Job {
         let mesh = |p: &[PathBuf]| Operand::Mesh { paths: p.to_vec(), transform: Default::default() };
         Ok(match self {
             Job::Resample { inputs } => Scene { expr: Expr::Operand(0), operands: vec![mesh(inputs)] },
-            Job::Bool { op, a, b } => Scene { expr: Expr::Op(*op, vec![Expr::Operand(0), Expr::Operand(1)]), operands: vec![mesh(a), mesh(b)] },
+            Job::Bool { op, a, b, iso_a, iso_b } => {
+                let side = |p: &[PathBuf], iso: Option<f32>| match (iso, p) {
+                    (Some(v), [input]) => Operand::Volume(Box::new(VolumeJob { input: input.clone(), raw: None, surface: crate::scene::VolumeSurface::Iso(v), own_grid: false, open_border: false })),
+                    _ => mesh(p),
+                };
+                Scene { expr: Expr::Op(*op, vec![Expr::Operand(0), Expr::Operand(1)]), operands: vec![side(a, *iso_a), side(b, *iso_b)] }
+            }
             Job::Csg { scene } => {
                 let text = std::fs::read_to_string(scene)
                     .map_err(|source| PipelineError::Temp { path: scene.clone(), op: "reading the scene", source })?;
@@ -98,7 +113,7 @@ impl Job {
     pub fn name(&self) -> String {
         match self {
             Job::Resample { inputs } => files_name(inputs),
-            Job::Bool { op, a, b } => format!("{} {op} {}", files_name(a), files_name(b)),
+            Job::Bool { op, a, b, .. } => format!("{} {op} {}", files_name(a), files_name(b)),
             Job::Csg { scene } => scene.display().to_string(),
             Job::Volume(v) => v.input.display().to_string(),
         }
@@ -120,7 +135,7 @@ impl Job {
         let all = |v: &[PathBuf]| v.iter().map(|p| absolute(p)).collect::<Vec<_>>();
         match self {
             Job::Resample { inputs } => Job::Resample { inputs: all(inputs) },
-            Job::Bool { op, a, b } => Job::Bool { op: *op, a: all(a), b: all(b) },
+            Job::Bool { op, a, b, iso_a, iso_b } => Job::Bool { op: *op, a: all(a), b: all(b), iso_a: *iso_a, iso_b: *iso_b },
             Job::Csg { scene } => Job::Csg { scene: absolute(scene) },
             Job::Volume(v) => Job::Volume(VolumeJob { input: absolute(&v.input), ..v.clone() }),
         }
@@ -224,7 +239,7 @@ impl RunSpec {
 
     /// `a op b` into `output`.
     pub fn boolean(op: BoolOp, a: impl Into<PathBuf>, b: impl Into<PathBuf>, output: impl Into<PathBuf>, size: GridSize) -> RunSpec {
-        RunSpec::new(Job::Bool { op, a: vec![a.into()], b: vec![b.into()] }, output, size)
+        RunSpec::new(Job::Bool { op, a: vec![a.into()], b: vec![b.into()], iso_a: None, iso_b: None }, output, size)
     }
 
     /// The scene file `scene` into `output`.

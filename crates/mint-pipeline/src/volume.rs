@@ -442,27 +442,11 @@ pub fn task_planes(grid: &Grid, parts: u32, task: u32) -> (u32, u32) {
 
 /// Writes the crossings of node planes `[k0, k1)` (each with the S lines
 /// to the plane after it) into `writer`, reading the slices they need from
-/// `volume`, on `threads` threads within `budget` bytes.
+/// `volume` placed by `p` on `grid` (its own engine frame, [`placement`],
+/// or the world frame of a scene, [`world_placement`]), on `threads`
+/// threads within `budget` bytes.
 #[allow(clippy::too_many_arguments)]
 pub fn discretize_planes(
-    job: &VolumeJob,
-    volume: &mut Volume,
-    grid: &Grid,
-    (k0, k1): (u32, u32),
-    writer: &mut ShardWriter,
-    threads: usize,
-    budget: u64,
-    progress: &dyn Progress,
-) -> Result<VolumeStats, PipelineError> {
-    let info = volume.info().clone();
-    let p = placement(job, &info, grid);
-    discretize_placed(job, volume, &p, grid, (k0, k1), writer, threads, budget, progress)
-}
-
-/// [`discretize_planes`] for a volume placed by `p` on `grid` (its own
-/// engine frame, or the world frame of a scene: [`world_placement`]).
-#[allow(clippy::too_many_arguments)]
-pub fn discretize_placed(
     job: &VolumeJob,
     volume: &mut Volume,
     p: &Placement,
