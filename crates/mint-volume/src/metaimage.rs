@@ -104,14 +104,11 @@ pub(crate) fn open(path: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vo
                 } else if toks.len() >= 4 && toks[0].contains('%') {
                     let n = |t: &str| t.parse::<i64>().map_err(|_| err(lineno, format!("ElementDataFile: `{t}` is not a whole number")));
                     let (lo, hi, step) = (n(toks[1])?, n(toks[2])?, n(toks[3])?);
-                    if step <= 0 || hi < lo || (hi - lo) / step > 1 << 24 {
-                        return Err(err(lineno, format!("ElementDataFile: the range {lo}..{hi} by {step} is empty or endless")));
+                    if step <= 0 {
+                        return Err(err(lineno, format!("ElementDataFile: the step {step} is not positive")));
                     }
-                    let files = (0..=(hi - lo) / step)
-                        .map(|c| crate::nrrd::printf_int(toks[0], lo + c * step).map(|n| dir.join(n)))
-                        .collect::<Option<Vec<_>>>()
-                        .ok_or_else(|| err(lineno, format!("ElementDataFile: `{}` is not a pattern with one %d", toks[0])))?;
-                    data = Some((files, 0));
+                    let names = crate::nrrd::pattern_files(toks[0], lo, hi, step).map_err(|why| err(lineno, format!("ElementDataFile: {why}")))?;
+                    data = Some((names.into_iter().map(|n| dir.join(n)).collect(), 0));
                 } else {
                     data = Some((vec![dir.join(value)], 0));
                 }

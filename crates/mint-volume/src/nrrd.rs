@@ -336,16 +336,8 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(Header, usize), VolumeError> {
                 } else if toks.len() >= 4 && toks[0].contains('%') {
                     let n = |t: &str| t.parse::<i64>().map_err(|_| err(lineno, format!("data file: `{t}` in `{value}` is not a whole number")));
                     let (lo, hi, step) = (n(toks[1])?, n(toks[2])?, n(toks[3])?);
-                    if step == 0 || (hi - lo).signum() * step.signum() < 0 || (hi - lo) / step > 1 << 24 {
-                        return Err(err(lineno, format!("data file: `{value}`: the range {lo}..{hi} by {step} is empty or endless")));
-                    }
-                    let mut files = Vec::new();
-                    let mut i = lo;
-                    while (step > 0 && i <= hi) || (step < 0 && i >= hi) {
-                        files.push(dir.join(printf_int(toks[0], i).ok_or_else(|| err(lineno, format!("data file: `{}` is not a pattern with one %d", toks[0])))?));
-                        i += step;
-                    }
-                    h.data = Some(DataFiles::Files(files));
+                    let names = pattern_files(toks[0], lo, hi, step).map_err(|why| err(lineno, format!("data file: `{value}`: {why}")))?;
+                    h.data = Some(DataFiles::Files(names.into_iter().map(|f| dir.join(f)).collect()));
                 } else if toks.len() == 1 {
                     h.data = Some(DataFiles::Files(vec![dir.join(toks[0])]));
                 } else {
@@ -375,6 +367,23 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<(Header, usize), VolumeError> {
     Ok((h, at))
 }
 
+/// The most files a `pattern lo hi step` data file line may name (one
+/// slice each, at least).
+const MAX_PATTERN_FILES: i128 = 1 << 20;
+
+/// The file names of `pattern` for `lo, lo + step, …` up to `hi` (NRRD's
+/// `data file: name%03d lo hi step`, MetaImage's `ElementDataFile`), or why
+/// not: an empty or endless range, or not a pattern with one `%d`.
+pub(crate) fn pattern_files(pattern: &str, lo: i64, hi: i64, step: i64) -> Result<Vec<String>, String> {
+    let (l, h, s) = (lo as i128, hi as i128, step as i128);
+    if s == 0 || (h - l).signum() * s.signum() < 0 || (h - l) / s >= MAX_PATTERN_FILES {
+        return Err(format!("the range {lo}..{hi} by {step} is empty or endless (at most {MAX_PATTERN_FILES} files)"));
+    }
+    (0..=(h - l) / s)
+        .map(|c| printf_int(pattern, (l + c * s) as i64).ok_or_else(|| format!("`{pattern}` is not a pattern with one %d")))
+        .collect()
+}
+
 /// `pattern` with its one `%d`/`%0Nd`/`%Nd` replaced by `i`.
 pub(crate) fn printf_int(pattern: &str, i: i64) -> Option<String> {
     let p = pattern.find('%')?;
@@ -384,7 +393,9 @@ pub(crate) fn printf_int(pattern: &str, i: i64) -> Option<String> {
         return None;
     }
     let spec = &rest[..d];
-    let width: usize = if spec.is_empty() { 0 } else { spec.parse().ok()? };
+    // (A width is a few digits; a huge one, found by fuzzing, made the
+    // formatter ask for petabytes.)
+    let width: usize = if spec.is_empty() { 0 } else { spec.parse().ok().filter(|&w| w <= 32)? };
     let num = if spec.starts_with('0') { format!("{i:0width$}") } else { format!("{i:width$}") };
     Some(format!("{}{}{}", &pattern[..p], num, &rest[d + 1..]))
 }
@@ -426,6 +437,8 @@ mod tests {
         assert_eq!(printf_int("s%3d.raw", 7).unwrap(), "s  7.raw");
         assert!(printf_int("s%s.raw", 7).is_none());
         assert!(printf_int("s%d%d.raw", 7).is_none());
+        // Found by fuzzing: a width of 16 digits made the formatter panic.
+        assert!(printf_int("s%8000000000800d.raw", 7).is_none());
     }
 
     fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
