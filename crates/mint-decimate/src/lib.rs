@@ -274,7 +274,9 @@ pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress
     let (positions, tris) = mint_io::read_mesh(&mid_path)?;
     let colours = vertex_colours(&mid_path)?;
     drop((owner, mid));
-    let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
+    // The intermediate's vertices lie on the input and its faces are chords
+    // of it: its quadrics take the lifted planes.
+    let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error, planes: mint_mesh::qem::Planes::Lifted };
     let tolerance = h * mint_pipeline::spec::defaults::F32_TOLERANCE_CELLS;
     let colour = colours.is_some();
     // The error against the input itself when it is not much larger than
@@ -361,7 +363,7 @@ fn decimate_directly(
     progress: &dyn Progress,
 ) -> Result<DecimateSummary, PipelineError> {
     let input = inputs[0].as_path();
-    let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
+    let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error, ..Default::default() };
     let tolerance = tolerance_of(&w.positions);
     let colour = w.colours.is_some();
     let t = Instant::now();
@@ -644,7 +646,7 @@ pub fn simplify_file(input: &Path, output: &Path, o: &SimplifyFileOptions, progr
     let (input_faces, input_vertices) = (tris.len() as u64, positions.len() as u64 + welded);
     let seconds_read = t0.elapsed().as_secs_f64();
     check_cancel(progress)?;
-    let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error };
+    let so = mint_mesh::SimplifyOptions { target_faces: o.target_faces, max_error: o.max_error, ..Default::default() };
     let tolerance = tolerance_of(&positions);
     let colour = colours.is_some();
     let write = WriteOptions { colours: colour, ..o.write.clone() };

@@ -27,11 +27,15 @@ pub struct SimplifyOptions {
     /// Stop early once the geometric error would exceed this fraction of the
     /// mesh's extent. Default 1.0: the face target decides.
     pub max_error: f32,
+    /// The planes the quadrics gather: the faces' own (a mesh simplified
+    /// itself, the default) or lifted onto the surface through the
+    /// vertices (a resampled intermediate, [`crate::qem::Planes`]).
+    pub planes: crate::qem::Planes,
 }
 
 impl Default for SimplifyOptions {
     fn default() -> Self {
-        SimplifyOptions { target_faces: 1000, max_error: 1.0 }
+        SimplifyOptions { target_faces: 1000, max_error: 1.0, planes: crate::qem::Planes::Faces }
     }
 }
 
@@ -107,11 +111,11 @@ fn simplify_impl(
         let blocks = if faces.len() > crate::qem::BLOCK_MIN_FACES { crate::qem::BLOCKS } else { 1 };
         let (moved, out, moved_colours, collapse) = match colours {
             Some((c, w)) => {
-                let (p, f, c, st) = crate::qem::collapse_coloured(positions, faces, c, w, target, o.max_error as f64, blocks, threads, stop);
+                let (p, f, c, st) = crate::qem::collapse_coloured(positions, faces, o.planes, c, w, target, o.max_error as f64, blocks, threads, stop);
                 (p, f, Some(c), st)
             }
             None => {
-                let (p, f, st) = crate::qem::collapse_in_blocks(positions, faces, target, o.max_error as f64, blocks, threads, stop);
+                let (p, f, st) = crate::qem::collapse_in_blocks(positions, faces, o.planes, target, o.max_error as f64, blocks, threads, stop);
                 (p, f, None, st)
             }
         };

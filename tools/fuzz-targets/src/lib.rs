@@ -1046,7 +1046,7 @@ pub fn simplify(data: &[u8]) {
     let target = (fraction * faces.len() as f64) as u64;
     // One thread: no spawned threads for the leak checker to trip on (the
     // thread count does not change the result: a unit test checks it).
-    let (p, f, _) = mint_mesh::qem::collapse_in_blocks(&positions, &faces, target, f64::INFINITY, blocks, 1, &|| false);
+    let (p, f, _) = mint_mesh::qem::collapse_in_blocks(&positions, &faces, mint_mesh::qem::Planes::Faces, target, f64::INFINITY, blocks, 1, &|| false);
     assert!(f.len() <= faces.len(), "faces grew");
     assert!(f.iter().flatten().all(|&v| (v as usize) < p.len()), "an index out of range");
     assert!(f.iter().flatten().all(|&v| p[v as usize].iter().all(|c| c.is_finite())), "a non-finite position");
@@ -1056,14 +1056,14 @@ pub fn simplify(data: &[u8]) {
         assert_eq!(after.genera, before.genera, "{blocks} blocks, target {target}: genera changed");
     }
     if target >= 4 {
-        if let Ok((_, _, r)) = mint_mesh::simplify(&positions, &faces, &mint_mesh::SimplifyOptions { target_faces: target, max_error: 1.0 }) {
+        if let Ok((_, _, r)) = mint_mesh::simplify(&positions, &faces, &mint_mesh::SimplifyOptions { target_faces: target, max_error: 1.0, ..Default::default() }) {
             assert!(!r.input_watertight || r.output_watertight, "simplify handed over a worse mesh: {r:?}");
         }
     }
     // The colour-aware collapse (each vertex coloured by its bytes): the
     // same checks, and every kept colour within the range of the input's.
     let colours: Vec<[u8; 4]> = vb.chunks_exact(3).map(|c| [c[0], c[1], c[2], 255]).collect();
-    let (p, f, c, _) = mint_mesh::qem::collapse_coloured(&positions, &faces, &colours, 0.01, target, f64::INFINITY, blocks, 1, &|| false);
+    let (p, f, c, _) = mint_mesh::qem::collapse_coloured(&positions, &faces, mint_mesh::qem::Planes::Faces, &colours, 0.01, target, f64::INFINITY, blocks, 1, &|| false);
     assert!(f.len() <= faces.len() && c.len() == p.len(), "faces grew, or colours for other vertices");
     assert!(f.iter().flatten().all(|&v| (v as usize) < p.len() && p[v as usize].iter().all(|x| x.is_finite())), "an index out of range or a non-finite position");
     for k in 0..3 {
