@@ -598,6 +598,67 @@ fn decimate_error_never_grows_with_a_finer_intermediate() {
     }
 }
 
+/// Issue 30: thin shapes decimated to 10% keep their components and genera
+/// exactly (a plate 0.03 thick with three holes and a slot, a torus whose
+/// tube is 2% of its size, a tree of thin cylinders), the plate keeps its
+/// thickness within 10%, and the error in the summary agrees with `mint
+/// distance` within 10%.
+#[test]
+fn thin_shapes_keep_components_genus_and_thickness_at_ten_percent() {
+    let d = tempfile::tempdir().unwrap();
+    let shapes = [
+        (
+            "plate",
+            r#"{"difference": [{"box": {"size": [2, 2, 0.03]}},
+              {"cylinder": {"radius": 0.3, "height": 1}, "translate": [0.5, 0.5, 0]},
+              {"cylinder": {"radius": 0.2, "height": 1}, "translate": [-0.5, 0.4, 0]},
+              {"cylinder": {"radius": 0.1, "height": 1}, "translate": [0.3, -0.6, 0]},
+              {"box": {"size": [0.6, 0.05, 1]}, "translate": [-0.4, -0.4, 0]}]}"#,
+            "0.012",
+            vec![4],
+        ),
+        ("torus", r#"{"torus": {"major": 1, "minor": 0.0416}}"#, "0.008", vec![1]),
+        (
+            "tree",
+            r#"{"union": [{"cylinder": {"radius": 0.03, "height": 2}},
+              {"cylinder": {"radius": 0.02, "height": 1.2}, "rotate": [40, 0, 0], "translate": [0, -0.35, 0.6]},
+              {"cylinder": {"radius": 0.015, "height": 0.8}, "rotate": [0, 45, 0], "translate": [0.25, 0, 0.8]}]}"#,
+            "0.006",
+            vec![0],
+        ),
+    ];
+    let check = |f: &Path| -> serde_json::Value { serde_json::from_str(&ok(&["check", p(f), "--json"])).unwrap() };
+    for (name, scene, cell, genera) in shapes {
+        let json = d.path().join(format!("{name}.json"));
+        std::fs::write(&json, scene).unwrap();
+        let input = d.path().join(format!("{name}.ply"));
+        ok(&["csg", p(&json), p(&input), "--cell-size", cell, "--quiet"]);
+        let before = check(&input);
+        assert_eq!(before["genera"], serde_json::json!(genera), "{name} as generated: {before}");
+        let faces = before["faces"].as_u64().unwrap();
+        let target = faces / 10;
+        let out = d.path().join(format!("{name}-10.ply"));
+        let j: serde_json::Value = serde_json::from_str(&ok(&["decimate", p(&input), p(&out), "--faces", &target.to_string(), "--json", "--quiet"])).unwrap();
+        let after = check(&out);
+        assert_eq!(
+            (after["watertight"].as_bool(), &after["components"], &after["genera"]),
+            (Some(true), &before["components"], &before["genera"]),
+            "{name}: {after}"
+        );
+        let got = after["faces"].as_u64().unwrap();
+        assert!(got <= target && got * 100 >= target * 98, "{name}: {got} faces for {target}");
+        if name == "plate" {
+            let thick = |c: &serde_json::Value| c["bbox_max"][2].as_f64().unwrap() - c["bbox_min"][2].as_f64().unwrap();
+            let (t0, t1) = (thick(&before), thick(&after));
+            assert!((t1 - t0).abs() <= 0.1 * t0, "plate thickness {t0} -> {t1}");
+        }
+        let dist: serde_json::Value = serde_json::from_str(&ok(&["distance", p(&input), p(&out), "--samples", "200000", "--json"])).unwrap();
+        let measured = dist["a_to_b"]["mean"].as_f64().unwrap().max(dist["b_to_a"]["mean"].as_f64().unwrap());
+        let reported = j["error"]["mean"].as_f64().unwrap();
+        assert!((reported - measured).abs() <= 0.1 * measured, "{name}: summary mean error {reported:.4e}, mint distance {measured:.4e}");
+    }
+}
+
 /// `mint simplify`: an STL soup is welded, simplified to its target within
 /// 2%, and stays watertight with its genus; without welding nothing can
 /// collapse, and the summary warns.
