@@ -1022,8 +1022,9 @@ pub fn resample(data: &[u8]) {
 
 /// The in-core simplifier on small meshes over the half-cell lattice:
 /// `data[0]` picks the target (low 4 bits: a fraction of the faces) and
-/// the blocks (high bits: 1 to 4), `data[1]` the vertex count, then 3 bytes
-/// a vertex and 3 bytes a face. Checks that nothing panics, that indices
+/// the blocks (high bits: 1 to 4), `data[1]` the vertex count (low 5 bits)
+/// and the quadrics' planes (bit 7: lifted, as for an intermediate), then
+/// 3 bytes a vertex and 3 bytes a face. Checks that nothing panics, that indices
 /// stay valid and positions finite, and that a closed, 2-manifold,
 /// oriented input keeps that and its genera under `qem::collapse_in_blocks`
 /// itself (not only under `simplify`, which may relax its target), and
@@ -1035,6 +1036,7 @@ pub fn simplify(data: &[u8]) {
     let fraction = f64::from(data[0] & 15) / 15.0;
     let blocks = usize::from(data[0] >> 4) % 4 + 1;
     let nv = (data[1] % 32) as usize + 4;
+    let planes = if data[1] & 0x80 != 0 { mint_mesh::qem::Planes::Lifted } else { mint_mesh::qem::Planes::Faces };
     let rest = &data[2..];
     if rest.len() < 3 * nv + 3 {
         return;
@@ -1046,7 +1048,7 @@ pub fn simplify(data: &[u8]) {
     let target = (fraction * faces.len() as f64) as u64;
     // One thread: no spawned threads for the leak checker to trip on (the
     // thread count does not change the result: a unit test checks it).
-    let (p, f, _) = mint_mesh::qem::collapse_in_blocks(&positions, &faces, mint_mesh::qem::Planes::Faces, target, f64::INFINITY, blocks, 1, &|| false);
+    let (p, f, _) = mint_mesh::qem::collapse_in_blocks(&positions, &faces, planes, target, f64::INFINITY, blocks, 1, &|| false);
     assert!(f.len() <= faces.len(), "faces grew");
     assert!(f.iter().flatten().all(|&v| (v as usize) < p.len()), "an index out of range");
     assert!(f.iter().flatten().all(|&v| p[v as usize].iter().all(|c| c.is_finite())), "a non-finite position");
@@ -1056,14 +1058,14 @@ pub fn simplify(data: &[u8]) {
         assert_eq!(after.genera, before.genera, "{blocks} blocks, target {target}: genera changed");
     }
     if target >= 4 {
-        if let Ok((_, _, r)) = mint_mesh::simplify(&positions, &faces, &mint_mesh::SimplifyOptions { target_faces: target, max_error: 1.0, ..Default::default() }) {
+        if let Ok((_, _, r)) = mint_mesh::simplify(&positions, &faces, &mint_mesh::SimplifyOptions { target_faces: target, max_error: 1.0, planes }) {
             assert!(!r.input_watertight || r.output_watertight, "simplify handed over a worse mesh: {r:?}");
         }
     }
     // The colour-aware collapse (each vertex coloured by its bytes): the
     // same checks, and every kept colour within the range of the input's.
     let colours: Vec<[u8; 4]> = vb.chunks_exact(3).map(|c| [c[0], c[1], c[2], 255]).collect();
-    let (p, f, c, _) = mint_mesh::qem::collapse_coloured(&positions, &faces, mint_mesh::qem::Planes::Faces, &colours, 0.01, target, f64::INFINITY, blocks, 1, &|| false);
+    let (p, f, c, _) = mint_mesh::qem::collapse_coloured(&positions, &faces, planes, &colours, 0.01, target, f64::INFINITY, blocks, 1, &|| false);
     assert!(f.len() <= faces.len() && c.len() == p.len(), "faces grew, or colours for other vertices");
     assert!(f.iter().flatten().all(|&v| (v as usize) < p.len() && p[v as usize].iter().all(|x| x.is_finite())), "an index out of range or a non-finite position");
     for k in 0..3 {
