@@ -16,6 +16,7 @@
 //! - [`distance`](mod@distance): [`distance()`] and [`symmetric_distance()`],
 //!   Metro-style sampled surface distances ([`DistanceReport`]) that are
 //!   deterministic for a seed whatever the thread count.
+//! - [`normals`]: area-weighted unit vertex normals.
 //! - [`rng`]: [`SplitMix64`], the tiny seeded generator the sampler uses.
 //! - [`error`]: [`MeshError`], the typed errors for bad input.
 //!
@@ -27,6 +28,7 @@ pub mod bvh;
 pub mod check;
 pub mod distance;
 pub mod error;
+pub mod normals;
 pub mod qem;
 pub mod rng;
 pub mod selfx;

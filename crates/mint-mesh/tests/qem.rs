@@ -290,8 +290,7 @@ fn lifted_planes_keep_a_chord_mesh_closer_to_its_sphere() {
     // A UV sphere's faces are chords: collapsed 4:1 on its faces' planes the
     // vertices settle inside; on lifted planes the result lies closer to
     // the sphere itself (0.80x the mean distance when this was written;
-    // asked: 0.85x), and keeps
-    // its topology.
+    // asked: 0.85x), and keeps its topology.
     let m = uv_sphere(1.0, 80, 160);
     let run = |planes: Planes| {
         let (p, f, _) = collapse_in_blocks(&m.0, &m.1, planes, 6000, f64::INFINITY, 1, 1, &|| false);

@@ -252,16 +252,7 @@ pub fn face_normal(positions: &[[f64; 3]], f: [u32; 3]) -> DVec3 {
 }
 
 /// Unit area-weighted vertex normals (zero for unused vertices).
-pub fn vertex_normals(positions: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<DVec3> {
-    let mut n = vec![DVec3::ZERO; positions.len()];
-    for f in faces {
-        let fnrm = face_normal(positions, *f);
-        for &i in f {
-            n[i as usize] += fnrm;
-        }
-    }
-    n.into_iter().map(DVec3::normalize_or_zero).collect()
-}
+pub use mint_mesh::normals::vertex_normals;
 
 /// Vertices on an edge used by exactly one face (or by more than two).
 pub fn boundary_vertices(n: usize, faces: &[[u32; 3]]) -> Vec<bool> {
