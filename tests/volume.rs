@@ -296,7 +296,11 @@ fn a_volume_gives_the_same_bytes_under_every_configuration() {
     let d = tempfile::tempdir().unwrap();
     let vol = d.path().join("g.nhdr");
     ok(&["gen", "volume", p(&vol), "--dims", "70,60,50", "--spacing", "0.8,0.8,1.25"]);
-    for grid in [&[][..], &["--cell-size", "1.7"][..]] {
+    // Wide and flat: five bands of rows per plane, so that one thread
+    // crosses them in two groups and two threads in one.
+    let wide = d.path().join("w.nhdr");
+    ok(&["gen", "volume", p(&wide), "--dims", "700,400,5"]);
+    for (vol, grid) in [(&vol, &[][..]), (&vol, &["--cell-size", "1.7"][..]), (&wide, &[][..])] {
         let mut want: Option<Vec<u8>> = None;
         let work = d.path().join("work");
         let variants: [&[&str]; 6] = [&["--threads", "1"], &["--threads", "2"], &["--parts", "3", "--slabs", "4"], &["--mem", "70M", "--slab", "3"], &["--parts", "7", "--threads", "2"], &["--work", p(&work)]];

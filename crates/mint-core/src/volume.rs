@@ -176,6 +176,15 @@ impl PlaneSampler {
         let [na1, nb1, _] = self.p.nodes.map(|n| n as usize);
         out.clear();
         out.resize(na1 * nb1, f32::NEG_INFINITY);
+        self.sample_rows(field, at, 0, out);
+    }
+
+    /// Rows `first ..` of [`Self::sample`]'s plane into `out` (whole rows
+    /// of `na1` nodes, as many as it holds), so that bands of one plane can
+    /// be sampled in parallel.
+    pub fn sample_rows(&self, field: Field, at: Option<(&[f32], &[f32], f32)>, first: usize, out: &mut [f32]) {
+        let na1 = self.p.nodes[0] as usize;
+        out.fill(f32::NEG_INFINITY);
         let Some((lower, upper, w)) = at else { return };
         let nx = self.p.dims[0] as usize;
         // Offsets in a slice of one step along local a and b.
@@ -194,9 +203,10 @@ impl PlaneSampler {
             x0 + wb * (x1 - x0)
         };
         let fast = self.p.on_voxels() && w == 0.0 && matches!(field, Field::Iso(_));
-        for (j, tb) in self.taps[1].iter().enumerate() {
+        let rows = out.len() / na1;
+        for (r, tb) in self.taps[1][first..first + rows].iter().enumerate() {
             let Some((b0, wb)) = *tb else { continue };
-            let row = &mut out[j * na1..(j + 1) * na1];
+            let row = &mut out[r * na1..(r + 1) * na1];
             if fast && sa == 1 {
                 // Own resolution: a run of samples is a run of nodes.
                 let first = self.taps[0].iter().position(|t| t.is_some());
@@ -247,9 +257,15 @@ fn crossing(n: u32, f0: f32, f1: f32, iso: f32, (lo, hi): (f64, f64)) -> f64 {
 /// The inside bits of one node plane, a row of `words` u64 per line of
 /// nodes along b (bit `i % 64` of word `i / 64` is node `i` along a).
 fn inside_bits(nodes: &[f32], na1: usize, nb1: usize, iso: f32, out: &mut Vec<u64>) {
-    let words = na1.div_ceil(64);
     out.clear();
-    out.resize(words * nb1, 0);
+    out.resize(na1.div_ceil(64) * nb1, 0);
+    inside_rows(nodes, na1, iso, out);
+}
+
+/// [`inside_bits`] of whole rows of nodes into `out` (`na1.div_ceil(64)`
+/// words per row), for bands of a plane in parallel.
+pub fn inside_rows(nodes: &[f32], na1: usize, iso: f32, out: &mut [u64]) {
+    let words = na1.div_ceil(64);
     for (row, bits) in nodes.chunks_exact(na1).zip(out.chunks_exact_mut(words)) {
         for (chunk, w) in row.chunks(64).zip(bits.iter_mut()) {
             let mut x = 0u64;
@@ -287,13 +303,49 @@ fn each_bit(bits: &[u64], n: usize, mut f: impl FnMut(usize)) {
 pub fn plane_crossings(p: &Placement, field: Field, k: u32, nodes: &[f32], next: Option<&[f32]>, out: &mut Vec<Intercept>) {
     let [na1, nb1, _] = p.nodes.map(|n| n as usize);
     let iso = field.iso();
+    let (mut cur, mut nxt) = (Vec::new(), Vec::new());
+    inside_bits(nodes, na1, nb1, iso, &mut cur);
+    let next = next.map(|n| {
+        inside_bits(n, na1, nb1, iso, &mut nxt);
+        (n, &nxt[..])
+    });
+    band_crossings(p, field, k, 0..nb1, (nodes, &cur), next, out);
+}
+
+/// Rows per band of a plane `na1` nodes wide: about 64K nodes, so that a
+/// band's crossings ([`band_capacity`]) stay a few MiB at any width. It
+/// depends on the grid alone, so the order of records does too.
+pub fn band_rows(na1: usize) -> usize {
+    (65536 / na1.max(1)).max(1)
+}
+
+/// The most crossings rows `rows` of a plane `na1` wide can hold: one per
+/// A, B and S edge.
+pub fn band_capacity(na1: usize, rows: usize) -> usize {
+    3 * na1 * rows
+}
+
+/// [`plane_crossings`] of rows `rows` only (A edges along those rows, B
+/// edges from each of them to the next row, S edges from their nodes), from
+/// the whole plane's node values and inside bits ([`inside_rows`]) and the
+/// next plane's: bands of one plane can be found in parallel and written in
+/// band order, so that a plane's crossings need not be held at once.
+pub fn band_crossings(
+    p: &Placement,
+    field: Field,
+    k: u32,
+    rows: std::ops::Range<usize>,
+    (nodes, cur): (&[f32], &[u64]),
+    next: Option<(&[f32], &[u64])>,
+    out: &mut Vec<Intercept>,
+) {
+    let [na1, nb1, _] = p.nodes.map(|n| n as usize);
+    let iso = field.iso();
     let (da, db, ds) = (p.domain(0), p.domain(1), p.domain(2));
     let words = na1.div_ceil(64);
-    let mut cur = Vec::new();
-    inside_bits(nodes, na1, nb1, iso, &mut cur);
     let mut diff = vec![0u64; words];
     // A: node i against node i + 1 of the same row.
-    for j in 0..nb1 {
+    for j in rows.clone() {
         let bits = &cur[j * words..(j + 1) * words];
         for w in 0..words {
             let carry = if w + 1 < words { bits[w + 1] << 63 } else { 0 };
@@ -306,7 +358,7 @@ pub fn plane_crossings(p: &Placement, field: Field, k: u32, nodes: &[f32], next:
         });
     }
     // B: row j against row j + 1.
-    for j in 0..nb1.saturating_sub(1) {
+    for j in rows.start..rows.end.min(nb1.saturating_sub(1)) {
         let (b0, b1) = (&cur[j * words..(j + 1) * words], &cur[(j + 1) * words..(j + 2) * words]);
         for w in 0..words {
             diff[w] = b0[w] ^ b1[w];
@@ -317,11 +369,9 @@ pub fn plane_crossings(p: &Placement, field: Field, k: u32, nodes: &[f32], next:
             out.push(Intercept::new(k, FAMILY_B, i as u32, crossing(j as u32, f0, f1, iso, db), f1 >= iso));
         });
     }
-    let Some(next) = next else { return };
+    let Some((next, nxt)) = next else { return };
     // S: this plane against the next, node by node.
-    let mut nxt = Vec::new();
-    inside_bits(next, na1, nb1, iso, &mut nxt);
-    for j in 0..nb1 {
+    for j in rows {
         for w in 0..words {
             diff[w] = cur[j * words + w] ^ nxt[j * words + w];
         }
@@ -656,5 +706,58 @@ mod tests {
         sampler.sample(Field::Iso(0.0), Some((&s[4..8], &s[8..12], w)), &mut out);
         assert_eq!(out[5], 1.25);
         assert_eq!(out[0], f32::NEG_INFINITY);
+    }
+
+    proptest::proptest! {
+        /// Bands of any height, sampled and crossed apart, give the whole
+        /// plane's node values and crossings, in band order.
+        #[test]
+        fn bands_give_the_planes_crossings(dims in proptest::array::uniform3(1u64..7), seed in 0u64..1000, rows in 1usize..9, step in 0.5f64..2.0) {
+            let n = (dims[0] * dims[1] * dims[2]) as usize;
+            let mut x = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+            let s: Vec<f32> = (0..n).map(|_| { x ^= x << 13; x ^= x >> 7; x ^= x << 17; (x % 5) as f32 }).collect();
+            let nodes = dims.map(|d| ((d as f64 + 1.0) / step).ceil() as u32 + 2);
+            let p = Placement { axis: [0, 1, 2], start: [-1.0, -1.0, -1.0], step: [step, step, step], dims, nodes };
+            let field = Field::Iso(2.0);
+            let sampler = PlaneSampler::new(p);
+            let slice = (dims[0] * dims[1]) as usize;
+            let [na1, nb1, ns1] = p.nodes.map(|n| n as usize);
+            let words = na1.div_ceil(64);
+            let at = |k: u32| p.slices_of_plane(k).map(|(z, w)| {
+                let lo = &s[z as usize * slice..(z as usize + 1) * slice];
+                (lo, if w > 0.0 { &s[(z as usize + 1) * slice..(z as usize + 2) * slice] } else { lo }, w)
+            });
+            let whole = volume_planes(&p, field, &s);
+            for k in 0..ns1 as u32 {
+                let mut planes = [Vec::new(), Vec::new()];
+                let mut bits = [vec![0u64; words * nb1], vec![0u64; words * nb1]];
+                for (d, plane) in planes.iter_mut().enumerate() {
+                    let q = (k as usize + d).min(ns1 - 1) as u32;
+                    let mut want = Vec::new();
+                    sampler.sample(field, at(q), &mut want);
+                    plane.resize(na1 * nb1, 0.0);
+                    for (b, chunk) in plane.chunks_mut(rows * na1).enumerate() {
+                        sampler.sample_rows(field, at(q), b * rows, chunk);
+                    }
+                    proptest::prop_assert_eq!(&*plane, &want[..]);
+                    for (v, w) in plane.chunks(rows * na1).zip(bits[d].chunks_mut(rows * words)) {
+                        inside_rows(v, na1, 2.0, w);
+                    }
+                }
+                let next = (k as usize + 1 < ns1).then(|| (&planes[1][..], &bits[1][..]));
+                let mut got = Vec::new();
+                for b in (0..nb1).step_by(rows) {
+                    band_crossings(&p, field, k, b..(b + rows).min(nb1), (&planes[0], &bits[0]), next, &mut got);
+                }
+                let mut want = whole[k as usize].clone();
+                proptest::prop_assert!(got.len() <= band_capacity(na1, nb1));
+                if rows >= nb1 {
+                    proptest::prop_assert_eq!(&got, &want);
+                }
+                got.sort_by(|a, b| a.sort_key().cmp(&b.sort_key()));
+                want.sort_by(|a, b| a.sort_key().cmp(&b.sort_key()));
+                proptest::prop_assert_eq!(got, want);
+            }
+        }
     }
 }

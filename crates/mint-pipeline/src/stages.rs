@@ -869,7 +869,7 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
         let dir = make_dir(&out.join("op-0"))?;
         let mut writer = ShardWriter::create(&dir, grid.local_dims()[2] + 1);
         let p = crate::volume::placement(job, volume.info(), grid);
-        let stats = crate::volume::discretize_planes(job, &mut volume, &p, grid, planes, &mut writer, ctx.threads, ctx.budget.sort() / 2, ctx.progress)?;
+        let stats = crate::volume::discretize_planes(job, &mut volume, &p, grid, planes, &mut writer, ctx.threads, ctx.budget.volume(), ctx.progress)?;
         return Ok(DiscretizeResult { operands: vec![Vec::new()], shards: vec![Some(writer.finish()?)], volumes: vec![Some(stats)] });
     }
     for (j, op) in ctx.scene.operands.iter().enumerate() {
@@ -890,7 +890,7 @@ fn discretize_task(ctx: &Ctx, task: u32, out: &Path) -> Result<DiscretizeResult,
             let p = crate::volume::world_placement(&info, grid).map_err(|m| PipelineError::stage(&job.input, format!("as an operand of a scene: {m}")))?;
             let dir = make_dir(&out.join(format!("op-{j}")))?;
             let mut writer = ShardWriter::create(&dir, grid.local_dims()[2] + 1);
-            let stats = crate::volume::discretize_planes(job, &mut volume, &p, grid, planes, &mut writer, ctx.threads, ctx.budget.sort() / 2, ctx.progress)?;
+            let stats = crate::volume::discretize_planes(job, &mut volume, &p, grid, planes, &mut writer, ctx.threads, ctx.budget.volume(), ctx.progress)?;
             shards.push(Some(writer.finish()?));
             volumes.push(Some(stats));
             continue;

@@ -14,13 +14,14 @@
 //! faces when that map mirrors.
 //!
 //! Memory: a task holds the slices its batch of planes reads (at least
-//! three) and two node planes per thread; the batch shrinks to the budget.
+//! two), two node planes, and the crossings of one group of bands of a
+//! plane ([`discretize_planes`]); the batch shrinks to the budget.
 
 use crate::error::PipelineError;
 use crate::progress::{check_cancel, Progress};
 use crate::scene::VolumeJob;
 use mint_core::grid::{Grid, GridSize};
-use mint_core::volume::{plane_crossings, Placement, PlaneSampler};
+use mint_core::volume::{band_capacity, band_crossings, band_rows, inside_rows, Placement, PlaneSampler};
 use mint_core::Intercept;
 use mint_store::ShardWriter;
 use mint_volume::{Volume, VolumeInfo};
@@ -445,6 +446,14 @@ pub fn task_planes(grid: &Grid, parts: u32, task: u32) -> (u32, u32) {
 /// `volume` placed by `p` on `grid` (its own engine frame, [`placement`],
 /// or the world frame of a scene, [`world_placement`]), on `threads`
 /// threads within `budget` bytes.
+///
+/// Planes are worked one after the other, each by every thread: a plane's
+/// rows are cut into bands ([`band_rows`], set by the grid alone), bands
+/// are sampled and crossed in parallel, a group of them at a time, and
+/// written in band order. Memory is the slices of a batch of planes, two
+/// node planes and their inside bits, and one group of bands' worst-case
+/// crossings, whatever the volume holds; the records' order depends on the
+/// grid only, never on threads or budget.
 #[allow(clippy::too_many_arguments)]
 pub fn discretize_planes(
     job: &VolumeJob,
@@ -457,45 +466,68 @@ pub fn discretize_planes(
     budget: u64,
     progress: &dyn Progress,
 ) -> Result<VolumeStats, PipelineError> {
+    use rayon::prelude::*;
     let info = volume.info().clone();
     let p = *p;
     let field = job.surface.field();
+    let iso = field.iso();
     let sampler = PlaneSampler::new(p);
     let ns = grid.local_dims()[2];
+    let [na1, nb1, _] = p.nodes.map(|n| n as usize);
+    let words = na1.div_ceil(64);
+    let rows = band_rows(na1);
+    let bands = nb1.div_ceil(rows);
     let slice_len = info.slice_len();
     let slice_bytes = slice_len as u64 * 4;
-    let plane_bytes = p.nodes[0] as u64 * p.nodes[1] as u64 * 4;
     let threads = threads.max(1);
-    // Two node planes and a plane's records (bounded by its edges) per thread.
-    let per_thread = 2 * plane_bytes + 3 * plane_bytes * 4;
-    let fixed = threads as u64 * per_thread;
-    let room = budget.saturating_sub(fixed) / slice_bytes.max(1);
-    if room < 3 {
+    // Two node planes with their bits, two slices, one band per thread.
+    let planes_bytes = 2 * (na1 * nb1 * 4 + nb1 * words * 8) as u64;
+    let band_bytes = (band_capacity(na1, rows) * std::mem::size_of::<Intercept>()) as u64;
+    let least_group = threads.min(bands);
+    let least = planes_bytes + 2 * slice_bytes + least_group as u64 * band_bytes;
+    if least > budget {
         return Err(PipelineError::budget(
             &job.input,
             format!(
-                "one slice of {} x {} samples needs {} MiB and a task at least three of them plus {} MiB of planes: more than the memory budget ({} MiB); use more --mem or fewer threads",
+                "one slice of {} x {} samples needs {} MiB, and a task two of them, two planes of {} x {} nodes and {} bands of crossings: {} MiB, more than the memory budget ({} MiB); use more --mem or fewer threads",
                 info.dims[0],
                 info.dims[1],
                 slice_bytes >> 20,
-                fixed >> 20,
+                na1,
+                nb1,
+                least_group,
+                least.div_ceil(1 << 20),
                 budget >> 20
             ),
         ));
     }
+    // Up to four bands per thread in a group, then the rest for slices.
+    let spare = budget - least;
+    let group = (least_group + (spare / 2 / band_bytes) as usize).min(4 * threads).min(bands);
+    let room = (budget - planes_bytes - group as u64 * band_bytes) / slice_bytes.max(1);
     // Planes per batch: as many as the slices in memory allow (a plane
     // reads at most two slices, neighbours share them), at most 64.
     let per_plane = p.step[2].abs().max(1.0);
-    let batch = (((room - 2) as f64 / per_plane).floor() as u32).clamp(1, 64);
+    let batch = (((room - 2) as f64 / per_plane).floor() as u32 + 1).clamp(1, 64);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .thread_name(|i| format!("mint-volume-{i}"))
+        .build()
+        .map_err(|e| PipelineError::stage(&job.input, format!("starting {threads} volume threads: {e}")))?;
     let mut stats = VolumeStats::default();
     let mut slices: Vec<f32> = Vec::new();
     let mut have: (u64, u64) = (0, 0);
-    let mut k = k0;
+    let (mut cur, mut nxt) = (vec![0f32; na1 * nb1], vec![0f32; na1 * nb1]);
+    let (mut cur_bits, mut nxt_bits) = (vec![0u64; nb1 * words], vec![0u64; nb1 * words]);
+    let mut outs: Vec<Vec<Intercept>> = (0..group).map(|_| Vec::with_capacity(band_capacity(na1, rows))).collect();
+    // Planes sampled: k0 ..= last (the one after k1 - 1 for its S lines,
+    // unless k1 - 1 is the last plane of the grid).
+    let last = k1.min(ns);
+    let mut q = k0;
     progress.start(crate::progress::DISCRETIZE, (k1 - k0) as u64);
-    while k < k1 {
-        let end = (k + batch).min(k1);
-        // Slices read by planes k ..= end (the last for the S lines only).
-        let (z0, z1) = p.slice_range(k, end.min(ns));
+    while q <= last {
+        let end = (q + batch - 1).min(last);
+        let (z0, z1) = p.slice_range(q, end);
         let mut fresh = 0..0;
         if z1 > z0 && (z0, z1) != have {
             // Keep the slices this batch shares with the last one (moved to
@@ -517,64 +549,71 @@ pub fn discretize_planes(
             }
             have = (z0, z1);
         }
-        let slice_of = |z: u64| -> &[f32] {
-            let i = (z - have.0) as usize;
-            &slices[i * slice_len..(i + 1) * slice_len]
-        };
-        let nodes_of = |k: u32, out: &mut Vec<f32>| {
-            let at = p.slices_of_plane(k).map(|(z, w)| (slice_of(z), if w > 0.0 { slice_of(z + 1) } else { slice_of(z) }, w));
-            sampler.sample(field, at, out);
-        };
-        // Planes k .. end in `threads` runs; each thread samples its first
-        // plane and every next one once.
-        let count = end - k;
-        let runs = (threads as u32).min(count);
-        let fresh_values = &slices[fresh];
-        let (results, fresh_stats): (Vec<Vec<Vec<Intercept>>>, VolumeStats) = std::thread::scope(|s| {
-            // The new slices' statistics, beside the planes' work.
-            let st = s.spawn(move || {
-                let mut st = VolumeStats::default();
-                sample_stats(fresh_values, &mut st);
-                st
-            });
-            let handles: Vec<_> = (0..runs)
-                .map(|t| {
-                    let (a, b) = (k + count * t / runs, k + count * (t + 1) / runs);
-                    let nodes_of = &nodes_of;
-                    s.spawn(move || {
-                        let (mut cur, mut nxt) = (Vec::new(), Vec::new());
-                        nodes_of(a, &mut cur);
-                        let mut planes = Vec::with_capacity((b - a) as usize);
-                        for q in a..b {
-                            let mut out = Vec::new();
-                            if q < ns {
-                                nodes_of(q + 1, &mut nxt);
-                                plane_crossings(&p, field, q, &cur, Some(&nxt), &mut out);
-                                std::mem::swap(&mut cur, &mut nxt);
-                            } else {
-                                plane_crossings(&p, field, q, &cur, None, &mut out);
-                            }
-                            planes.push(out);
-                        }
-                        planes
-                    })
+        let fresh_stats = pool.install(|| {
+            slices[fresh]
+                .par_chunks(slice_len.max(1))
+                .map(|s| {
+                    let mut st = VolumeStats::default();
+                    sample_stats(s, &mut st);
+                    st
                 })
-                .collect();
-            let planes = handles.into_iter().map(|h| h.join().expect("a volume worker panicked")).collect();
-            (planes, st.join().expect("a volume worker panicked"))
+                .reduce(VolumeStats::default, |mut a, b| {
+                    a.nan += b.nan;
+                    a.range = match (a.range, b.range) {
+                        (Some(x), Some(y)) => Some([x[0].min(y[0]), x[1].max(y[1])]),
+                        (x, y) => x.or(y),
+                    };
+                    a
+                })
         });
         stats.nan += fresh_stats.nan;
         stats.range = match (stats.range, fresh_stats.range) {
             (Some(a), Some(b)) => Some([a[0].min(b[0]), a[1].max(b[1])]),
             (a, b) => a.or(b),
         };
-        for plane in results.into_iter().flatten() {
-            stats.records += plane.len() as u64;
-            writer.append(&plane)?;
+        let slice_of = |z: u64| -> &[f32] {
+            let i = (z - have.0) as usize;
+            &slices[i * slice_len..(i + 1) * slice_len]
+        };
+        for q in q..=end {
+            // Plane q's nodes and bits, band by band.
+            let at = p.slices_of_plane(q).map(|(z, w)| (slice_of(z), if w > 0.0 { slice_of(z + 1) } else { slice_of(z) }, w));
+            pool.install(|| {
+                nxt.par_chunks_mut(rows * na1).zip(nxt_bits.par_chunks_mut(rows * words)).enumerate().for_each(|(b, (v, bits))| {
+                    sampler.sample_rows(field, at, b * rows, v);
+                    inside_rows(v, na1, iso, bits);
+                })
+            });
+            std::mem::swap(&mut cur, &mut nxt);
+            std::mem::swap(&mut cur_bits, &mut nxt_bits);
+            // Now `cur` is plane q and `nxt` plane q - 1: cross q - 1 with q,
+            // and the grid's last plane k1 - 1 = ns with nothing.
+            let mut cross = |k: u32, planes: ((&[f32], &[u64]), Option<(&[f32], &[u64])>)| -> Result<(), PipelineError> {
+                for g in (0..bands).step_by(group) {
+                    let n = group.min(bands - g);
+                    pool.install(|| {
+                        outs[..n].par_iter_mut().enumerate().for_each(|(i, out)| {
+                            out.clear();
+                            let b = g + i;
+                            band_crossings(&p, field, k, b * rows..((b + 1) * rows).min(nb1), planes.0, planes.1, out);
+                        })
+                    });
+                    for out in &outs[..n] {
+                        stats.records += out.len() as u64;
+                        writer.append(out)?;
+                    }
+                }
+                progress.advance(1);
+                check_cancel(progress)
+            };
+            if q > k0 {
+                cross(q - 1, ((&nxt, &nxt_bits), Some((&cur, &cur_bits))))?;
+            }
+            if q == ns && q < k1 {
+                cross(q, ((&cur, &cur_bits), None))?;
+            }
         }
-        progress.advance(count as u64);
-        check_cancel(progress)?;
-        k = end;
+        q = end + 1;
     }
     progress.finish();
     Ok(stats)

@@ -77,6 +77,13 @@ impl Budget {
         self.working()
     }
 
+    /// A volume's discretize task (mint-pipeline's `discretize_planes`): its
+    /// slices, two node planes and a group of bands' crossings. Nothing
+    /// else of the task is alive then: everything but the reserve.
+    pub fn volume(&self) -> u64 {
+        self.working()
+    }
+
     /// One worker's corner buckets in the sort's scatter pass, and again
     /// one worker's position buckets in its gather pass: 45% of the sort's
     /// share over the workers for each, so that both sets (alive together
@@ -138,6 +145,7 @@ impl Budget {
         let t = self.threads;
         vec![
             ("discretize, sorted dereference", self.total(), vec![("reserve", Self::RESERVE), ("scatter buckets", t * self.sort_buckets_per_thread()), ("gather buckets", t * self.sort_buckets_per_thread())]),
+            ("discretize, volume", self.total(), vec![("reserve", Self::RESERVE), ("slices, planes and bands", self.volume())]),
             ("reconstruct", self.total(), vec![("reserve", Self::RESERVE), ("sub-slabs in flight", (t + 2) * self.slab_in_flight())]),
             ("check: weld", self.check(), vec![("weld buckets", t * self.check_weld_per_thread()), ("bucket table", self.check_weld_bucket())]),
             (
