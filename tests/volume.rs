@@ -365,6 +365,10 @@ fn bad_volumes_fail_with_one_line_and_write_nothing() {
     cases.push((dir.join("short.raw"), vec!["--raw-dims", "10,10,10", "--raw-type", "u8"], "do not match the data"));
     // Not a volume.
     cases.push((w("x.txt", b"hello"), vec![], "not a volume mint knows"));
+    // Slices too wide for the budget: two of 2048 x 2048 f32 samples and two
+    // node planes do not fit 64M (16 MiB after the reserve).
+    w("wide.raw", &vec![0u8; 2048 * 2048 * 2]);
+    cases.push((dir.join("wide.raw"), vec!["--raw-dims", "2048,2048,2", "--raw-type", "u8", "--mem", "64M"], "more than the memory budget (16 MiB)"));
     for (input, extra, want) in cases {
         let out = dir.join("out.ply");
         let mut args = vec!["volume", p(&input), p(&out), "--iso", "1"];
