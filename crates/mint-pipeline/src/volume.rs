@@ -558,19 +558,11 @@ pub fn discretize_planes(
                     st
                 })
                 .reduce(VolumeStats::default, |mut a, b| {
-                    a.nan += b.nan;
-                    a.range = match (a.range, b.range) {
-                        (Some(x), Some(y)) => Some([x[0].min(y[0]), x[1].max(y[1])]),
-                        (x, y) => x.or(y),
-                    };
+                    a.merge(&b);
                     a
                 })
         });
-        stats.nan += fresh_stats.nan;
-        stats.range = match (stats.range, fresh_stats.range) {
-            (Some(a), Some(b)) => Some([a[0].min(b[0]), a[1].max(b[1])]),
-            (a, b) => a.or(b),
-        };
+        stats.merge(&fresh_stats);
         let slice_of = |z: u64| -> &[f32] {
             let i = (z - have.0) as usize;
             &slices[i * slice_len..(i + 1) * slice_len]
