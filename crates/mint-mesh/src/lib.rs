@@ -27,6 +27,7 @@
 pub mod bvh;
 pub mod check;
 pub mod distance;
+mod edge_heap;
 pub mod error;
 pub mod normals;
 pub mod qem;

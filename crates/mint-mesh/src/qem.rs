@@ -37,6 +37,14 @@
 
 use glam::DVec3;
 
+use crate::edge_heap::{EdgeHeap, Key};
+
+/// The ends of an edge that has gone.
+const DEAD: u32 = u32::MAX;
+
+/// How many times the refused edges may come back when the heap runs dry.
+const READMISSIONS: u64 = 32;
+
 /// A symmetric quadric `pᵀAp + 2b·p + c`, and the area it gathers.
 #[derive(Debug, Clone, Copy, Default)]
 struct Quadric {
@@ -303,11 +311,11 @@ pub struct CollapseStats {
     pub max_error: f64,
     /// The largest side of the input's bounding box.
     pub extent: f64,
-    /// Candidates taken from the heap (stale ones included).
+    /// Edges taken from the heap and judged.
     pub candidates: u64,
     /// Collapses refused by the link condition or the face checks.
     pub refused: u64,
-    /// Rebuilds of the heap from the live edges.
+    /// Times the refused edges were priced again and put back.
     pub rebuilds: u64,
     /// The `stop` hook ended the collapse early.
     pub stopped: bool,
@@ -315,16 +323,6 @@ pub struct CollapseStats {
 
 /// The weight of a boundary edge's constraint plane, per squared edge length.
 const BORDER_WEIGHT: f64 = 100.0;
-
-/// One candidate collapse: its cost (f64 bits: non-negative, so they
-/// order as the values) and its edge `u < v`. A candidate is stale when
-/// an end has gone or its cost has changed since (a newer one was pushed).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-struct Candidate {
-    cost_bits: u64,
-    u: u32,
-    v: u32,
-}
 
 /// A collapse's cost also holds `REGULARIZATION × (the area its quadric
 /// gathers) × (edge length)²`, which orders collapses the planes cannot
@@ -352,6 +350,13 @@ pub const BLOCK_MIN_FACES: usize = 400_000;
 /// The number of blocks of a large mesh (fixed, so that the result does
 /// not depend on the thread count).
 pub const BLOCKS: usize = 8;
+/// The blocks [`collapse`] cuts a mesh of `faces` faces into: [`BLOCKS`]
+/// above [`BLOCK_MIN_FACES`] (or `MINT_QEM_BLOCK_MIN`, for measuring it), else 1.
+pub fn blocks_for(faces: usize) -> usize {
+    let min = std::env::var("MINT_QEM_BLOCK_MIN").ok().and_then(|v| v.parse().ok()).unwrap_or(BLOCK_MIN_FACES);
+    if faces > min { BLOCKS } else { 1 }
+}
+
 /// Blocks stop at this multiple of their share of the target.
 const BLOCK_SLACK: f64 = 1.1;
 /// Nor does a block collapse more than this ratio of its faces: the held
@@ -426,7 +431,7 @@ pub fn lift(x: [DVec3; 3], ns: [DVec3; 3], n: DVec3) -> f64 {
 /// on a slab at a time keeps the tables in the caches; the result depends
 /// on the face count, never on `threads`.
 pub fn collapse(positions: &[[f64; 3]], faces: &[[u32; 3]], target_faces: u64, max_error: f64, threads: usize) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, CollapseStats) {
-    let blocks = if faces.len() > BLOCK_MIN_FACES { BLOCKS } else { 1 };
+    let blocks = blocks_for(faces.len());
     collapse_in_blocks(positions, faces, Planes::Faces, target_faces, max_error, blocks, threads, &|| false)
 }
 
@@ -831,10 +836,8 @@ fn run<Q: VertexQuadric>(
     let border: Vec<bool> = (0..nv).map(|v| border_edges[v] != 0 || locked[v]).collect();
     drop(border_edges);
 
-    let mut gone_v = vec![false; nv];
     let eps = regularization();
     let flip = flip_cos();
-    let mut heap = MinHeap::with_capacity(unique.len());
     // The cost and position of collapsing edge (u, v): border and locked
     // vertices stay where they are, except that two border vertices may
     // merge along their boundary edge.
@@ -862,56 +865,64 @@ fn run<Q: VertexQuadric>(
         };
         Some((q.eval(p) + eps * area_of(&quad[u as usize], &quad[v as usize]) * (pu - pv).length_squared(), p))
     };
-    let push = |heap: &mut MinHeap, c: f64, u: u32, v: u32| {
-        heap.push(Candidate { cost_bits: c.to_bits(), u: u.min(v), v: u.max(v) });
-    };
-    for &(u, v) in &unique {
-        if let Some((c, _)) = cost(&pos, &quad, &vf, &tri, u, v) {
-            push(&mut heap, c, u, v);
-        }
-    }
+    let key_of = |c: f64, a: u32, b: u32| Key { cost_bits: c.to_bits(), u: a.min(b), v: a.max(b) };
+    // The edges: their ends (u < v; DEAD once gone) by id, and each
+    // vertex's ids, one per neighbour through a live face.
+    let mut ends: Vec<[u32; 2]> = unique.iter().map(|&(a, b)| [a, b]).collect();
     drop(unique);
+    let mut ve: Vec<Vec<u32>> = vec![Vec::new(); nv];
+    for (id, &[a, b]) in ends.iter().enumerate() {
+        ve[a as usize].push(id as u32);
+        ve[b as usize].push(id as u32);
+    }
+    let initial: Vec<(Key, u32)> = ends
+        .iter()
+        .enumerate()
+        .filter_map(|(id, &[a, b])| cost(&pos, &quad, &vf, &tri, a, b).map(|(c, _)| (key_of(c, a, b), id as u32)))
+        .collect();
+    let mut heap = EdgeHeap::from(initial, ends.len());
+    // Live edges taken out of the heap (refused, or unpriceable): they come
+    // back when a collapse next to them prices them again, or, when the
+    // heap runs dry short of the target, all together, if a collapse has
+    // happened since they last came back (at most READMISSIONS times).
+    let mut out: Vec<u32> = Vec::new();
+    let mut collapses_at_readmission = u64::MAX;
 
     let max_cost_distance = max_distance;
-    let mut rebuilt_len = heap.len() as u64;
+    let t_loop = std::time::Instant::now();
     let mut nu: Vec<u32> = Vec::new();
     let mut nv_: Vec<u32> = Vec::new();
     let mut around: Vec<u32> = Vec::new();
+    let mut fresh: Vec<u32> = Vec::new();
+    let mut old_edges: Vec<(u32, u32)> = Vec::new();
     while live > target_faces {
-        // (Only after the heap has doubled since the last rebuild: pushes
-        // come only with collapses, so rebuilds cannot go on forever.)
-        if heap.len() as u64 > (2 * live).max(2 * rebuilt_len) + 1024 {
-            // Mostly stale entries: rebuild from the live edges (each
-            // interior edge once, as the half-edge that runs up in index;
-            // boundary edges have one half-edge).
-            let mut fresh = Vec::with_capacity(2 * live as usize);
-            for f in (0..tri.len()).filter(|&f| alive[f]) {
-                let t = tri[f];
-                for k in 0..3 {
-                    let (a, b) = (t[k], t[(k + 1) % 3]);
-                    if a < b || faces_on_edge(&vf, &tri, a, b) == 1 {
-                        if let Some((c, _)) = cost(&pos, &quad, &vf, &tri, a, b) {
-                            fresh.push(Candidate { cost_bits: c.to_bits(), u: a, v: b });
-                        }
-                    }
+        if heap.peek().is_none() && stats.collapses != collapses_at_readmission && stats.rebuilds < READMISSIONS {
+            collapses_at_readmission = stats.collapses;
+            for id in std::mem::take(&mut out) {
+                let [a, b] = ends[id as usize];
+                if a == DEAD || heap.contains(id) {
+                    continue;
+                }
+                match cost(&pos, &quad, &vf, &tri, a, b) {
+                    Some((c, _)) => heap.set(id, key_of(c, a, b)),
+                    None => out.push(id),
                 }
             }
-            heap = MinHeap::from(fresh);
-            rebuilt_len = heap.len() as u64;
             stats.rebuilds += 1;
         }
-        let Some(cand) = heap.pop() else { break };
+        let Some((key, id)) = heap.peek() else { break };
         stats.candidates += 1;
         if stats.candidates % 4096 == 0 && stop() {
             stats.stopped = true;
             break;
         }
-        let (u, v) = (cand.u, cand.v);
-        if gone_v[u as usize] || gone_v[v as usize] {
-            continue;
-        }
+        let [u, v] = ends[id as usize];
+        // Whatever is decided, the edge leaves the heap: it collapses, or
+        // waits until it is priced again.
+        heap.remove(id);
+        out.push(id);
         let Some((c, p)) = cost(&pos, &quad, &vf, &tri, u, v) else { continue };
-        if c.to_bits() != cand.cost_bits {
+        if c.to_bits() != key.cost_bits {
             continue;
         }
         // The geometric error alone, as a distance.
@@ -1003,93 +1014,61 @@ fn run<Q: VertexQuadric>(
         let qg = quad[gone as usize];
         quad[keep as usize].add(&qg);
         pos[keep as usize] = p;
-        gone_v[gone as usize] = true;
         stats.collapses += 1;
         stats.max_error = stats.max_error.max(distance);
+        // Edges: keep's neighbours now, each by the id keep had for it, or
+        // else gone's (renamed), or a new one; gone's other edges and the
+        // collapsed one go. Then keep's edges are priced again.
         neighbours(&vf[keep as usize], &tri, keep, &mut nu);
+        let old_keep = std::mem::take(&mut ve[keep as usize]);
+        let old_gone = std::mem::take(&mut ve[gone as usize]);
+        // (far end, id) of each old edge, keep's first: the first match wins.
+        old_edges.clear();
+        old_edges.extend(old_keep.iter().chain(&old_gone).map(|&id| {
+            let [a, b] = ends[id as usize];
+            (if a == keep || a == gone { b } else { a }, id)
+        }));
+        fresh.clear();
         for &x in &nu {
-            if let Some((c, _)) = cost(&pos, &quad, &vf, &tri, keep, x) {
-                push(&mut heap, c, keep, x);
+            let id = match old_edges.iter().find(|e| e.0 == x) {
+                Some(e) => e.1,
+                None => {
+                    ends.push([DEAD; 2]);
+                    heap.grow(ends.len());
+                    ve[x as usize].push(ends.len() as u32 - 1);
+                    ends.len() as u32 - 1
+                }
+            };
+            ends[id as usize] = [keep.min(x), keep.max(x)];
+            fresh.push(id);
+        }
+        for &(x, id) in &old_edges {
+            if ends[id as usize][0] == DEAD || fresh.contains(&id) {
+                continue;
+            }
+            heap.remove(id);
+            if x != keep && x != gone {
+                ve[x as usize].retain(|&e| e != id);
+            }
+            ends[id as usize] = [DEAD; 2];
+        }
+        for &id in &fresh {
+            let [a, b] = ends[id as usize];
+            match cost(&pos, &quad, &vf, &tri, a, b) {
+                Some((c, _)) => heap.set(id, key_of(c, a, b)),
+                None => {
+                    heap.remove(id);
+                    out.push(id);
+                }
             }
         }
+        ve[keep as usize] = std::mem::replace(&mut fresh, old_keep);
+    }
+    if std::env::var_os("MINT_QEM_TRACE").is_some() {
+        eprintln!("qem: run of {} faces: loop {:.3}s", tri.len(), t_loop.elapsed().as_secs_f64());
     }
     let out_faces: Vec<[u32; 3]> = (0..tri.len()).filter(|&f| alive[f]).map(|f| tri[f]).collect();
     (pos, out_faces, quad)
-}
-
-/// A 4-ary min-heap of candidates: half the levels of a binary heap, and a
-/// node's children side by side in memory, so that a pop, the collapse's
-/// most frequent step (stale entries included), touches fewer cache lines.
-/// Candidates are totally ordered, so the pops come in the same order as
-/// from any other heap: the result does not depend on it.
-struct MinHeap {
-    v: Vec<Candidate>,
-}
-
-impl MinHeap {
-    fn with_capacity(n: usize) -> MinHeap {
-        MinHeap { v: Vec::with_capacity(n) }
-    }
-
-    /// A heap of `v` (Floyd's bottom-up construction).
-    fn from(v: Vec<Candidate>) -> MinHeap {
-        let mut h = MinHeap { v };
-        for i in (0..h.v.len().div_ceil(4)).rev() {
-            h.sift_down(i);
-        }
-        h
-    }
-
-    fn len(&self) -> usize {
-        self.v.len()
-    }
-
-    fn push(&mut self, c: Candidate) {
-        let mut i = self.v.len();
-        self.v.push(c);
-        while i > 0 {
-            let parent = (i - 1) / 4;
-            if self.v[parent] <= c {
-                break;
-            }
-            self.v[i] = self.v[parent];
-            i = parent;
-        }
-        self.v[i] = c;
-    }
-
-    fn pop(&mut self) -> Option<Candidate> {
-        let last = self.v.pop()?;
-        if self.v.is_empty() {
-            return Some(last);
-        }
-        let top = std::mem::replace(&mut self.v[0], last);
-        self.sift_down(0);
-        Some(top)
-    }
-
-    fn sift_down(&mut self, mut i: usize) {
-        let n = self.v.len();
-        let c = self.v[i];
-        loop {
-            let first = 4 * i + 1;
-            if first >= n {
-                break;
-            }
-            let mut best = first;
-            for k in first + 1..(first + 4).min(n) {
-                if self.v[k] < self.v[best] {
-                    best = k;
-                }
-            }
-            if self.v[best] >= c {
-                break;
-            }
-            self.v[i] = self.v[best];
-            i = best;
-        }
-        self.v[i] = c;
-    }
 }
 
 /// The number of faces on edge (u, v).

@@ -9,8 +9,9 @@
 //! than the input is never handed over silently.
 //!
 //! Memory: the input, the collapse's tables (per vertex a quadric of 88
-//! bytes, 288 with colour, a position and a face list; per face 12 bytes;
-//! a heap of at most two candidates of 16 bytes per face), and the result.
+//! bytes, 288 with colour, a position, a face list and an edge list; per
+//! face 12 bytes; per edge its ends, 8 bytes, its id in both ends' lists
+//! and a heap entry of 28 bytes), and the result.
 //!
 //! [`simplify_coloured`] does the same for a mesh with a colour per vertex,
 //! by colour-aware quadrics ([`crate::qem::collapse_coloured`]).
@@ -104,11 +105,14 @@ fn simplify_impl(
     let t = std::time::Instant::now();
     let before = try_check(positions, faces)?;
     let input_watertight = before.watertight;
+    if trace {
+        eprintln!("qem: input checked at {:.2}s", t.elapsed().as_secs_f64());
+    }
     let mut target = o.target_faces.min(faces.len() as u64);
     let mut relaxed = 0;
     loop {
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let blocks = if faces.len() > crate::qem::BLOCK_MIN_FACES { crate::qem::BLOCKS } else { 1 };
+        let blocks = crate::qem::blocks_for(faces.len());
         let (moved, out, moved_colours, collapse) = match colours {
             Some((c, w)) => {
                 let (p, f, c, st) = crate::qem::collapse_coloured(positions, faces, o.planes, c, w, target, o.max_error as f64, blocks, threads, stop);
