@@ -560,6 +560,11 @@ fn decimate_hits_its_target_keeps_closed_inputs_closed_and_errs_less_with_more_f
     let (mean, reported) = (dist["a_to_b"]["mean"].as_f64().unwrap().max(dist["b_to_a"]["mean"].as_f64().unwrap()), j["error"]["mean"].as_f64().unwrap());
     assert!((reported / mean - 1.0).abs() < 0.05, "summary's mean error {reported}, mint distance's {mean}");
     assert_eq!(j["error"]["reference"], "input");
+    // --error-samples 0 leaves the measurement out, and the same mesh comes.
+    let out0 = d.path().join("unmeasured.ply");
+    let j: serde_json::Value = serde_json::from_str(&ok(&["decimate", p(&d.path().join("torus.ply")), p(&out0), "--faces", "1000", "--json", "--error-samples", "0"])).unwrap();
+    assert!(j["error"].is_null(), "{j}");
+    assert_eq!(std::fs::read(&out0).unwrap(), std::fs::read(&out).unwrap());
     // A dirty input (flips, non-manifold slivers) is resampled, and the
     // summary says why.
     let scan = d.path().join("scan.ply");

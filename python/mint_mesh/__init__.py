@@ -362,9 +362,11 @@ def decimate(vertices: Any, faces: Any = None, *, target_faces: int, colors: Any
     itself; anything else is resampled to an intermediate mesh first
     (closes holes, drops detail below the target's scale), then quadric
     edge collapse. ``.summary["route"]`` says which ran and why, and
-    ``.summary["error"]`` what it cost (sampled distance to the input).
+    ``.summary["error"]`` what it cost (sampled distance to the input;
+    ``error_samples=0`` leaves it out, and it is then None).
     Options: ``route`` ("auto", "direct", "resample"), ``intermediate``,
-    ``error``, ``color_weight``, ``no_color``, ``mem``, ``threads``...
+    ``error``, ``error_samples``, ``color_weight``, ``no_color``, ``mem``,
+    ``threads``...
 
     >>> import mint_mesh
     >>> v, f = mint_mesh.generate("torus", faces=100000)
@@ -381,7 +383,9 @@ def simplify(vertices: Any, faces: Any = None, *, target_faces: int, colors: Any
     """Quadric edge collapse (Garland-Heckbert, f64) of a mesh that fits in
     memory to about ``target_faces`` faces, as ``mint simplify``: keeps a
     closed, oriented 2-manifold so; boundaries slide along themselves.
-    Options: ``error``, ``no_weld``, ``color_weight``, ``no_color``.
+    Options: ``error``, ``error_samples`` (samples per direction of the
+    summary's sampled error; 0 leaves it out, the faster call),
+    ``no_weld``, ``color_weight``, ``no_color``.
 
     >>> import mint_mesh
     >>> v, f = mint_mesh.generate("sphere", faces=20000)

@@ -81,6 +81,7 @@ def decimate(
     route: Optional[Literal["auto", "direct", "resample"]] = ...,
     intermediate: Optional[int] = ...,
     error: Optional[float] = ...,
+    error_samples: Optional[int] = ...,
     color_weight: Optional[float] = ...,
     no_color: bool = ...,
     mem: Optional[Union[str, int]] = ...,
@@ -96,6 +97,7 @@ def simplify(
     target_faces: int,
     colors: Optional[Colors] = ...,
     error: Optional[float] = ...,
+    error_samples: Optional[int] = ...,
     no_weld: bool = ...,
     double: bool = ...,
     color_weight: Optional[float] = ...,
@@ -200,6 +202,7 @@ def decimate_file(
     route: Optional[Literal["auto", "direct", "resample"]] = ...,
     intermediate: Optional[int] = ...,
     error: Optional[float] = ...,
+    error_samples: Optional[int] = ...,
     work: Optional[PathLike] = ...,
     threads: Optional[int] = ...,
     tmp: Optional[PathLike] = ...,
@@ -209,7 +212,7 @@ def decimate_file(
     progress: Optional[Progress] = ...,
     **options: Any,
 ) -> dict: ...
-def simplify_file(input: PathLike, output: PathLike, *, target_faces: int, error: Optional[float] = ..., no_weld: bool = ..., ascii: bool = ..., double: bool = ..., no_color: bool = ..., color_weight: Optional[float] = ..., progress: Optional[Progress] = ..., **options: Any) -> dict: ...
+def simplify_file(input: PathLike, output: PathLike, *, target_faces: int, error: Optional[float] = ..., error_samples: Optional[int] = ..., no_weld: bool = ..., ascii: bool = ..., double: bool = ..., no_color: bool = ..., color_weight: Optional[float] = ..., progress: Optional[Progress] = ..., **options: Any) -> dict: ...
 def boolean_file(a: PathLike, b: PathLike, op: Op, output: PathLike, *, cells: Optional[float] = ..., cell_size: Optional[float] = ..., mem: Optional[Union[str, int]] = ..., work: Optional[PathLike] = ..., progress: Optional[Progress] = ..., **options: Any) -> dict: ...
 def csg_file(scene: PathLike, output: PathLike, *, cells: Optional[float] = ..., cell_size: Optional[float] = ..., mem: Optional[Union[str, int]] = ..., work: Optional[PathLike] = ..., progress: Optional[Progress] = ..., **options: Any) -> dict: ...
 def check_file(inputs: Paths, *, strict: bool = ..., self_intersections: bool = ..., no_weld: bool = ..., mem: Optional[Union[str, int]] = ..., tmp: Optional[PathLike] = ..., threads: Optional[int] = ..., progress: Optional[Progress] = ..., **options: Any) -> dict: ...

@@ -61,6 +61,14 @@ def test_decimate_and_simplify_hit_the_target(torus):
     assert d["a_to_b"]["max"] < 0.05 and d["b_to_a"]["max"] < 0.05
 
 
+def test_simplify_without_the_error_measurement_gives_the_same_mesh(torus):
+    measured = mint_mesh.simplify(*torus, target_faces=3000)
+    unmeasured = mint_mesh.simplify(*torus, target_faces=3000, error_samples=0)
+    assert measured.summary["error"]["samples"] == 50000
+    assert unmeasured.summary["error"] is None
+    assert np.array_equal(measured.vertices, unmeasured.vertices) and np.array_equal(measured.faces, unmeasured.faces)
+
+
 def test_simplify_keeps_float64_precision():
     v, f = mint_mesh.generate("sphere", faces=5000)
     far = v + np.array([6.0e6, 4.0e6, 100.0])  # geo-referenced: f32 would round to 0.5

@@ -174,7 +174,8 @@ pub(crate) fn print_check(name: &str, r: &mint_mesh::CheckReport) {
 
 /// The decimate and simplify summaries' line on the output's distance to
 /// its reference.
-pub(crate) fn surface_error_line(e: &mint_decimate::SurfaceError) -> String {
+pub(crate) fn surface_error_line(e: &Option<mint_decimate::SurfaceError>) -> String {
+    let Some(e) = e else { return "  distance     not measured (--error-samples 0)".to_string() };
     format!(
         "  distance     to the {}: mean {:.2e}, max {:.2e} of its diagonal ({:.3e} and {:.3e}; 2 x {} samples, {:.2} s)",
         e.reference, e.mean_rel, e.max_rel, e.mean, e.max, e.samples, e.seconds

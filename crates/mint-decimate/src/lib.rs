@@ -110,6 +110,9 @@ pub struct DecimateOptions {
     pub write: WriteSpec,
     /// How much colour weighs in the collapse ([`COLOUR_WEIGHT`]).
     pub colour_weight: f64,
+    /// Samples per direction of the summary's error ([`ERROR_SAMPLES`]; 0:
+    /// not measured).
+    pub error_samples: usize,
     /// Directly, by resampling, or chosen ([`Route`]).
     pub route: Route,
     /// The resampling's tuning (memory, threads, work directory, parts…).
@@ -155,7 +158,7 @@ pub struct DecimateSummary {
     pub folded_pairs_removed: u64,
     /// The output's sampled distance to the input (or, for inputs much
     /// larger than the intermediate, to the intermediate).
-    pub error: SurfaceError,
+    pub error: Option<SurfaceError>,
     pub seconds_area: f64,
     pub seconds_resample: f64,
     pub seconds_simplify: f64,
@@ -282,7 +285,7 @@ pub fn decimate(inputs: &[PathBuf], output: &Path, o: &DecimateOptions, progress
     // The error against the input itself when it is not much larger than
     // the intermediate, else against the intermediate.
     let reference = if faces as usize <= ERROR_INPUT_FACTOR * tris.len().max(1) { Reference::Files(inputs) } else { Reference::Own("intermediate") };
-    let (sr, output_precision, _, seconds_write, error) = simplify_and_write(input, output, format, &o.write.options(None, colour), tolerance, positions, tris, colours, o.colour_weight, &so, reference, progress)?;
+    let (sr, output_precision, _, seconds_write, error) = simplify_and_write(input, output, format, &o.write.options(None, colour), tolerance, positions, tris, colours, o.colour_weight, &so, reference, o.error_samples, progress)?;
     // Reading the intermediate counts as simplifying.
     let seconds_simplify = t.elapsed().as_secs_f64() - seconds_write;
     let base = summary_of(inputs, output, o, ("resample", why_not), (faces, area, colour), (sr, output_precision, seconds_simplify, seconds_write, error), seconds_area, t0);
@@ -309,7 +312,7 @@ fn summary_of(
     o: &DecimateOptions,
     (route, route_reason): (&'static str, String),
     (input_faces, input_area, colour): (u64, f64, bool),
-    (sr, output_precision, seconds_simplify, seconds_write, error): (mint_mesh::SimplifyReport, String, f64, f64, SurfaceError),
+    (sr, output_precision, seconds_simplify, seconds_write, error): (mint_mesh::SimplifyReport, String, f64, f64, Option<SurfaceError>),
     seconds_area: f64,
     t0: Instant,
 ) -> DecimateSummary {
@@ -368,7 +371,7 @@ fn decimate_directly(
     let colour = w.colours.is_some();
     let t = Instant::now();
     let (sr, output_precision, _, seconds_write, error) =
-        simplify_and_write(input, output, format, &o.write.options(None, colour), tolerance, w.positions, w.tris, w.colours, o.colour_weight, &so, Reference::Own("input"), progress)?;
+        simplify_and_write(input, output, format, &o.write.options(None, colour), tolerance, w.positions, w.tris, w.colours, o.colour_weight, &so, Reference::Own("input"), o.error_samples, progress)?;
     let seconds_simplify = t.elapsed().as_secs_f64() - seconds_write;
     Ok(summary_of(inputs, output, o, ("direct", route_reason), (faces, area, colour), (sr, output_precision, seconds_simplify, seconds_write, error), seconds_area, t0))
 }
@@ -423,8 +426,9 @@ fn simplify_and_write(
     colour_weight: f64,
     so: &mint_mesh::SimplifyOptions,
     reference: Reference,
+    error_samples: usize,
     progress: &dyn Progress,
-) -> Result<(mint_mesh::SimplifyReport, String, f64, f64, SurfaceError), PipelineError> {
+) -> Result<(mint_mesh::SimplifyReport, String, f64, f64, Option<SurfaceError>), PipelineError> {
     let t = Instant::now();
     let err = |e| match e {
         mint_mesh::MeshError::Cancelled => PipelineError::Cancelled,
@@ -447,11 +451,12 @@ fn simplify_and_write(
     let seconds_simplify = t.elapsed().as_secs_f64();
     check_cancel(progress)?;
     let error = match reference {
-        Reference::Own(name) => surface_error(input, name, (&positions, &tris), (&p, &f))?,
+        _ if error_samples == 0 => None,
+        Reference::Own(name) => Some(surface_error(input, name, (&positions, &tris), (&p, &f), error_samples)?),
         Reference::Files(files) => {
             drop((positions, tris));
             let (rp, rf) = read_whole(files)?;
-            surface_error(input, "input", (&rp, &rf), (&p, &f))?
+            Some(surface_error(input, "input", (&rp, &rf), (&p, &f), error_samples)?)
         }
     };
     check_cancel(progress)?;
@@ -488,7 +493,8 @@ fn simplify_and_write(
 /// sphere, whose borders then hold vertices the shape needs).
 pub const COLOUR_WEIGHT: f64 = 0.0003;
 
-/// Samples per direction of the error in the summaries: the mean to about
+/// Samples per direction of the error in the summaries (the default of
+/// `--error-samples`): the mean to about
 /// 1%, the max a lower bound that finds deviations covering 1/50,000 of
 /// the area. Measured on Igea (268k faces to 27k): 2 × 50k samples with
 /// both trees cost 0.1 s.
@@ -520,13 +526,13 @@ pub struct SurfaceError {
 }
 
 /// The sampled two-sided distance between `out` and `reference`.
-fn surface_error(input: &Path, name: &'static str, reference: mint_mesh::MeshRef, out: mint_mesh::MeshRef) -> Result<SurfaceError, PipelineError> {
+fn surface_error(input: &Path, name: &'static str, reference: mint_mesh::MeshRef, out: mint_mesh::MeshRef, samples: usize) -> Result<SurfaceError, PipelineError> {
     let t = Instant::now();
-    let (ab, ba) = mint_mesh::try_symmetric_distance(reference, out, ERROR_SAMPLES, 1).map_err(|e| PipelineError::stage(input, format!("measuring the error: {e}")))?;
+    let (ab, ba) = mint_mesh::try_symmetric_distance(reference, out, samples, 1).map_err(|e| PipelineError::stage(input, format!("measuring the error: {e}")))?;
     let diagonal = ab.bbox_diagonal.max(ba.bbox_diagonal);
     let (mean, max) = (ab.mean.max(ba.mean), ab.max.max(ba.max));
     let rel = |x: f64| if diagonal > 0.0 { x / diagonal } else { 0.0 };
-    Ok(SurfaceError { reference: name, samples: ERROR_SAMPLES as u64, mean, max, mean_rel: rel(mean), max_rel: rel(max), seconds: t.elapsed().as_secs_f64() })
+    Ok(SurfaceError { reference: name, samples: samples as u64, mean, max, mean_rel: rel(mean), max_rel: rel(max), seconds: t.elapsed().as_secs_f64() })
 }
 
 /// The surface the output is measured against: the in-core stage's own
@@ -600,6 +606,9 @@ pub struct SimplifyFileOptions {
     pub write: WriteOptions,
     /// How much colour weighs in the collapse ([`COLOUR_WEIGHT`]).
     pub colour_weight: f64,
+    /// Samples per direction of the summary's error ([`ERROR_SAMPLES`]; 0:
+    /// not measured).
+    pub error_samples: usize,
 }
 
 /// What [`simplify_file`] did.
@@ -625,7 +634,7 @@ pub struct SimplifySummary {
     pub relaxed: u32,
     pub folded_pairs_removed: u64,
     /// The output's sampled distance to the input (as welded).
-    pub error: SurfaceError,
+    pub error: Option<SurfaceError>,
     pub seconds_read: f64,
     pub seconds_simplify: f64,
     pub seconds_write: f64,
@@ -650,7 +659,7 @@ pub fn simplify_file(input: &Path, output: &Path, o: &SimplifyFileOptions, progr
     let tolerance = tolerance_of(&positions);
     let colour = colours.is_some();
     let write = WriteOptions { colours: colour, ..o.write.clone() };
-    let (sr, output_precision, seconds_simplify, seconds_write, error) = simplify_and_write(input, output, format, &write, tolerance, positions, tris, colours, o.colour_weight, &so, Reference::Own("input"), progress)?;
+    let (sr, output_precision, seconds_simplify, seconds_write, error) = simplify_and_write(input, output, format, &write, tolerance, positions, tris, colours, o.colour_weight, &so, Reference::Own("input"), o.error_samples, progress)?;
     Ok(SimplifySummary {
         input: input.display().to_string(),
         output: output.display().to_string(),

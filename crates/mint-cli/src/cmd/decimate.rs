@@ -62,6 +62,12 @@ pub struct DecimateArgs {
     /// in shape; 0 ignores colour (the kept vertices then take white).
     #[arg(long, value_name = "W", default_value_t = mint_decimate::COLOUR_WEIGHT)]
     pub color_weight: f64,
+    /// Samples per direction of the error the summary reports (the sampled
+    /// two-sided distance between the output and the input, as `mint
+    /// distance` measures it); 0 leaves it out, saving about 0.1 s on a
+    /// 270k-face mesh and 1 s against a 4M-face intermediate.
+    #[arg(long, value_name = "N", default_value_t = mint_decimate::ERROR_SAMPLES)]
+    pub error_samples: usize,
     /// Also write OUT.png beside the output: input and output side by side.
     #[arg(long)]
     pub preview: bool,
@@ -95,6 +101,7 @@ pub(crate) fn cmd_decimate(a: DecimateArgs) -> Result<()> {
         max_error: a.error,
         write: mint_pipeline::WriteSpec { no_colour: a.no_color, ..Default::default() },
         colour_weight: a.color_weight,
+        error_samples: a.error_samples,
         route: match a.route {
             RouteArg::Auto => mint_decimate::Route::Auto,
             RouteArg::Direct => mint_decimate::Route::Direct,

@@ -45,6 +45,12 @@ pub struct SimplifyArgs {
     /// in shape; 0 ignores colour (the kept vertices then take white).
     #[arg(long, value_name = "W", default_value_t = mint_decimate::COLOUR_WEIGHT)]
     pub color_weight: f64,
+    /// Samples per direction of the error the summary reports (the sampled
+    /// two-sided distance between the output and the input, as `mint
+    /// distance` measures it); 0 leaves it out, saving about 0.1 s on a
+    /// 270k-face mesh and 1 s against a 4M-face intermediate.
+    #[arg(long, value_name = "N", default_value_t = mint_decimate::ERROR_SAMPLES)]
+    pub error_samples: usize,
     #[command(flatten)]
     pub quiet: QuietArg,
     #[command(flatten)]
@@ -59,6 +65,7 @@ pub(crate) fn cmd_simplify(a: SimplifyArgs) -> Result<()> {
         weld: !a.no_weld,
         write: WriteOptions { ascii: a.ascii, double: a.double, colours: !a.no_color, ..Default::default() },
         colour_weight: a.color_weight,
+        error_samples: a.error_samples,
     };
     let bars = Bars::new(a.quiet.quiet || a.json.json);
     let s = mint_decimate::simplify_file(&a.input, &a.output, &o, &bars)?;
