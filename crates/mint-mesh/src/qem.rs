@@ -380,8 +380,13 @@ fn block_slack() -> f64 {
 /// so a block asked for a large reduction would collapse its inside far
 /// beyond what the whole pass, which later removes those seams, would
 /// have chosen (a 2M-face sphere to 20k: seams of about 23k faces, more
-/// than the target). The whole pass does the rest in cost order.
-pub const BLOCK_MAX_RATIO: u64 = 8;
+/// than the target). The whole pass does the rest in cost order. Was 8
+/// while only meshes above 400k faces went through blocks; with smaller
+/// ones in blocks, 8 left the shared meshes' mean errors at 0.1% 5-14%
+/// above the whole-mesh collapse and the bunny through a 64N intermediate
+/// 1.08x worse than through 32N; 4 keeps 10% and 1% within 2% of the
+/// whole-mesh collapse and the 64N bunny below its 32N (docs/PERFORMANCE.md).
+pub const BLOCK_MAX_RATIO: u64 = 4;
 
 /// Which planes the vertices' quadrics gather.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
