@@ -364,12 +364,20 @@ pub fn blocks_for(faces: usize) -> usize {
     if faces > min { BLOCKS } else { 1 }
 }
 
-/// Blocks stop at this multiple of their share of the target, leaving the
-/// whole pass room to collapse the fine faces along their cuts. Was 1.1:
-/// with 1.1 the bunny at 10% had a 1.45x larger mean error in blocks than
-/// in one piece, Laurana 1.42x; with 2 both are within 3%, and the 2M-face
-/// sphere to 200k gains (mean 2.42e-6 against 2.59e-6).
-const BLOCK_SLACK: f64 = 2.0;
+/// Blocks stop at this multiple of their share of the target.
+const BLOCK_SLACK: f64 = 1.1;
+
+/// Nor does a block collapse below this many times its faces on a vertex
+/// shared with another block (held still in the block phase): the whole
+/// pass needs room to collapse those seams. On a 2M-face sphere the seams
+/// are a few percent of a block, on the 70k-face bunny cut in 8 a third
+/// of its share of a 10% target; with only [`BLOCK_SLACK`] and
+/// [`BLOCK_MAX_RATIO`] the bunny at 10% came out with a 1.45x larger mean
+/// error in blocks than in one piece, Laurana 1.42x. With 8x the seams,
+/// the shared meshes at 10% and 1% are within 1.5% of the whole-mesh
+/// collapse, at 0.1% within 5%, and the 2M-face sphere to 200k gains (mean
+/// 2.42e-6 against 2.59e-6) at about 0.15 s more (docs/PERFORMANCE.md).
+pub const SEAM_FACTOR: u64 = 8;
 
 /// [`BLOCK_SLACK`], or `MINT_QEM_BLOCK_SLACK` (for measuring it).
 fn block_slack() -> f64 {
@@ -380,13 +388,8 @@ fn block_slack() -> f64 {
 /// so a block asked for a large reduction would collapse its inside far
 /// beyond what the whole pass, which later removes those seams, would
 /// have chosen (a 2M-face sphere to 20k: seams of about 23k faces, more
-/// than the target). The whole pass does the rest in cost order. Was 8
-/// while only meshes above 400k faces went through blocks; with smaller
-/// ones in blocks, 8 left the shared meshes' mean errors at 0.1% 5-14%
-/// above the whole-mesh collapse and the bunny through a 64N intermediate
-/// 1.08x worse than through 32N; 4 keeps 10% and 1% within 2% of the
-/// whole-mesh collapse and the 64N bunny below its 32N (docs/PERFORMANCE.md).
-pub const BLOCK_MAX_RATIO: u64 = 4;
+/// than the target). The whole pass does the rest in cost order.
+pub const BLOCK_MAX_RATIO: u64 = 8;
 
 /// Which planes the vertices' quadrics gather.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -471,9 +474,11 @@ pub fn collapse_in_blocks(
     threads: usize,
     stop: &(dyn Fn() -> bool + Sync),
 ) -> (Vec<[f64; 3]>, Vec<[u32; 3]>, CollapseStats) {
+    let t = std::time::Instant::now();
     let (pos, centre, extent) = centred(positions);
     let max_distance = max_error * extent;
     let quad = initial_quadrics(&pos, faces, planes);
+    trace("initial quadrics", t);
     let stats = CollapseStats { extent, ..Default::default() };
     let (out_pos, out_faces, _, stats) = collapse_with(pos, quad, faces, target_faces, max_distance, blocks, threads, stop, stats);
     let out_pos: Vec<[f64; 3]> = out_pos.iter().map(|p| (*p + centre).to_array()).collect();
@@ -549,9 +554,37 @@ fn collapse_with<Q: VertexQuadric>(
     if std::env::var_os("MINT_QEM_TRACE").is_some() {
         eprintln!("qem: blocks done: {} faces, {stats:?}", tri.len());
     }
-    let pinned = vec![false; nv];
-    let (out_pos, out_faces, quad) = run(pos, tri, quad, &pinned, target_faces, max_distance, stop, &mut stats);
-    (out_pos, out_faces, quad, stats)
+    // The whole pass on the vertices still in use, renumbered in their
+    // order (so the same collapses come in the same order): after the
+    // blocks, tables a fraction of the size, which the caches hold.
+    let mut used = vec![false; nv];
+    for t in &tri {
+        for &v in t {
+            used[v as usize] = true;
+        }
+    }
+    let used: Vec<u32> = (0..nv as u32).filter(|&v| used[v as usize]).collect();
+    if used.len() == nv {
+        let pinned = vec![false; nv];
+        let (out_pos, out_faces, quad) = run(pos, tri, quad, &pinned, target_faces, max_distance, stop, &mut stats);
+        return (out_pos, out_faces, quad, stats);
+    }
+    let mut local = vec![u32::MAX; nv];
+    for (l, &g) in used.iter().enumerate() {
+        local[g as usize] = l as u32;
+    }
+    let ltri: Vec<[u32; 3]> = tri.iter().map(|t| t.map(|v| local[v as usize])).collect();
+    drop((tri, local));
+    let lpos: Vec<DVec3> = used.iter().map(|&v| pos[v as usize]).collect();
+    let lquad: Vec<Q> = used.iter().map(|&v| quad[v as usize]).collect();
+    let pinned = vec![false; used.len()];
+    let (lpos, lfaces, lquad) = run(lpos, ltri, lquad, &pinned, target_faces, max_distance, stop, &mut stats);
+    for (l, &g) in used.iter().enumerate() {
+        pos[g as usize] = lpos[l];
+        quad[g as usize] = lquad[l];
+    }
+    let out_faces = lfaces.iter().map(|t| t.map(|l| used[l as usize])).collect();
+    (pos, out_faces, quad, stats)
 }
 
 /// The block phase of [`collapse_in_blocks`]: returns the faces after it
@@ -569,6 +602,7 @@ fn collapse_blocks<Q: VertexQuadric>(
     stop: &(dyn Fn() -> bool + Sync),
     stats: &mut CollapseStats,
 ) -> Vec<[u32; 3]> {
+    let t0 = std::time::Instant::now();
     let nv = pos.len();
     // Faces to blocks by the centroid along the longest axis, at quantiles.
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
@@ -621,9 +655,13 @@ fn collapse_blocks<Q: VertexQuadric>(
             }
             id
         });
+        if t.iter().any(|&v| vblock[v as usize] == SHARED) {
+            part.seam += 1;
+        }
         part.faces.push(lt);
     }
     drop(local);
+    trace("blocks cut", t0);
     let total = faces.len() as f64;
     let next = std::sync::atomic::AtomicUsize::new(0);
     let results: Vec<std::sync::Mutex<Option<BlockResult<Q>>>> = (0..blocks).map(|_| std::sync::Mutex::new(None)).collect();
@@ -641,7 +679,7 @@ fn collapse_blocks<Q: VertexQuadric>(
         // spends the rest where it costs least, first on the fine faces
         // along the held vertices.
         let share = ((slack * target_faces as f64) * part.faces.len() as f64 / total).round() as u64;
-        let share = share.max(part.faces.len() as u64 / block_max_ratio());
+        let share = share.max(part.faces.len() as u64 / block_max_ratio()).max(seam_factor() * part.seam);
         let mut st = CollapseStats::default();
         let (p, f, q) = run(p, part.faces.clone(), q, &pinned, share, max_distance, stop, &mut st);
         *results[b].lock().unwrap() = Some(BlockResult { pos: p, faces: f, quad: q, stats: st });
@@ -655,6 +693,7 @@ fn collapse_blocks<Q: VertexQuadric>(
             }
         });
     }
+    trace("blocks collapsed", t0);
     // Merge: moved positions and quadrics back; a shared vertex gathers
     // what each block added to its quadric.
     let original: Vec<(u32, Q)> = (0..nv as u32).filter(|&v| vblock[v as usize] == SHARED).map(|v| (v, quad[v as usize])).collect();
@@ -683,6 +722,18 @@ fn collapse_blocks<Q: VertexQuadric>(
     out
 }
 
+/// With `MINT_QEM_TRACE`: how long since `t` it took to reach `what`.
+fn trace(what: &str, t: std::time::Instant) {
+    if std::env::var_os("MINT_QEM_TRACE").is_some() {
+        eprintln!("qem: {what} at {:.3}s", t.elapsed().as_secs_f64());
+    }
+}
+
+/// [`SEAM_FACTOR`], or `MINT_QEM_SEAM` (for measuring it).
+fn seam_factor() -> u64 {
+    std::env::var("MINT_QEM_SEAM").ok().and_then(|v| v.parse().ok()).unwrap_or(SEAM_FACTOR)
+}
+
 /// [`BLOCK_MAX_RATIO`], or `MINT_QEM_BLOCK_RATIO` (for measuring it).
 fn block_max_ratio() -> u64 {
     std::env::var("MINT_QEM_BLOCK_RATIO").ok().and_then(|v| v.parse().ok()).filter(|&r| r >= 1).unwrap_or(BLOCK_MAX_RATIO)
@@ -693,6 +744,8 @@ fn block_max_ratio() -> u64 {
 #[derive(Default)]
 struct Block {
     faces: Vec<[u32; 3]>,
+    /// Faces on a vertex shared with another block.
+    seam: u64,
     global: Vec<u32>,
     shared: std::collections::BTreeMap<u32, u32>,
 }
