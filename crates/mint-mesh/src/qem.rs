@@ -373,10 +373,13 @@ const BLOCK_SLACK: f64 = 1.1;
 /// are a few percent of a block, on the 70k-face bunny cut in 8 a third
 /// of its share of a 10% target; with only [`BLOCK_SLACK`] and
 /// [`BLOCK_MAX_RATIO`] the bunny at 10% came out with a 1.45x larger mean
-/// error in blocks than in one piece, Laurana 1.42x. With 8x the seams,
-/// the shared meshes at 10% and 1% are within 1.5% of the whole-mesh
-/// collapse, at 0.1% within 5%, and the 2M-face sphere to 200k gains (mean
-/// 2.42e-6 against 2.59e-6) at about 0.15 s more (docs/PERFORMANCE.md).
+/// error in blocks than in one piece, Laurana 1.42x. With 8x the seams the
+/// shared meshes at 10% and 1% are within 1.5% of the whole-mesh collapse
+/// and the thin shapes of `scripts/bench/thin.sh` within MeshLab's mean
+/// error by the margins they had; 4x was faster on meshes below 100k
+/// faces (the horse's blocks did two thirds of the work, not one third)
+/// but put the thin tree at 10% at 1.13x MeshLab's mean error
+/// (docs/PERFORMANCE.md).
 pub const SEAM_FACTOR: u64 = 8;
 
 /// [`BLOCK_SLACK`], or `MINT_QEM_BLOCK_SLACK` (for measuring it).
