@@ -68,11 +68,7 @@ impl EdgeHeap {
         } else {
             let i = i as usize;
             let old = std::mem::replace(&mut self.v[i].0, key);
-            if key < old {
-                self.sift_up(i);
-            } else {
-                self.sift_down(i);
-            }
+            self.restore(i, old);
         }
     }
 
@@ -88,17 +84,22 @@ impl EdgeHeap {
         if i < self.v.len() {
             let old = std::mem::replace(&mut self.v[i], last).0;
             self.at[last.1 as usize] = i as u32;
-            if last.0 < old {
-                self.sift_up(i);
-            } else {
-                self.sift_down(i);
-            }
+            self.restore(i, old);
         }
     }
 
     /// The least key and its id, left in.
     pub fn peek(&self) -> Option<(Key, u32)> {
         self.v.first().copied()
+    }
+
+    /// Moves the entry at `i`, whose key was `old`, to where its key goes.
+    fn restore(&mut self, i: usize, old: Key) {
+        if self.v[i].0 < old {
+            self.sift_up(i);
+        } else {
+            self.sift_down(i);
+        }
     }
 
     /// Entry `e` at index `i`.

@@ -995,8 +995,8 @@ fn run<Q: VertexQuadric>(
             break;
         }
         let [u, v] = ends[id as usize];
-        // Whatever is decided, the edge leaves the heap: it collapses, or
-        // waits until it is priced again.
+        // Whatever is decided, the edge leaves the heap: it collapses (and
+        // leaves `out` again), or waits until it is priced again.
         heap.remove(id);
         out.push(id);
         let Some((c, p)) = cost(&pos, &quad, &vf, &tri, u, v) else { continue };
@@ -1066,7 +1066,9 @@ fn run<Q: VertexQuadric>(
             stats.refused += 1;
             continue;
         }
-        // Collapse `gone` into `keep` (a border end is the one kept).
+        // Collapse `gone` into `keep` (a border end is the one kept); the
+        // edge goes, so it does not wait with the refused ones.
+        out.pop();
         let (keep, gone) = if border[v as usize] && !border[u as usize] { (v, u) } else { (u, v) };
         for &f in shared {
             alive[f as usize] = false;
@@ -1142,9 +1144,7 @@ fn run<Q: VertexQuadric>(
         }
         ve[keep as usize] = std::mem::replace(&mut fresh, old_keep);
     }
-    if std::env::var_os("MINT_QEM_TRACE").is_some() {
-        eprintln!("qem: run of {} faces: loop {:.3}s", tri.len(), t_loop.elapsed().as_secs_f64());
-    }
+    trace(&format!("run of {} faces: loop done", tri.len()), t_loop);
     let out_faces: Vec<[u32; 3]> = (0..tri.len()).filter(|&f| alive[f]).map(|f| tri[f]).collect();
     (pos, out_faces, quad)
 }
