@@ -58,8 +58,9 @@ fn u32_at(b: &[u8], i: usize) -> u32 {
 /// sequence or item), without interpreting values. Sequences are entered:
 /// in explicit VR by their VR `SQ`, in implicit VR when the value starts
 /// with an item tag. Walks Explicit VR Big Endian data sets too. Stops,
-/// content, at encapsulated pixel data and for Deflated data sets (their
-/// readers refuse them).  The message names the element and the byte.
+/// content, for Deflated data sets (their
+/// readers refuse them); the fragments of encapsulated pixel data are walked
+/// as items that must fit in the file. The message names the element and the byte.
 pub fn check_lengths(b: &[u8], lay: Layout) -> Result<(), String> {
     let (pos, explicit) = match lay {
         Layout::Bare { explicit } => (0, explicit),
@@ -146,7 +147,11 @@ fn walk(b: &[u8], mut pos: usize, explicit: bool, big: bool) -> Result<(), Strin
         pos += hdr;
         if len == UNDEFINED {
             if bulk {
-                return Ok(()); // encapsulated pixel data: fragments, not elements
+                // Encapsulated pixel data: items (the offset table, then
+                // the fragments) up to a sequence delimiter, each within
+                // what holds it.
+                pos = fragments(b, pos, end, at, u32_at)?;
+                continue;
             }
             continue; // a sequence: its items follow
         }
@@ -164,6 +169,29 @@ fn walk(b: &[u8], mut pos: usize, explicit: bool, big: bool) -> Result<(), Strin
     Ok(())
 }
 
+/// Walks the items of encapsulated pixel data from `pos` (after the
+/// element header at `at`) to its sequence delimiter; returns the byte
+/// after it.
+fn fragments(b: &[u8], mut pos: usize, end: usize, at: usize, u32_at: impl Fn(&[u8], usize) -> u32) -> Result<usize, String> {
+    let u16_le = |i: usize| u16::from_le_bytes([b[i], b[i + 1]]);
+    loop {
+        if end - pos < 8 {
+            return Err(format!("the pixel data fragments of the element at byte {at} are cut short at byte {pos}"));
+        }
+        let (group, elem, len) = (u16_le(pos), u16_le(pos + 2), u32_at(b, pos + 4));
+        if group != 0xFFFE || !matches!(elem, 0xE000 | 0xE0DD) {
+            return Err(format!("byte {pos}: ({group:04X},{elem:04X}) where a pixel data fragment or its delimiter should be"));
+        }
+        pos += 8;
+        if elem == 0xE0DD {
+            return Ok(pos);
+        }
+        if len == UNDEFINED || len as usize > end - pos {
+            return Err(format!("a pixel data fragment at byte {} claims {len} bytes but {} remain", pos - 8, end - pos));
+        }
+        pos += len as usize;
+    }
+}
 
 #[cfg(test)]
 mod tests {

@@ -31,6 +31,7 @@
 mod decode;
 mod dicom;
 pub mod dicom_lengths;
+mod dicom_pixels;
 pub mod error;
 mod metaimage;
 mod nifti;
