@@ -109,7 +109,7 @@ pub struct ResampleSummary {
 /// What a `mint volume` run read, and in which frame it wrote.
 #[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct VolumeSummary {
-    /// "NRRD", "MetaImage", "NIfTI-1", "DICOM series", "TIFF stack", "raw".
+    /// "NRRD", "MetaImage", "NIfTI-1", "DICOM series" (with the compression, e.g. "DICOM series (JPEG Lossless)"), "TIFF stack", "raw".
     pub format: String,
     pub dims: [u64; 3],
     /// Stored sample type (`u16`, `f32`, …) and rescale.

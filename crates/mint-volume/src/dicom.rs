@@ -592,7 +592,13 @@ pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vol
         frame: Frame::Lps,
         slope: first.slope,
         intercept: first.intercept,
-        format: "DICOM series",
+        format: match (sorted.iter().all(|h| h.syntax.codec == h0.syntax.codec), h0.syntax.codec) {
+            (false, _) => "DICOM series (mixed compression)",
+            (true, None) => "DICOM series",
+            (true, Some(Codec::Rle)) => "DICOM series (RLE Lossless)",
+            (true, Some(Codec::JpegBaseline)) => "DICOM series (JPEG Baseline, lossy)",
+            (true, Some(Codec::JpegLossless)) => "DICOM series (JPEG Lossless)",
+        },
         files: sorted.iter().map(|h| h.path.clone()).collect(),
         sequential_only: false,
     };
@@ -839,8 +845,9 @@ mod tests {
     fn compressed_series_read_as_their_uncompressed_originals() {
         let plain = folder(&[("1-01.dcm", slice(1)), ("1-02.dcm", slice(2))]);
         let (pi, ps) = slices(plain.path());
-        for what in ["rle", "jpeg-lossless-sv1"] {
+        for (what, format) in [("rle", "DICOM series (RLE Lossless)"), ("jpeg-lossless-sv1", "DICOM series (JPEG Lossless)")] {
             let (ci, cs) = slices(&compressed(what));
+            assert_eq!(ci.format, format);
             assert_eq!((ci.dims, ci.index_to_world, ci.sample, ci.slope, ci.intercept), (pi.dims, pi.index_to_world, pi.sample, pi.slope, pi.intercept), "{what}");
             assert!(cs == ps, "{what}: the samples differ");
         }
