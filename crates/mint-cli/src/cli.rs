@@ -100,7 +100,7 @@ Coordinates: the output is in the frame the file declares (DICOM and MetaImage: 
 RAS from the sform or qform; NRRD: its space), with spacing, origin and direction cosines applied; the summary names \
 the frame.\n\n\
 Formats: NRRD (.nrrd, .nhdr; raw or gzip, one data file or one per slice), MetaImage (.mhd, .mha), NIfTI-1 (.nii, \
-.nii.gz), a DICOM series (a folder; uncompressed, RLE Lossless, JPEG Baseline and JPEG Lossless transfer syntaxes), TIFF stacks (a folder or a multi-page file), and \
+.nii.gz), a DICOM series (a folder of single-frame files, or an enhanced multi-frame file; uncompressed, RLE Lossless, JPEG Baseline and JPEG Lossless transfer syntaxes), TIFF stacks (a folder or a multi-page file), and \
 raw samples (--raw-dims, --raw-type).\n\n\
 Examples:\n  mint volume head.nhdr skull.ply --iso 1150\n  mint volume ct/ bone.ply --iso 300 --cell-size 1.0 --mem 1G\n  \
 mint volume seg.nii.gz organs.ply --labels --one-file")]

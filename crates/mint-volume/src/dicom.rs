@@ -27,7 +27,14 @@
 //! each slice's own RescaleSlope/RescaleIntercept applies. MONOCHROME1
 //! (inverted display) values are kept as stored: the rescale gives the
 //! physical value, the inversion is a display convention only.
-//! Multi-frame files (NumberOfFrames > 1) are refused.
+//! Enhanced multi-frame files (NumberOfFrames > 1 with a
+//! PerFrameFunctionalGroupsSequence item per frame) are read as the
+//! series of their frames: each frame's position, orientation, spacing and
+//! rescale come from its own functional groups, then the shared ones, then
+//! the top level; frames are read one at a time from where the length walk
+//! found the pixels (native: at their offset; encapsulated: the frame's
+//! fragments by the basic offset table, or one fragment a frame). Other
+//! multi-frame files (no per-frame positions) are refused in one line.
 //!
 //! Every file's element lengths are walked first (`crate::dicom_lengths`),
 //! so no declared length larger than the file reaches the parser.
@@ -47,9 +54,13 @@ use dicom_object::{FileMetaTable, OpenFileOptions, Tag};
 use dicom_transfer_syntax_registry::{TransferSyntaxIndex, TransferSyntaxRegistry};
 
 use crate::decode::Sample;
+use crate::dicom_lengths::PixelData;
 use crate::dicom_pixels::{decode_frame, Codec, FrameShape};
 use crate::source::SliceSource;
 use crate::{Frame, VolumeError, VolumeInfo};
+
+/// The most frames a multi-frame file may declare.
+const MAX_FRAMES: i64 = 1 << 20;
 
 /// The attributes read (names as in PS3.6).
 mod tags {
@@ -73,6 +84,13 @@ mod tags {
     pub const RESCALE_INTERCEPT: Tag = Tag(0x0028, 0x1052);
     pub const RESCALE_SLOPE: Tag = Tag(0x0028, 0x1053);
     pub const PIXEL_DATA: Tag = Tag(0x7FE0, 0x0010);
+    // Multi-frame functional groups (PS3.3 C.7.6.16) and their macros.
+    pub const SHARED_GROUPS: Tag = Tag(0x5200, 0x9229);
+    pub const PER_FRAME_GROUPS: Tag = Tag(0x5200, 0x9230);
+    pub const PLANE_POSITION: Tag = Tag(0x0020, 0x9113);
+    pub const PLANE_ORIENTATION: Tag = Tag(0x0020, 0x9116);
+    pub const PIXEL_MEASURES: Tag = Tag(0x0028, 0x9110);
+    pub const PIXEL_VALUE_TRANSFORMATION: Tag = Tag(0x0028, 0x9145);
 }
 
 /// The Media Storage Directory SOP class (a DICOMDIR).
@@ -123,6 +141,27 @@ struct Header {
     syntax: Syntax,
     thickness: Option<f64>,
     between: Option<f64>,
+    /// In a multi-frame file: which frame, and where the file's pixels are.
+    frame: Option<FrameOf>,
+}
+
+/// A frame of a multi-frame file.
+#[derive(Clone, Debug)]
+struct FrameOf {
+    /// 0-based.
+    index: u32,
+    count: u32,
+    pixels: std::sync::Arc<PixelData>,
+}
+
+impl Header {
+    /// The file's name, and the frame's number (1-based) in a multi-frame file.
+    fn label(&self) -> String {
+        match &self.frame {
+            Some(f) => format!("{} frame {}", short(&self.path), f.index + 1),
+            None => short(&self.path),
+        }
+    }
 }
 
 /// Whether the file starts with a 128-byte preamble and `DICM`.
@@ -219,16 +258,31 @@ fn text_of(obj: &InMemDicomObject, tag: Tag) -> Option<String> {
     (!s.is_empty()).then(|| s.to_string())
 }
 
-/// Reads the header of the DICOM file `path` (up to PixelData); `None`
-/// when it holds no image (a DICOMDIR, a structure set, a report).
-fn read_header(path: &Path) -> Result<Option<Header>, VolumeError> {
+/// Where attribute `tag` of functional group macro `seq` is: in the first
+/// of `groups` (a frame's own, the shared ones) whose `seq` item holds it,
+/// or else at the top level.
+fn holder<'a>(top: &'a InMemDicomObject, groups: [Option<&'a InMemDicomObject>; 2], seq: Tag, tag: Tag) -> &'a InMemDicomObject {
+    groups.into_iter().flatten().filter_map(|g| g.get(seq).and_then(|e| e.items()).and_then(|i| i.first())).find(|o| o.get(tag).is_some()).unwrap_or(top)
+}
+
+/// Reads the header of the DICOM file `path` (up to PixelData): one
+/// [`Header`] per frame, none when it holds no image (a DICOMDIR, a
+/// structure set, a report).
+fn read_header(path: &Path) -> Result<Vec<Header>, VolumeError> {
     // Every declared length against the file, before dicom-object sizes a
     // buffer by one (see `crate::dicom_lengths`).
-    let bytes = std::fs::read(path).map_err(|e| VolumeError::io(path, "reading", e))?;
-    if let Some(layout) = crate::dicom_lengths::layout(&bytes) {
-        crate::dicom_lengths::check_lengths(&bytes, layout).map_err(|m| VolumeError::format(path, format!("{m}: truncated or corrupted")))?;
-    }
-    drop(bytes);
+    // The walk also says where the pixels are (for frames of multi-frame
+    // files). Mapped, not read: a multi-frame file can be gigabytes.
+    let file = File::open(path).map_err(|e| VolumeError::io(path, "opening", e))?;
+    // SAFETY: a read-only map of an input mint never writes; another
+    // process truncating the file meanwhile can fault the process (SIGBUS),
+    // the trade-off mint-io's mapped inputs document.
+    let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| VolumeError::io(path, "mapping", e))?;
+    let pixels = match crate::dicom_lengths::layout(&map) {
+        Some(layout) => crate::dicom_lengths::pixel_data(&map, layout).map_err(|m| VolumeError::format(path, format!("{m}: truncated or corrupted")))?,
+        None => None,
+    };
+    drop(map);
     // A syntax mint does not read is named before any parser inflates or
     // decodes the file.
     if let Some(uid) = meta_transfer_syntax(path) {
@@ -245,10 +299,10 @@ fn read_header(path: &Path) -> Result<Option<Header>, VolumeError> {
         }
     };
     if obj.meta().media_storage_sop_class_uid() == DICOMDIR_CLASS || text_of(&obj, tags::SOP_CLASS_UID).as_deref() == Some(DICOMDIR_CLASS) {
-        return Ok(None);
+        return Ok(Vec::new());
     }
     if obj.get(tags::ROWS).is_none() {
-        return Ok(None);
+        return Ok(Vec::new());
     }
     let syntax = check_transfer_syntax(path, obj.meta().transfer_syntax())?;
     let spp = int_of(&obj, path, tags::SAMPLES_PER_PIXEL, "SamplesPerPixel")?.unwrap_or(1);
@@ -266,16 +320,9 @@ fn read_header(path: &Path) -> Result<Option<Header>, VolumeError> {
             ));
         }
     }
-    if let Some(nf) = int_of(&obj, path, tags::NUMBER_OF_FRAMES, "NumberOfFrames")? {
-        if nf != 1 {
-            return Err(VolumeError::unsupported(
-                path,
-                format!(
-                    "{}: a multi-frame image ({nf} frames); mint reads a series of single-frame files only (split it with `dcmsplit` or `gdcmtar --split`)",
-                    place(tags::NUMBER_OF_FRAMES, "NumberOfFrames")
-                ),
-            ));
-        }
+    let frames = int_of(&obj, path, tags::NUMBER_OF_FRAMES, "NumberOfFrames")?.unwrap_or(1);
+    if !(1..=MAX_FRAMES).contains(&frames) {
+        return Err(VolumeError::format(path, format!("{}: {frames} is not a usable number of frames", place(tags::NUMBER_OF_FRAMES, "NumberOfFrames"))));
     }
     let dim = |tag: Tag, name: &str| -> Result<u64, VolumeError> {
         let v = int_req(&obj, path, tag, name)?;
@@ -302,41 +349,74 @@ fn read_header(path: &Path) -> Result<Option<Header>, VolumeError> {
     if !matches!(pr, 0 | 1) {
         return Err(VolumeError::format(path, format!("{}: {pr} (0 unsigned or 1 signed)", place(tags::PIXEL_REPRESENTATION, "PixelRepresentation"))));
     }
-    let iop_v = floats_req(&obj, path, tags::IMAGE_ORIENTATION_PATIENT, "ImageOrientationPatient", 6)?;
-    let ipp_v = floats_req(&obj, path, tags::IMAGE_POSITION_PATIENT, "ImagePositionPatient", 3)?;
-    let ps_v = floats_req(&obj, path, tags::PIXEL_SPACING, "PixelSpacing", 2)?;
-    if ps_v.iter().any(|&s| s <= 0.0) {
-        return Err(VolumeError::format(path, format!("{}: {:?} must be positive", place(tags::PIXEL_SPACING, "PixelSpacing"), ps_v)));
-    }
-    let one = |tag: Tag, name: &str| -> Result<Option<f64>, VolumeError> { Ok(floats_of(&obj, path, tag, name, 1)?.map(|v| v[0])) };
-    let slope = one(tags::RESCALE_SLOPE, "RescaleSlope")?.unwrap_or(1.0);
-    let intercept = one(tags::RESCALE_INTERCEPT, "RescaleIntercept")?.unwrap_or(0.0);
-    if slope == 0.0 {
-        return Err(VolumeError::format(path, format!("{}: 0", place(tags::RESCALE_SLOPE, "RescaleSlope"))));
-    }
-    // Judged on the widest stored samples read (32 bits, either sign).
-    crate::decode::check_rescale(crate::Sample::I32, slope, intercept).and_then(|_| crate::decode::check_rescale(crate::Sample::U32, slope, intercept)).map_err(|m| VolumeError::format(path, format!("{}: {m}", place(tags::RESCALE_SLOPE, "RescaleSlope"))))?;
-    let thickness = one(tags::SLICE_THICKNESS, "SliceThickness")?.filter(|&t| t > 0.0);
-    let between = one(tags::SPACING_BETWEEN_SLICES, "SpacingBetweenSlices")?.filter(|&t| t > 0.0);
     let series = text_of(&obj, tags::SERIES_INSTANCE_UID).unwrap_or_default();
-    Ok(Some(Header {
-        path: path.to_path_buf(),
-        series,
-        rows,
-        cols,
-        bits_allocated: ba as u32,
-        bits_stored: bs as u32,
-        high_bit: hb as u32,
-        signed: pr == 1,
-        iop: std::array::from_fn(|i| iop_v[i]),
-        ipp: std::array::from_fn(|i| ipp_v[i]),
-        ps: [ps_v[0], ps_v[1]],
-        slope,
-        intercept,
-        syntax,
-        thickness,
-        between,
-    }))
+    // Functional groups (enhanced images): a frame's own, then the shared
+    // ones, then the top level.
+    let shared = obj.get(tags::SHARED_GROUPS).and_then(|e| e.items()).and_then(|i| i.first());
+    let per_frame = obj.get(tags::PER_FRAME_GROUPS).and_then(|e| e.items()).unwrap_or(&[]);
+    let frame_data = if frames > 1 {
+        if per_frame.len() as i64 != frames {
+            return Err(VolumeError::unsupported(
+                path,
+                format!(
+                    "{}: a multi-frame image of {frames} frames with {} items of {}; mint reads enhanced multi-frame images (a position per frame) and series of single-frame files (split it with `dcmsplit` or `gdcmtar --split`)",
+                    place(tags::NUMBER_OF_FRAMES, "NumberOfFrames"),
+                    per_frame.len(),
+                    place(tags::PER_FRAME_GROUPS, "PerFrameFunctionalGroupsSequence")
+                ),
+            ));
+        }
+        let pixels = match pixels {
+            Some(p) => std::sync::Arc::new(p),
+            None => return Err(VolumeError::format(path, format!("{} is missing", place(tags::PIXEL_DATA, "PixelData")))),
+        };
+        Some(pixels)
+    } else {
+        None
+    };
+    let mut out = Vec::with_capacity(frames as usize);
+    for f in 0..frames as usize {
+        let fg = if frames > 1 { per_frame.get(f) } else { per_frame.first() };
+        let at = |seq: Tag, tag: Tag| -> &InMemDicomObject { holder(&obj, [fg, shared], seq, tag) };
+        let iop_v = floats_req(at(tags::PLANE_ORIENTATION, tags::IMAGE_ORIENTATION_PATIENT), path, tags::IMAGE_ORIENTATION_PATIENT, "ImageOrientationPatient", 6)?;
+        let ipp_v = floats_req(at(tags::PLANE_POSITION, tags::IMAGE_POSITION_PATIENT), path, tags::IMAGE_POSITION_PATIENT, "ImagePositionPatient", 3)?;
+        let ps_v = floats_req(at(tags::PIXEL_MEASURES, tags::PIXEL_SPACING), path, tags::PIXEL_SPACING, "PixelSpacing", 2)?;
+        if ps_v.iter().any(|&s| s <= 0.0) {
+            return Err(VolumeError::format(path, format!("{}: {:?} must be positive", place(tags::PIXEL_SPACING, "PixelSpacing"), ps_v)));
+        }
+        let one = |seq: Tag, tag: Tag, name: &str| -> Result<Option<f64>, VolumeError> { Ok(floats_of(at(seq, tag), path, tag, name, 1)?.map(|v| v[0])) };
+        let slope = one(tags::PIXEL_VALUE_TRANSFORMATION, tags::RESCALE_SLOPE, "RescaleSlope")?.unwrap_or(1.0);
+        let intercept = one(tags::PIXEL_VALUE_TRANSFORMATION, tags::RESCALE_INTERCEPT, "RescaleIntercept")?.unwrap_or(0.0);
+        if slope == 0.0 {
+            return Err(VolumeError::format(path, format!("{}: 0", place(tags::RESCALE_SLOPE, "RescaleSlope"))));
+        }
+        // Judged on the widest stored samples read (32 bits, either sign).
+        crate::decode::check_rescale(crate::Sample::I32, slope, intercept)
+            .and_then(|_| crate::decode::check_rescale(crate::Sample::U32, slope, intercept))
+            .map_err(|m| VolumeError::format(path, format!("{}: {m}", place(tags::RESCALE_SLOPE, "RescaleSlope"))))?;
+        let thickness = one(tags::PIXEL_MEASURES, tags::SLICE_THICKNESS, "SliceThickness")?.filter(|&t| t > 0.0);
+        let between = one(tags::PIXEL_MEASURES, tags::SPACING_BETWEEN_SLICES, "SpacingBetweenSlices")?.filter(|&t| t > 0.0);
+        out.push(Header {
+            path: path.to_path_buf(),
+            series: series.clone(),
+            rows,
+            cols,
+            bits_allocated: ba as u32,
+            bits_stored: bs as u32,
+            high_bit: hb as u32,
+            signed: pr == 1,
+            iop: std::array::from_fn(|i| iop_v[i]),
+            ipp: std::array::from_fn(|i| ipp_v[i]),
+            ps: [ps_v[0], ps_v[1]],
+            slope,
+            intercept,
+            syntax,
+            thickness,
+            between,
+            frame: frame_data.as_ref().map(|p| FrameOf { index: f as u32, count: frames as u32, pixels: p.clone() }),
+        });
+    }
+    Ok(out)
 }
 
 /// The transfer syntax the file meta group names, if it can be read.
@@ -377,6 +457,7 @@ struct SliceMeta {
     slope: f64,
     intercept: f64,
     syntax: Syntax,
+    frame: Option<FrameOf>,
 }
 
 /// Opens the DICOM series in the folder `dir`.
@@ -398,9 +479,7 @@ pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vol
             continue;
         }
         dicom_files += 1;
-        if let Some(h) = read_header(p)? {
-            heads.push(h);
-        }
+        heads.extend(read_header(p)?);
     }
     if heads.is_empty() {
         return Err(VolumeError::format(
@@ -433,24 +512,24 @@ pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vol
     // The same grid in every file.
     let h0 = heads[0].clone();
     for h in &heads[1..] {
-        let differ = |what: String| -> VolumeError { VolumeError::format(&h.path, format!("{what}, but {} has {}", short(&h0.path), "the first value")) };
+        let differ = |what: String| -> VolumeError { VolumeError::format(&h.path, format!("{what}, but {} has {}", h0.label(), "the first value")) };
         let _ = differ;
         let msg = if (h.rows, h.cols) != (h0.rows, h0.cols) {
-            Some(format!("{} x {} (Columns x Rows), but {} is {} x {}", h.cols, h.rows, short(&h0.path), h0.cols, h0.rows))
+            Some(format!("{} x {} (Columns x Rows), but {} is {} x {}", h.cols, h.rows, h0.label(), h0.cols, h0.rows))
         } else if (h.bits_allocated, h.bits_stored, h.high_bit, h.signed) != (h0.bits_allocated, h0.bits_stored, h0.high_bit, h0.signed) {
             Some(format!(
                 "BitsAllocated/BitsStored/HighBit/PixelRepresentation {}/{}/{}/{}, but {} has {}/{}/{}/{}",
-                h.bits_allocated, h.bits_stored, h.high_bit, h.signed as u8, short(&h0.path), h0.bits_allocated, h0.bits_stored, h0.high_bit, h0.signed as u8
+                h.bits_allocated, h.bits_stored, h.high_bit, h.signed as u8, h0.label(), h0.bits_allocated, h0.bits_stored, h0.high_bit, h0.signed as u8
             ))
         } else if h.iop.iter().zip(&h0.iop).any(|(a, b)| (a - b).abs() > 1e-4) {
-            Some(format!("(0020,0037) ImageOrientationPatient {:?}, but {} has {:?}", h.iop, short(&h0.path), h0.iop))
+            Some(format!("(0020,0037) ImageOrientationPatient {:?}, but {} has {:?}", h.iop, h0.label(), h0.iop))
         } else if h.ps.iter().zip(&h0.ps).any(|(a, b)| (a - b).abs() > 1e-4 * b.abs().max(1.0)) {
-            Some(format!("(0028,0030) PixelSpacing {:?}, but {} has {:?}", h.ps, short(&h0.path), h0.ps))
+            Some(format!("(0028,0030) PixelSpacing {:?}, but {} has {:?}", h.ps, h0.label(), h0.ps))
         } else {
             None
         };
         if let Some(m) = msg {
-            return Err(VolumeError::format(&h.path, format!("not the same grid as the rest of the series: {m}")));
+            return Err(VolumeError::format(&h.path, format!("{}not the same grid as the rest of the series: {m}", h.frame.as_ref().map(|f| format!("frame {}: ", f.index + 1)).unwrap_or_default())));
         }
     }
     // Directions.
@@ -477,7 +556,7 @@ pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vol
         if (pos[w + 1] - pos[w]).abs() < 1e-4 {
             return Err(VolumeError::format(
                 &sorted[w + 1].path,
-                format!("(0020,0032) ImagePositionPatient: the same slice position ({:.4} mm along the normal) as {}: duplicate slices", pos[w], short(&sorted[w].path)),
+                format!("(0020,0032) ImagePositionPatient: the same slice position ({:.4} mm along the normal) as {}: duplicate slices", pos[w], sorted[w].label()),
             ));
         }
     }
@@ -498,9 +577,9 @@ pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vol
                     &a.path,
                     format!(
                         "slice missing between {} (position {:.4}) and {} (position {:.4}): a step of {:.4} mm where the series steps {:.4} mm (about {} slice{} missing)",
-                        short(&a.path),
+                        a.label(),
                         pos[w],
-                        short(&b.path),
+                        b.label(),
                         pos[w + 1],
                         g,
                         median,
@@ -514,9 +593,9 @@ pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vol
                     &a.path,
                     format!(
                         "non-uniform slice spacing between {} (position {:.4}) and {} (position {:.4}): a step of {:.4} mm where the series steps {:.4} mm",
-                        short(&a.path),
+                        a.label(),
                         pos[w],
-                        short(&b.path),
+                        b.label(),
                         pos[w + 1],
                         g,
                         median
@@ -538,8 +617,8 @@ pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vol
                         "(0020,0032) ImagePositionPatient {:?} is {:.4} mm off the line of slices from {} to {}: the slices do not form one grid",
                         h.ipp,
                         off,
-                        short(&sorted[0].path),
-                        short(&sorted[count - 1].path)
+                        sorted[0].label(),
+                        sorted[count - 1].label()
                     ),
                 ));
             }
@@ -567,6 +646,25 @@ pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vol
                     layout.cols, layout.rows, layout.bits_allocated
                 ),
             ));
+        }
+    }
+    // A multi-frame file's native pixels hold all its frames.
+    for h in &sorted {
+        if let Some(FrameOf { index: 0, count, pixels }) = &h.frame {
+            if let PixelData::Native { len, .. } = **pixels {
+                if (len as u64) < *count as u64 * slice_bytes {
+                    return Err(VolumeError::format(
+                        &h.path,
+                        format!(
+                            "(7FE0,0010) PixelData holds {len} bytes, fewer than the {} of {count} frames of {} x {} x {} bits: truncated",
+                            *count as u64 * slice_bytes,
+                            layout.cols,
+                            layout.rows,
+                            layout.bits_allocated
+                        ),
+                    ));
+                }
+            }
         }
     }
     let first = sorted[0];
@@ -599,12 +697,16 @@ pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vol
             (true, Some(Codec::JpegBaseline)) => "DICOM series (JPEG Baseline, lossy)",
             (true, Some(Codec::JpegLossless)) => "DICOM series (JPEG Lossless)",
         },
-        files: sorted.iter().map(|h| h.path.clone()).collect(),
+        files: {
+            // Each file once (a multi-frame file holds several slices).
+            let mut seen = std::collections::HashSet::new();
+            sorted.iter().filter(|h| seen.insert(h.path.clone())).map(|h| h.path.clone()).collect()
+        },
         sequential_only: false,
     };
     let slices = sorted
         .iter()
-        .map(|h| SliceMeta { path: h.path.clone(), slope: h.slope, intercept: h.intercept, syntax: h.syntax })
+        .map(|h| SliceMeta { path: h.path.clone(), slope: h.slope, intercept: h.intercept, syntax: h.syntax, frame: h.frame.clone() })
         .collect();
     Ok((info, Box::new(DicomSlices { layout, slices })))
 }
@@ -657,6 +759,70 @@ fn decode_samples(bytes: &[u8], layout: &Layout, big_endian: bool, slope: f64, i
     }
 }
 
+/// Slice `k`, frame `f` of a multi-frame file, read from where the walk
+/// found its pixels: native samples at their offset, or the frame's
+/// fragments (by the basic offset table, or one fragment a frame).
+fn read_frame(k: u64, s: &SliceMeta, f: &FrameOf, l: &Layout, out: &mut [f32]) -> Result<(), VolumeError> {
+    let pd = place(tags::PIXEL_DATA, "PixelData");
+    let at = |m: String| VolumeError::format(&s.path, format!("slice {k} (frame {}): {pd}: {m}", f.index + 1));
+    let need = (l.rows * l.cols) as usize;
+    let bpp = (l.bits_allocated / 8) as usize;
+    let mut file = File::open(&s.path).map_err(|e| VolumeError::io(&s.path, "opening", e))?;
+    let mut read_at = |offset: usize, len: usize| -> Result<Vec<u8>, VolumeError> {
+        let mut b = vec![0u8; len];
+        file.seek(SeekFrom::Start(offset as u64)).and_then(|_| file.read_exact(&mut b)).map_err(|e| VolumeError::io(&s.path, &format!("reading frame {} at byte {offset}", f.index + 1), e))?;
+        Ok(b)
+    };
+    let (bytes, big_endian) = match (&*f.pixels, s.syntax.codec) {
+        (PixelData::Native { offset, len }, None) => {
+            // The open checked that the value holds every frame.
+            let start = f.index as usize * need * bpp;
+            if start + need * bpp > *len {
+                return Err(at(format!("{len} bytes hold no frame {}", f.index + 1)));
+            }
+            (read_at(offset + start, need * bpp)?, s.syntax.big_endian)
+        }
+        (PixelData::Encapsulated { items }, Some(codec)) => {
+            let Some((&(bot_at, bot_len), frags)) = items.split_first() else { return Err(at("no basic offset table item".into())) };
+            if frags.is_empty() {
+                return Err(at("no fragments".into()));
+            }
+            let count = f.count as usize;
+            let i = f.index as usize;
+            let range = if bot_len > 0 {
+                if bot_len != 4 * count {
+                    return Err(at(format!("a basic offset table of {bot_len} bytes for {count} frames")));
+                }
+                let bot = read_at(bot_at, bot_len)?;
+                let off = |j: usize| u32::from_le_bytes([bot[4 * j], bot[4 * j + 1], bot[4 * j + 2], bot[4 * j + 3]]) as usize;
+                // Item j's offset from the first fragment's item.
+                let rel = |j: usize| frags[j].0 - frags[0].0;
+                let first = (0..frags.len()).find(|&j| rel(j) == off(i)).ok_or_else(|| at(format!("the offset table's {} for frame {} starts no fragment", off(i), i + 1)))?;
+                let end = if i + 1 < count { (first..frags.len()).find(|&j| rel(j) >= off(i + 1)).unwrap_or(frags.len()) } else { frags.len() };
+                first..end
+            } else if frags.len() == count {
+                i..i + 1
+            } else {
+                return Err(at(format!("{} fragments for {count} frames and no offset table: mint cannot tell the frames apart", frags.len())));
+            };
+            let mut pieces = Vec::with_capacity(range.len());
+            for &(o, n) in &frags[range] {
+                pieces.push(read_at(o, n)?);
+            }
+            let mut bytes = Vec::new();
+            decode_frame(codec, &pieces, FrameShape { rows: l.rows, cols: l.cols, bits_allocated: l.bits_allocated }, &mut bytes).map_err(at)?;
+            (bytes, false)
+        }
+        (PixelData::Native { .. }, Some(_)) => return Err(at("not encapsulated, but the transfer syntax is a compressed one".into())),
+        (PixelData::Encapsulated { .. }, None) => return Err(at("encapsulated (compressed), but the transfer syntax is not a compressed one".into())),
+    };
+    if bytes.len() < need * bpp {
+        return Err(at(format!("{} bytes, fewer than the {} of a frame", bytes.len(), need * bpp)));
+    }
+    decode_samples(&bytes[..need * bpp], l, big_endian, s.slope, s.intercept, out);
+    Ok(())
+}
+
 impl SliceSource for DicomSlices {
     fn read_slice(&mut self, k: u64, out: &mut [f32]) -> Result<(), VolumeError> {
         let Some(s) = self.slices.get(k as usize) else {
@@ -667,6 +833,9 @@ impl SliceSource for DicomSlices {
         let need = (l.rows * l.cols) as usize;
         if out.len() != need {
             return Err(VolumeError::new(crate::VolumeErrorKind::Value, &s.path, format!("slice {k}: {} values asked, a slice holds {need}", out.len())));
+        }
+        if let Some(f) = &s.frame {
+            return read_frame(k, s, f, &l, out);
         }
         let obj = OpenFileOptions::new()
             .read_to(tags::PIXEL_DATA)
@@ -894,6 +1063,71 @@ mod tests {
         let d = folder(&[("1.dcm", ext)]);
         let e = open_err(&d);
         assert!(e.contains("JPEG Extended") && e.contains("no decoder") && e.contains("JPEG Lossless"), "{e}");
+    }
+
+
+    fn multiframe(what: &str) -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/dicom-multiframe").join(what)
+    }
+
+    /// `file` alone in a folder.
+    fn alone(file: &Path) -> tempfile::TempDir {
+        folder(&[("1.dcm", std::fs::read(file).unwrap())])
+    }
+
+    #[test]
+    fn enhanced_multi_frame_files_read_as_the_series_of_their_frames() {
+        let (si, ss) = slices(&multiframe("single"));
+        assert_eq!(si.dims, [64, 64, 3]);
+        for what in ["enhanced.dcm", "enhanced-rle.dcm", "enhanced-jpeg-lossless.dcm"] {
+            let d = alone(&multiframe(what));
+            let (mi, ms) = slices(d.path());
+            // Frames stored 1-02, 1-01, 1-03 come out ordered by position.
+            assert_eq!((mi.dims, mi.index_to_world, mi.slope, mi.intercept), (si.dims, si.index_to_world, si.slope, si.intercept), "{what}");
+            assert!(ms == ss, "{what}: the samples differ");
+            assert_eq!(mi.files.len(), 1);
+        }
+        // Frames are placed by their own positions: the world point of
+        // voxel (0, 0, 2) is the highest slice's (z = 312).
+        assert_eq!(si.world([0.0, 0.0, 2.0])[2], 312.0);
+    }
+
+    #[test]
+    fn damaged_multi_frame_files_are_one_line() {
+        let b = std::fs::read(multiframe("enhanced.dcm")).unwrap();
+        // NumberOfFrames 4 with 3 per-frame items, and 2 with 3.
+        for n in ["4", "2"] {
+            let d = folder(&[("1.dcm", edit(&b, (0x0028, 0x0008), n.as_bytes()))]);
+            let e = open_err(&d);
+            assert!(e.contains("1.dcm") && e.contains("PerFrameFunctionalGroupsSequence") && !e.contains('\n'), "{e}");
+        }
+        let d = folder(&[("1.dcm", edit(&b, (0x0028, 0x0008), b"0"))]);
+        assert!(open_err(&d).contains("not a usable number of frames"));
+        // Truncated pixels.
+        let d = folder(&[("1.dcm", b[..b.len() - 100].to_vec())]);
+        let e = open_err(&d);
+        assert!(e.contains("1.dcm") && e.contains("truncated"), "{e}");
+        // Compressed frames with bytes flipped: errors name the frame, or a value.
+        for what in ["enhanced-rle.dcm", "enhanced-jpeg-lossless.dcm"] {
+            let c = std::fs::read(multiframe(what)).unwrap();
+            for k in 1..40 {
+                let mut f = c.clone();
+                let at = f.len() - 300 * k;
+                for x in &mut f[at..at + 16] {
+                    *x ^= 0x5A;
+                }
+                let d = folder(&[("1.dcm", f)]);
+                match Volume::open(d.path(), &OpenOptions::default()) {
+                    Err(e) => assert!(!e.to_string().contains('\n')),
+                    Ok(mut v) => {
+                        let mut s = vec![0.0; 64 * 64 * 3];
+                        if let Err(e) = v.read_slices(0, 3, &mut s) {
+                            assert!(e.to_string().contains("1.dcm") && !e.to_string().contains('\n'), "{e}");
+                        }
+                    }
+                }
+            }
+        }
     }
 
 }

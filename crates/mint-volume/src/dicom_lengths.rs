@@ -62,6 +62,33 @@ fn u32_at(b: &[u8], i: usize) -> u32 {
 /// readers refuse them); the fragments of encapsulated pixel data are walked
 /// as items that must fit in the file. The message names the element and the byte.
 pub fn check_lengths(b: &[u8], lay: Layout) -> Result<(), String> {
+    pixel_data(b, lay).map(|_| ())
+}
+
+/// Where the data set's (7FE0,0010) PixelData value is, in bytes of the file.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum PixelData {
+    /// Native samples.
+    Native {
+        /// Where the value starts.
+        offset: usize,
+        /// Its length in bytes.
+        len: usize,
+    },
+    /// Encapsulated pixel data.
+    Encapsulated {
+        /// The items' values as (offset, length): the basic offset table
+        /// first, then the fragments.
+        items: Vec<(usize, usize)>,
+    },
+}
+
+/// The most items of encapsulated pixel data recorded.
+const MAX_ITEMS: usize = 1 << 20;
+
+/// [`check_lengths`], also saying where the top-level PixelData is (`None`
+/// when there is none, or for a Deflated data set).
+pub fn pixel_data(b: &[u8], lay: Layout) -> Result<Option<PixelData>, String> {
     let (pos, explicit) = match lay {
         Layout::Bare { explicit } => (0, explicit),
         Layout::Preamble | Layout::Meta => {
@@ -89,7 +116,7 @@ pub fn check_lengths(b: &[u8], lay: Layout) -> Result<(), String> {
             match ts.as_str() {
                 "1.2.840.10008.1.2" => (pos, false),
                 "1.2.840.10008.1.2.2" => return walk(b, pos, true, true),
-                "1.2.840.10008.1.2.1.99" => return Ok(()),
+                "1.2.840.10008.1.2.1.99" => return Ok(None),
                 _ => (pos, true),
             }
         }
@@ -99,7 +126,8 @@ pub fn check_lengths(b: &[u8], lay: Layout) -> Result<(), String> {
 
 /// The data set's walk from byte `pos`: explicit or implicit VR, little or
 /// big endian (Explicit VR Big Endian: every number after the meta group).
-fn walk(b: &[u8], mut pos: usize, explicit: bool, big: bool) -> Result<(), String> {
+fn walk(b: &[u8], mut pos: usize, explicit: bool, big: bool) -> Result<Option<PixelData>, String> {
+    let mut found = None;
     let u16_at = |b: &[u8], i: usize| if big { u16::from_be_bytes([b[i], b[i + 1]]) } else { u16_at(b, i) };
     let u32_at = |b: &[u8], i: usize| if big { u32::from_be_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]]) } else { u32_at(b, i) };
     // Ends of the defined-length sequences and items we are in.
@@ -150,7 +178,12 @@ fn walk(b: &[u8], mut pos: usize, explicit: bool, big: bool) -> Result<(), Strin
                 // Encapsulated pixel data: items (the offset table, then
                 // the fragments) up to a sequence delimiter, each within
                 // what holds it.
-                pos = fragments(b, pos, end, at, u32_at)?;
+                let top = ends.len() == 1 && (group, elem) == (0x7FE0, 0x0010);
+                let mut items = Vec::new();
+                pos = fragments(b, pos, end, at, u32_at, top.then_some(&mut items))?;
+                if top {
+                    found = Some(PixelData::Encapsulated { items });
+                }
                 continue;
             }
             continue; // a sequence: its items follow
@@ -159,6 +192,9 @@ fn walk(b: &[u8], mut pos: usize, explicit: bool, big: bool) -> Result<(), Strin
         if len > end - pos {
             return Err(format!("element ({group:04X},{elem:04X}) at byte {at} claims {len} bytes but {} remain", end - pos));
         }
+        if ends.len() == 1 && (group, elem) == (0x7FE0, 0x0010) {
+            found = Some(PixelData::Native { offset: pos, len });
+        }
         let items_follow = len >= 8 && u16_at(b, pos) == 0xFFFE && u16_at(b, pos + 2) == 0xE000;
         if sq || (!explicit && items_follow) {
             ends.push(pos + len);
@@ -166,13 +202,13 @@ fn walk(b: &[u8], mut pos: usize, explicit: bool, big: bool) -> Result<(), Strin
             pos += len;
         }
     }
-    Ok(())
+    Ok(found)
 }
 
 /// Walks the items of encapsulated pixel data from `pos` (after the
 /// element header at `at`) to its sequence delimiter; returns the byte
 /// after it.
-fn fragments(b: &[u8], mut pos: usize, end: usize, at: usize, u32_at: impl Fn(&[u8], usize) -> u32) -> Result<usize, String> {
+fn fragments(b: &[u8], mut pos: usize, end: usize, at: usize, u32_at: impl Fn(&[u8], usize) -> u32, mut record: Option<&mut Vec<(usize, usize)>>) -> Result<usize, String> {
     let u16_le = |i: usize| u16::from_le_bytes([b[i], b[i + 1]]);
     loop {
         if end - pos < 8 {
@@ -188,6 +224,12 @@ fn fragments(b: &[u8], mut pos: usize, end: usize, at: usize, u32_at: impl Fn(&[
         }
         if len == UNDEFINED || len as usize > end - pos {
             return Err(format!("a pixel data fragment at byte {} claims {len} bytes but {} remain", pos - 8, end - pos));
+        }
+        if let Some(items) = record.as_deref_mut() {
+            if items.len() == MAX_ITEMS {
+                return Err(format!("the pixel data of the element at byte {at} has more than {MAX_ITEMS} fragments"));
+            }
+            items.push((pos, len as usize));
         }
         pos += len as usize;
     }
