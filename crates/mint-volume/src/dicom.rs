@@ -349,6 +349,18 @@ fn read_header(path: &Path) -> Result<Vec<Header>, VolumeError> {
     if !matches!(pr, 0 | 1) {
         return Err(VolumeError::format(path, format!("{}: {pr} (0 unsigned or 1 signed)", place(tags::PIXEL_REPRESENTATION, "PixelRepresentation"))));
     }
+    // Compressed pixels too short for the frames the header claims are
+    // refused before any slice is sized by the header.
+    if let (Some(codec), Some(PixelData::Encapsulated { items })) = (syntax.codec, &pixels) {
+        let have: u64 = items.iter().skip(1).map(|&(_, n)| n as u64).sum();
+        let need = frames as u64 * crate::dicom_pixels::min_bytes(codec, FrameShape { rows, cols, bits_allocated: ba as u32 });
+        if have < need {
+            return Err(VolumeError::format(
+                path,
+                format!("{}: {have} bytes of fragments cannot hold {frames} frame{} of {cols} x {rows} samples: truncated, or Rows/Columns wrong", place(tags::PIXEL_DATA, "PixelData"), if frames == 1 { "" } else { "s" }),
+            ));
+        }
+    }
     let series = text_of(&obj, tags::SERIES_INSTANCE_UID).unwrap_or_default();
     // Functional groups (enhanced images): a frame's own, then the shared
     // ones, then the top level.
@@ -695,7 +707,7 @@ pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vol
             (true, None) => "DICOM series",
             (true, Some(Codec::Rle)) => "DICOM series (RLE Lossless)",
             (true, Some(Codec::JpegBaseline)) => "DICOM series (JPEG Baseline, lossy)",
-            (true, Some(Codec::JpegLossless)) => "DICOM series (JPEG Lossless)",
+            (true, Some(Codec::JpegLossless { .. })) => "DICOM series (JPEG Lossless)",
         },
         files: {
             // Each file once (a multi-frame file holds several slices).
@@ -759,6 +771,16 @@ fn decode_samples(bytes: &[u8], layout: &Layout, big_endian: bool, slope: f64, i
     }
 }
 
+/// The layout of samples as `codec` hands them back: a JPEG decoder's
+/// come right-aligned (the stored value in the low BitsStored bits),
+/// whatever HighBit says; RLE keeps the stored bytes as they are.
+fn decoded_layout(l: &Layout, codec: Option<Codec>) -> Layout {
+    match codec {
+        Some(Codec::JpegBaseline | Codec::JpegLossless { .. }) => Layout { high_bit: l.bits_stored - 1, ..*l },
+        _ => *l,
+    }
+}
+
 /// Slice `k`, frame `f` of a multi-frame file, read from where the walk
 /// found its pixels: native samples at their offset, or the frame's
 /// fragments (by the basic offset table, or one fragment a frame).
@@ -819,7 +841,7 @@ fn read_frame(k: u64, s: &SliceMeta, f: &FrameOf, l: &Layout, out: &mut [f32]) -
     if bytes.len() < need * bpp {
         return Err(at(format!("{} bytes, fewer than the {} of a frame", bytes.len(), need * bpp)));
     }
-    decode_samples(&bytes[..need * bpp], l, big_endian, s.slope, s.intercept, out);
+    decode_samples(&bytes[..need * bpp], &decoded_layout(l, s.syntax.codec), big_endian, s.slope, s.intercept, out);
     Ok(())
 }
 
@@ -876,7 +898,7 @@ impl SliceSource for DicomSlices {
                 ),
             ));
         }
-        decode_samples(&bytes[..need * bpp], &l, big_endian, s.slope, s.intercept, out);
+        decode_samples(&bytes[..need * bpp], &decoded_layout(&l, s.syntax.codec), big_endian, s.slope, s.intercept, out);
         Ok(())
     }
 
@@ -1103,6 +1125,11 @@ mod tests {
         }
         let d = folder(&[("1.dcm", edit(&b, (0x0028, 0x0008), b"0"))]);
         assert!(open_err(&d).contains("not a usable number of frames"));
+        // Rows and Columns claimed far beyond what the fragments can hold.
+        let rle = std::fs::read(multiframe("enhanced-rle.dcm")).unwrap();
+        let big = edit(&edit(&rle, (0x0028, 0x0010), &65535u16.to_le_bytes()), (0x0028, 0x0011), &65535u16.to_le_bytes());
+        let e = open_err(&folder(&[("1.dcm", big)]));
+        assert!(e.contains("cannot hold 3 frames of 65535 x 65535"), "{e}");
         // Truncated pixels.
         let d = folder(&[("1.dcm", b[..b.len() - 100].to_vec())]);
         let e = open_err(&d);

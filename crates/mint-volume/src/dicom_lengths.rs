@@ -178,6 +178,9 @@ fn walk(b: &[u8], mut pos: usize, explicit: bool, big: bool) -> Result<Option<Pi
                 // Encapsulated pixel data: items (the offset table, then
                 // the fragments) up to a sequence delimiter, each within
                 // what holds it.
+                if big {
+                    return Err(format!("element ({group:04X},{elem:04X}) at byte {at}: encapsulated pixel data in Explicit VR Big Endian (PS3.5 A.4 allows it in little endian only)"));
+                }
                 let top = ends.len() == 1 && (group, elem) == (0x7FE0, 0x0010);
                 let mut items = Vec::new();
                 pos = fragments(b, pos, end, at, u32_at, top.then_some(&mut items))?;

@@ -10,7 +10,9 @@
 //!   Non-Hierarchical, Process 14 (1.2.840.10008.1.2.4.57) and its
 //!   First-Order Prediction form (1.2.840.10008.1.2.4.70, the usual
 //!   lossless CT export), 2 to 16 bits: decoded by `jpeg-decoder`, one
-//!   grey component only.
+//!   grey component only. The markers are walked first: one frame header
+//!   of the named process, one scan, and for lossless no restart interval
+//!   and no point transform (which jpeg-decoder 0.3 gets wrong silently).
 //!
 //! Others (JPEG Extended 12-bit, JPEG-LS, JPEG 2000, HTJ2K, deflate) have no
 //! decoder here; `crate::dicom` names them in one line with a conversion
@@ -25,8 +27,9 @@ pub(crate) enum Codec {
     Rle,
     /// JPEG Baseline (Process 1), 8 bits.
     JpegBaseline,
-    /// JPEG Lossless (Process 14, any predictor, or selection value 1).
-    JpegLossless,
+    /// JPEG Lossless (Process 14); `first_order`: the syntax of selection
+    /// value 1 only (.70), else any predictor (.57).
+    JpegLossless { first_order: bool },
 }
 
 impl Codec {
@@ -35,7 +38,8 @@ impl Codec {
         Some(match uid {
             "1.2.840.10008.1.2.5" => Codec::Rle,
             "1.2.840.10008.1.2.4.50" => Codec::JpegBaseline,
-            "1.2.840.10008.1.2.4.57" | "1.2.840.10008.1.2.4.70" => Codec::JpegLossless,
+            "1.2.840.10008.1.2.4.57" => Codec::JpegLossless { first_order: false },
+            "1.2.840.10008.1.2.4.70" => Codec::JpegLossless { first_order: true },
             _ => return None,
         })
     }
@@ -54,6 +58,10 @@ pub(crate) struct FrameShape {
 /// error says what is wrong, without the file (the caller adds it).
 pub(crate) fn decode_frame(codec: Codec, fragments: &[Vec<u8>], shape: FrameShape, out: &mut Vec<u8>) -> Result<(), String> {
     out.clear();
+    let have: u64 = fragments.iter().map(|f| f.len() as u64).sum();
+    if have < min_bytes(codec, shape) {
+        return Err(format!("{have} bytes cannot hold a frame of {} x {} samples", shape.cols, shape.rows));
+    }
     match codec {
         Codec::Rle => {
             if fragments.len() != 1 {
@@ -61,7 +69,7 @@ pub(crate) fn decode_frame(codec: Codec, fragments: &[Vec<u8>], shape: FrameShap
             }
             rle(&fragments[0], shape, out)
         }
-        Codec::JpegBaseline | Codec::JpegLossless => {
+        Codec::JpegBaseline | Codec::JpegLossless { .. } => {
             let bytes: Vec<u8>;
             let data: &[u8] = if fragments.len() == 1 {
                 &fragments[0]
@@ -69,8 +77,22 @@ pub(crate) fn decode_frame(codec: Codec, fragments: &[Vec<u8>], shape: FrameShap
                 bytes = fragments.concat();
                 &bytes
             };
-            jpeg(data, shape, out)
+            jpeg(data, codec, shape, out)
         }
+    }
+}
+
+/// The fewest bytes of pixel data a valid frame of `shape` takes in
+/// `codec` (RLE: a 64-byte header and at most 128 bytes from every 2 of a
+/// segment; JPEG Lossless: at least a bit a sample; Baseline: at least 2
+/// bits an 8 x 8 block): a frame claimed larger than its data can be is
+/// refused before anything is sized by it.
+pub(crate) fn min_bytes(codec: Codec, shape: FrameShape) -> u64 {
+    let n = shape.rows * shape.cols;
+    match codec {
+        Codec::Rle => 64 + (shape.bits_allocated as u64 / 8) * 2 * n.div_ceil(128),
+        Codec::JpegLossless { .. } => n / 8,
+        Codec::JpegBaseline => n / 256,
     }
 }
 
@@ -135,10 +157,106 @@ fn packbits(mut src: &[u8], n: usize, mut put: impl FnMut(usize, u8)) -> usize {
     i
 }
 
+/// Checks the markers of a JPEG frame before the decoder runs: one frame
+/// header of the process the transfer syntax names (SOF0/SOF1 baseline,
+/// SOF3 lossless), one scan, and for lossless no point transform and no
+/// restart interval (jpeg-decoder 0.3 reconstructs those wrongly, without
+/// an error), and the first-order predictor where the syntax says so. One
+/// scan also bounds the decoder's work: each scan decodes the whole frame.
+fn jpeg_markers(d: &[u8], codec: Codec) -> Result<(), String> {
+    if d.len() < 4 || d[0] != 0xFF || d[1] != 0xD8 {
+        return Err("the JPEG data does not start with SOI (FF D8)".into());
+    }
+    let (mut pos, mut frames, mut scans) = (2usize, 0u32, 0u32);
+    loop {
+        // A marker: FF (fill FFs allowed), then its code.
+        if pos >= d.len() || d[pos] != 0xFF {
+            return Err(format!("JPEG: no marker at byte {pos}"));
+        }
+        while pos < d.len() && d[pos] == 0xFF {
+            pos += 1;
+        }
+        let Some(&m) = d.get(pos) else { return Err("the JPEG data ends early (no EOI)".into()) };
+        pos += 1;
+        if m == 0xD9 {
+            break;
+        }
+        if (0xD0..=0xD7).contains(&m) || m == 0x01 {
+            continue;
+        }
+        if pos + 2 > d.len() {
+            return Err("the JPEG data ends early".into());
+        }
+        let len = u16::from_be_bytes([d[pos], d[pos + 1]]) as usize;
+        if len < 2 || pos + len > d.len() {
+            return Err(format!("JPEG: marker FF{m:02X} at byte {} claims {len} bytes", pos - 2));
+        }
+        let seg = &d[pos + 2..pos + len];
+        pos += len;
+        match m {
+            0xC0..=0xCF if !matches!(m, 0xC4 | 0xC8 | 0xCC) => {
+                frames += 1;
+                let ok = match codec {
+                    Codec::JpegBaseline => matches!(m, 0xC0 | 0xC1),
+                    Codec::JpegLossless { .. } => m == 0xC3,
+                    Codec::Rle => false,
+                };
+                if !ok {
+                    return Err(format!("the JPEG frame is coded by process SOF{} where the transfer syntax names {}", m - 0xC0, if codec == Codec::JpegBaseline { "baseline (SOF0)" } else { "lossless (SOF3)" }));
+                }
+            }
+            0xDD if matches!(codec, Codec::JpegLossless { .. }) => {
+                if seg.len() >= 2 && u16::from_be_bytes([seg[0], seg[1]]) != 0 {
+                    return Err("JPEG Lossless with restart intervals (DRI): not decoded by mint; convert with `dcmdjpeg`".into());
+                }
+            }
+            0xDA => {
+                scans += 1;
+                if scans > 1 {
+                    return Err("the JPEG frame has more than one scan; mint reads single-scan grey images".into());
+                }
+                if let Codec::JpegLossless { first_order } = codec {
+                    // Ns, Ns component specs, then Ss (the predictor), Se, Ah|Al.
+                    let ns = *seg.first().unwrap_or(&0) as usize;
+                    let (Some(&ss), Some(&ahal)) = (seg.get(1 + 2 * ns), seg.get(3 + 2 * ns)) else { return Err("JPEG: a scan header cut short".into()) };
+                    if ahal & 0x0F != 0 {
+                        return Err(format!("JPEG Lossless with a point transform of {}: not decoded by mint; convert with `dcmdjpeg`", ahal & 0x0F));
+                    }
+                    if first_order && ss != 1 {
+                        return Err(format!("the JPEG scan uses predictor {ss} where the transfer syntax names the first-order predictor (1)"));
+                    }
+                }
+                // The entropy-coded data: up to the next marker that is not
+                // a stuffed FF 00 or a restart marker.
+                while pos + 1 < d.len() && !(d[pos] == 0xFF && d[pos + 1] != 0x00 && !(0xD0..=0xD7).contains(&d[pos + 1])) {
+                    pos += 1;
+                }
+                if pos + 1 >= d.len() {
+                    return Err("the JPEG data ends early (no EOI)".into());
+                }
+            }
+            _ => {}
+        }
+    }
+    if frames != 1 || scans != 1 {
+        return Err(format!("the JPEG data has {frames} frame headers and {scans} scans; mint reads one of each"));
+    }
+    Ok(())
+}
+
+/// jpeg-decoder's error as one line (a short stream named as such).
+fn jpeg_error(e: jpeg_decoder::Error) -> String {
+    match e {
+        jpeg_decoder::Error::Io(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => "the JPEG data ends early".into(),
+        e => format!("JPEG: {e}"),
+    }
+}
+
 /// JPEG (baseline or lossless) through jpeg-decoder.
-fn jpeg(data: &[u8], shape: FrameShape, out: &mut Vec<u8>) -> Result<(), String> {
+fn jpeg(data: &[u8], codec: Codec, shape: FrameShape, out: &mut Vec<u8>) -> Result<(), String> {
+    jpeg_markers(data, codec)?;
     let mut d = jpeg_decoder::Decoder::new(data);
-    d.read_info().map_err(|e| format!("JPEG: {e}"))?;
+    d.read_info().map_err(jpeg_error)?;
     let info = d.info().ok_or("JPEG: no frame header")?;
     if (info.width as u64, info.height as u64) != (shape.cols, shape.rows) {
         return Err(format!("the JPEG frame is {} x {}, the header's Columns x Rows {} x {}", info.width, info.height, shape.cols, shape.rows));
@@ -148,26 +266,24 @@ fn jpeg(data: &[u8], shape: FrameShape, out: &mut Vec<u8>) -> Result<(), String>
         jpeg_decoder::PixelFormat::L16 => true,
         other => return Err(format!("the JPEG frame holds {other:?} pixels; mint reads one grey sample per pixel")),
     };
-    if wide && shape.bits_allocated < 16 {
-        return Err(format!("the JPEG frame holds 16-bit samples, BitsAllocated is {}", shape.bits_allocated));
-    }
     // The decoder's buffers are bounded by the checked frame size.
     d.set_max_decoding_buffer_size((shape.rows * shape.cols * 2).max(1 << 16) as usize);
-    let px = d.decode().map_err(|e| format!("JPEG: {e}"))?;
+    let px = d.decode().map_err(jpeg_error)?;
     let n = (shape.rows * shape.cols) as usize;
     let bpp = (shape.bits_allocated / 8) as usize;
-    if px.len() != n * if wide { 2 } else { 1 } {
+    // Lossless of 2 to 7 bits comes out as 16-bit words although the info
+    // says L8 (jpeg-decoder 0.3 writes words for any precision but 8).
+    let words = wide || (matches!(codec, Codec::JpegLossless { .. }) && px.len() == 2 * n);
+    if px.len() != n * if words { 2 } else { 1 } {
         return Err(format!("the JPEG frame decodes to {} bytes, not {} x {} samples", px.len(), shape.cols, shape.rows));
     }
     out.resize(n * bpp, 0);
-    if wide {
-        for (o, c) in out.chunks_exact_mut(bpp).zip(px.chunks_exact(2)) {
-            o[..2].copy_from_slice(&u16::from_ne_bytes([c[0], c[1]]).to_le_bytes());
+    for (i, o) in out.chunks_exact_mut(bpp).enumerate() {
+        let v = if words { u16::from_ne_bytes([px[2 * i], px[2 * i + 1]]) } else { px[i] as u16 };
+        if bpp == 1 && v > 255 {
+            return Err(format!("the JPEG frame holds samples above 255 (more than 8 bits), BitsAllocated is {}", shape.bits_allocated));
         }
-    } else {
-        for (o, &b) in out.chunks_exact_mut(bpp).zip(&px) {
-            o[0] = b;
-        }
+        o[..2.min(bpp)].copy_from_slice(&v.to_le_bytes()[..2.min(bpp)]);
     }
     Ok(())
 }
@@ -212,7 +328,8 @@ mod tests {
         let mut three = f.clone();
         three[..4].copy_from_slice(&3u32.to_le_bytes());
         assert!(decode_frame(Codec::Rle, &[three], shape, &mut out).unwrap_err().contains("3 RLE segments"));
-        assert!(decode_frame(Codec::Rle, &[f[..10].to_vec()], shape, &mut out).unwrap_err().contains("64 bytes"));
+        assert!(decode_frame(Codec::Rle, &[f[..10].to_vec()], shape, &mut out).unwrap_err().contains("cannot hold a frame"));
+        assert!(rle(&f[..10], shape, &mut out).unwrap_err().contains("64 bytes"));
         for cut in 0..f.len() {
             let mut g = f.clone();
             g[cut] ^= 0xA5;
@@ -220,11 +337,52 @@ mod tests {
         }
     }
 
+    /// The JPEG stream of a committed file (Process 14, predictor 6, 512 x 512).
+    fn p14() -> Vec<u8> {
+        let b = std::fs::read(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/dicom-compressed/jpeg-lossless-p14/1-01.dcm")).unwrap();
+        let soi = (0..b.len() - 3).find(|&i| b[i..i + 4] == [0xFF, 0xD8, 0xFF, 0xC3] || (b[i..i + 3] == [0xFF, 0xD8, 0xFF] && b[i + 3] != 0xD8)).unwrap();
+        let eoi = (soi..b.len() - 1).rev().find(|&i| b[i..i + 2] == [0xFF, 0xD9]).unwrap();
+        b[soi..eoi + 2].to_vec()
+    }
+
     #[test]
-    fn jpeg_damage_is_an_error() {
-        let shape = FrameShape { rows: 4, cols: 4, bits_allocated: 16 };
+    fn jpeg_markers_are_checked_before_decoding() {
+        let shape = FrameShape { rows: 512, cols: 512, bits_allocated: 16 };
+        let any = Codec::JpegLossless { first_order: false };
+        let j = p14();
         let mut out = Vec::new();
-        assert!(decode_frame(Codec::JpegLossless, &[vec![0xFF, 0xD8, 0xFF]], shape, &mut out).unwrap_err().starts_with("JPEG"));
-        assert!(decode_frame(Codec::JpegLossless, &[vec![]], shape, &mut out).is_err());
+        decode_frame(any, &[j.clone()], shape, &mut out).unwrap();
+        assert_eq!(out.len(), 512 * 512 * 2);
+        // Fragments split anywhere decode the same.
+        let mut again = Vec::new();
+        decode_frame(any, &[j[..1000].to_vec(), j[1000..].to_vec()], shape, &mut again).unwrap();
+        assert!(again == out);
+        // The first-order syntax (.70) refuses predictor 6; a baseline syntax refuses SOF3.
+        let e = decode_frame(Codec::JpegLossless { first_order: true }, &[j.clone()], shape, &mut out).unwrap_err();
+        assert!(e.contains("predictor 6"), "{e}");
+        let e = decode_frame(Codec::JpegBaseline, &[j.clone()], shape, &mut out).unwrap_err();
+        assert!(e.contains("SOF3"), "{e}");
+        // A restart interval, a second scan, a truncated stream, a frame of another size.
+        let dri = [&j[..2], &[0xFF, 0xDD, 0x00, 0x04, 0x00, 0x10][..], &j[2..]].concat();
+        assert!(decode_frame(any, &[dri], shape, &mut out).unwrap_err().contains("restart"));
+        let sos = (0..j.len() - 1).find(|&i| j[i..i + 2] == [0xFF, 0xDA]).unwrap();
+        let two = [&j[..j.len() - 2], &j[sos..]].concat();
+        assert!(decode_frame(any, &[two], shape, &mut out).unwrap_err().contains("more than one scan"));
+        let e = decode_frame(any, &[j[..j.len() / 2].to_vec()], shape, &mut out).unwrap_err();
+        assert!(e.contains("ends early"), "{e}");
+        let small = FrameShape { rows: 256, cols: 512, bits_allocated: 16 };
+        assert!(decode_frame(any, &[j.clone()], small, &mut out).unwrap_err().contains("512 x 512"));
+        // A frame claimed far larger than its data: refused before decoding.
+        let huge = FrameShape { rows: 65535, cols: 65535, bits_allocated: 16 };
+        assert!(decode_frame(any, &[j.clone()], huge, &mut out).unwrap_err().contains("cannot hold a frame"));
+        // Tiny or empty data, and bytes flipped anywhere: an error or a frame, never a panic.
+        let tiny = FrameShape { rows: 4, cols: 4, bits_allocated: 16 };
+        assert!(decode_frame(any, &[vec![0xFF, 0xD8, 0xFF]], tiny, &mut out).unwrap_err().contains("SOI"));
+        assert!(decode_frame(any, &[vec![]], tiny, &mut out).is_err());
+        for k in (0..j.len()).step_by(j.len() / 97) {
+            let mut g = j.clone();
+            g[k] ^= 0xFF;
+            let _ = decode_frame(any, &[g], shape, &mut out);
+        }
     }
 }
