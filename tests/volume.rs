@@ -398,3 +398,31 @@ fn bad_volumes_fail_with_one_line_and_write_nothing() {
 fn flate2_encoder() -> flate2::write::GzEncoder<Vec<u8>> {
     flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default())
 }
+
+#[test]
+fn compressed_and_multi_frame_dicom_give_the_bytes_of_their_uncompressed_series() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let d = tempfile::tempdir().unwrap();
+    let mesh = |input: &Path, name: &str| -> (Vec<u8>, serde_json::Value) {
+        let out = d.path().join(name);
+        let json: serde_json::Value = serde_json::from_str(&ok(&["volume", p(input), p(&out), "--iso", "0", "--json"])).unwrap();
+        watertight(&out);
+        (std::fs::read(&out).unwrap(), json)
+    };
+    // Three 64 x 64 crops as single-frame files, and as one enhanced
+    // multi-frame file (frames stored out of order), plain and compressed.
+    let (want, j) = mesh(&data.join("dicom-multiframe/single"), "single.ply");
+    assert!(j["output_faces"].as_u64().unwrap() > 1000, "{j}");
+    for (name, format) in [
+        ("enhanced.dcm", "DICOM series"),
+        ("enhanced-rle.dcm", "DICOM series (RLE Lossless)"),
+        ("enhanced-jpeg-lossless.dcm", "DICOM series (JPEG Lossless)"),
+    ] {
+        let one = d.path().join(name.replace(".dcm", ""));
+        std::fs::create_dir(&one).unwrap();
+        std::fs::copy(data.join("dicom-multiframe").join(name), one.join(name)).unwrap();
+        let (got, j) = mesh(&one, &format!("{name}.ply"));
+        assert_eq!(j["volume"]["format"], format, "{name}");
+        assert!(got == want, "{name}: other bytes than the single-frame series");
+    }
+}
