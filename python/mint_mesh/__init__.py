@@ -778,8 +778,10 @@ def volume(samples: Any, *, iso: float, spacing: Any = (1.0, 1.0, 1.0), origin: 
 def volume_file(input: PathLike, output: PathLike, *, iso: Optional[float] = None, labels: Any = None,
                 progress: Optional[Progress] = None, **options: Any) -> dict:
     """``mint volume``, out of core within ``mem``: a NRRD, MetaImage,
-    NIfTI-1, DICOM series (a folder), TIFF stack or raw file (``raw_dims``,
-    ``raw_type``, ``raw_spacing``) to its surface at ``iso``, in the frame
+    NIfTI-1, DICOM series (a folder of single-frame files or an enhanced
+    multi-frame file; uncompressed, RLE or JPEG Baseline/Lossless), TIFF
+    stack or raw file (``raw_dims``, ``raw_type``, ``raw_spacing``) to its
+    surface at ``iso``, in the frame
     the file declares (the summary's ``volume.frame``), or with ``labels``
     (``True`` or "all" for every label but 0, or a list such as ``[1, 2]``)
     one surface per label, one file each unless ``one_file=True``. Options
