@@ -29,6 +29,12 @@ pub const FAMILY_S: u32 = 2;
 const FAMILY_SHIFT: u32 = 30;
 const INDEX_MASK: u32 = (1 << FAMILY_SHIFT) - 1;
 
+/// The `line` field of the records of line (`family`, `index`).
+#[inline]
+pub const fn line_id(family: u32, index: u32) -> u32 {
+    (family << FAMILY_SHIFT) | index
+}
+
 /// One kept intersection of the surface with a grid line. 16 bytes, `repr(C)`,
 /// written to disk as is (little-endian); see docs/FORMATS.md.
 #[repr(C)]
@@ -161,7 +167,7 @@ impl<'a> PlaneLines<'a> {
     /// The index range (into `records`) of one line.
     #[inline]
     pub fn line(&self, family: u32, index: u32) -> std::ops::Range<usize> {
-        let id = (family << FAMILY_SHIFT) | index;
+        let id = line_id(family, index);
         let start = self.records.partition_point(|r| r.line < id);
         let len = self.records[start..].partition_point(|r| r.line == id);
         start..start + len

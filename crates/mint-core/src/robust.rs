@@ -139,8 +139,9 @@ pub fn census_plane(raw: &mut [Intercept]) -> LineCensus {
     c
 }
 
-/// Walks a valid line and sets the states of its nodes in `row_set`.
-fn line_states(line: &Line, n_nodes: u32, mut set: impl FnMut(u32)) {
+/// Walks a valid line and sets the states of its inside nodes, a run
+/// `set(i0, i1)` (nodes `i0 .. i1`) at a time.
+fn line_states(line: &Line, n_nodes: u32, mut set: impl FnMut(u32, u32)) {
     let mut w = 0i64;
     let mut next_node = 0u32;
     for (k, r) in line.records.iter().enumerate() {
@@ -151,9 +152,7 @@ fn line_states(line: &Line, n_nodes: u32, mut set: impl FnMut(u32)) {
             _ => w > 0,
         };
         if inside {
-            for i in next_node..=c.min(n_nodes - 1) {
-                set(i);
-            }
+            set(next_node, (c + 1).min(n_nodes));
         }
         next_node = next_node.max(c + 1);
         w += if r.entering() { 1 } else { -1 };
@@ -163,9 +162,7 @@ fn line_states(line: &Line, n_nodes: u32, mut set: impl FnMut(u32)) {
         _ => w > 0,
     };
     if inside {
-        for i in next_node..n_nodes {
-            set(i);
-        }
+        set(next_node, n_nodes);
     }
 }
 
@@ -360,7 +357,7 @@ fn prepare_plane(raw: Vec<Intercept>, s_raw: Vec<Intercept>, s_below: &[Intercep
     for j in (0..=nb).filter(|_| rule != SignRule::Sheet) {
         match &a_lines[j as usize] {
             None => {}
-            Some(l) if l.rule.is_some() => line_states(l, na + 1, |i| states.set(i, j)),
+            Some(l) if l.rule.is_some() => line_states(l, na + 1, |i0, i1| states.set_run(j, i0, i1)),
             Some(l) => {
                 for i in 0..=na {
                     let from_b = b_lines[i as usize].as_ref().map(|b| match b.rule {
@@ -383,32 +380,24 @@ fn prepare_plane(raw: Vec<Intercept>, s_raw: Vec<Intercept>, s_below: &[Intercep
     let mut ab = EdgeVertices::default();
     let empty = Line { records: Vec::new(), rule: Some(rule) };
     let mut used = 0u64;
-    let mut total = 0u64;
-    for j in 0..=nb {
+    let total: u64 = a_lines.iter().chain(&b_lines).flatten().map(|l| l.records.len() as u64).sum();
+    // (The changes come word-wise from the states, in vertex order: A by
+    // row then cell, B by column then cell.)
+    states.changes_along_a(|i, j| {
         let l = a_lines[j as usize].as_ref().unwrap_or(&empty);
-        total += l.records.len() as u64;
-        for i in 0..na {
-            let (s0, s1) = (states.get(i, j), states.get(i + 1, j));
-            if s0 != s1 {
-                let cell = cell_slice(&l.records, i);
-                used += cell.len() as u64;
-                let v = select(cell, s1, l.rule.unwrap_or(rule), stats);
-                ab.push(vertex_record(plane, FAMILY_A, j, i, v, s1, stats));
-            }
-        }
-    }
-    for i in 0..=na {
+        let s1 = states.get(i + 1, j);
+        let cell = cell_slice(&l.records, i);
+        used += cell.len() as u64;
+        let v = select(cell, s1, l.rule.unwrap_or(rule), stats);
+        ab.push(vertex_record(plane, FAMILY_A, j, i, v, s1, stats));
+    });
+    for (i, j) in states.changes_along_b() {
         let l = b_lines[i as usize].as_ref().unwrap_or(&empty);
-        total += l.records.len() as u64;
-        for j in 0..nb {
-            let (s0, s1) = (states.get(i, j), states.get(i, j + 1));
-            if s0 != s1 {
-                let cell = cell_slice(&l.records, j);
-                used += cell.len() as u64;
-                let v = select(cell, s1, l.rule.unwrap_or(rule), stats);
-                ab.push(vertex_record(plane, FAMILY_B, i, j, v, s1, stats));
-            }
-        }
+        let s1 = states.get(i, j + 1);
+        let cell = cell_slice(&l.records, j);
+        used += cell.len() as u64;
+        let v = select(cell, s1, l.rule.unwrap_or(rule), stats);
+        ab.push(vertex_record(plane, FAMILY_B, i, j, v, s1, stats));
     }
     stats.dropped_intercepts += total - used;
     Prepared { ab, s_raw, states }
@@ -432,22 +421,17 @@ fn cell_slice(records: &[Intercept], cell: u32) -> &[Intercept] {
 
 /// The family-S vertices of layer `k` (between planes with `lower` and
 /// `upper` states), one per node whose state changes across the layer.
-fn layer_s_vertices(s_raw: &[Intercept], lower: &NodeStates, upper: &NodeStates, k: u32, na: u32, nb: u32, rule: SignRule, stats: &mut RepairStats) -> EdgeVertices {
+fn layer_s_vertices(s_raw: &[Intercept], lower: &NodeStates, upper: &NodeStates, k: u32, nb: u32, rule: SignRule, stats: &mut RepairStats) -> EdgeVertices {
     let mut out = EdgeVertices::default();
     let lines_view = PlaneLines::new(s_raw);
     let mut used = 0usize;
-    for i in 0..=na {
-        for j in 0..=nb {
-            let (s0, s1) = (lower.get(i, j), upper.get(i, j));
-            if s0 == s1 {
-                continue;
-            }
-            let idx = i * (nb + 1) + j;
-            let range = lines_view.line(FAMILY_S, idx);
-            used += range.len();
-            let v = select(&s_raw[range], s1, rule, stats);
-            out.push(vertex_record(k, FAMILY_S, idx, k, v, s1, stats));
-        }
+    for (i, j) in lower.changes_to(upper) {
+        let s1 = upper.get(i, j);
+        let idx = i * (nb + 1) + j;
+        let range = lines_view.line(FAMILY_S, idx);
+        used += range.len();
+        let v = select(&s_raw[range], s1, rule, stats);
+        out.push(vertex_record(k, FAMILY_S, idx, k, v, s1, stats));
     }
     stats.dropped_intercepts += (s_raw.len() - used) as u64;
     out
@@ -539,7 +523,7 @@ pub fn reconstruct_slab_solids(
             (0..n - 1)
                 .map(|p| {
                     let pr = &prepared[o];
-                    layer_s_vertices(&pr[p].s_raw, &pr[p].states, &pr[p + 1].states, k0 + p as u32, na, nb, rules[o], &mut stats)
+                    layer_s_vertices(&pr[p].s_raw, &pr[p].states, &pr[p + 1].states, k0 + p as u32, nb, rules[o], &mut stats)
                 })
                 .collect()
         })
@@ -548,12 +532,12 @@ pub fn reconstruct_slab_solids(
     // each part is built in vertex order, so the whole is too.
     let mut finals: Vec<EdgeVertices> = Vec::with_capacity(n);
     for p in 0..n {
-        let mut f = if single { prepared[0][p].ab.clone() } else { combine_ab(&prepared, p, &states[p], k0 + p as u32, na, nb, expr) };
+        let mut f = if single { prepared[0][p].ab.clone() } else { combine_ab(&prepared, p, &states[p], k0 + p as u32, expr) };
         if p + 1 < n {
             if single {
                 f.extend(&s_finals[0][p]);
             } else {
-                f.extend(&combine_s(&prepared, &s_finals, p, &states[p], &states[p + 1], k0 + p as u32, na, nb, expr));
+                f.extend(&combine_s(&prepared, &s_finals, p, &states[p], &states[p + 1], k0 + p as u32, nb, expr));
             }
         }
         if let Some(open) = open {
@@ -608,7 +592,7 @@ fn combined_vertex(expr: &Expr, lower: &mut [bool], changes: &mut Vec<(f64, usiz
 
 /// The result's A/B edge vertices of plane `p`.
 #[allow(clippy::too_many_arguments)]
-fn combine_ab(prepared: &[Vec<Prepared>], p: usize, states: &NodeStates, plane: u32, na: u32, nb: u32, expr: &Expr) -> EdgeVertices {
+fn combine_ab(prepared: &[Vec<Prepared>], p: usize, states: &NodeStates, plane: u32, expr: &Expr) -> EdgeVertices {
     let m = prepared.len();
     let mut out = EdgeVertices::default();
     let mut lower = vec![false; m];
@@ -626,39 +610,24 @@ fn combine_ab(prepared: &[Vec<Prepared>], p: usize, states: &NodeStates, plane: 
         let (v, synth) = combined_vertex(expr, &mut lower, &mut changes, &synthesized, cell);
         out.push((Intercept::new(plane, family, index, v, entering), synth));
     };
-    for j in 0..=nb {
-        for i in 0..na {
-            let (s0, s1) = (states.get(i, j), states.get(i + 1, j));
-            if s0 != s1 {
-                edge(FAMILY_A, j, i, (i, j), s1, &mut out);
-            }
-        }
-    }
-    for i in 0..=na {
-        for j in 0..nb {
-            let (s0, s1) = (states.get(i, j), states.get(i, j + 1));
-            if s0 != s1 {
-                edge(FAMILY_B, i, j, (i, j), s1, &mut out);
-            }
-        }
+    states.changes_along_a(|i, j| edge(FAMILY_A, j, i, (i, j), states.get(i + 1, j), &mut out));
+    for (i, j) in states.changes_along_b() {
+        edge(FAMILY_B, i, j, (i, j), states.get(i, j + 1), &mut out);
     }
     out
 }
 
 /// The result's S edge vertices of layer `p` (between planes `p`, `p + 1`).
 #[allow(clippy::too_many_arguments)]
-fn combine_s(prepared: &[Vec<Prepared>], s_finals: &[Vec<EdgeVertices>], p: usize, lo: &NodeStates, hi: &NodeStates, k: u32, na: u32, nb: u32, expr: &Expr) -> EdgeVertices {
+fn combine_s(prepared: &[Vec<Prepared>], s_finals: &[Vec<EdgeVertices>], p: usize, lo: &NodeStates, hi: &NodeStates, k: u32, nb: u32, expr: &Expr) -> EdgeVertices {
     let m = prepared.len();
     let mut out = EdgeVertices::default();
     let mut lower = vec![false; m];
     let mut synthesized = vec![false; m];
     let mut changes = Vec::with_capacity(m);
-    for i in 0..=na {
-        for j in 0..=nb {
-            let (s0, s1) = (lo.get(i, j), hi.get(i, j));
-            if s0 == s1 {
-                continue;
-            }
+    for (i, j) in lo.changes_to(hi) {
+        {
+            let s1 = hi.get(i, j);
             let idx = i * (nb + 1) + j;
             changes.clear();
             for o in 0..m {

@@ -203,11 +203,91 @@ impl NodeStates {
         let k = j as usize * self.width + i as usize;
         self.bits[k >> 6] |= 1 << (k & 63);
     }
-    /// Sets nodes `i0 .. i1` of row `j`.
+    /// Sets nodes `i0 .. i1` of row `j`, a word at a time.
     pub fn set_run(&mut self, j: u32, i0: u32, i1: u32) {
-        for i in i0..i1 {
-            self.set(i, j);
+        if i0 >= i1 {
+            return;
         }
+        let (a, b) = (j as usize * self.width + i0 as usize, j as usize * self.width + i1 as usize);
+        let (wa, wb) = (a >> 6, (b - 1) >> 6);
+        let lo = !0u64 << (a & 63);
+        let hi = !0u64 >> (63 - ((b - 1) & 63));
+        if wa == wb {
+            self.bits[wa] |= lo & hi;
+            return;
+        }
+        self.bits[wa] |= lo;
+        self.bits[wa + 1..wb].fill(!0);
+        self.bits[wb] |= hi;
+    }
+
+    /// Word `w` of the bits shifted down by `s` (bit `k` of the result is
+    /// node `k + s`; zero past the end).
+    #[inline]
+    fn shifted_word(&self, w: usize, s: usize) -> u64 {
+        let (q, r) = (w + s / 64, s % 64);
+        let at = |q: usize| self.bits.get(q).copied().unwrap_or(0);
+        if r == 0 {
+            at(q)
+        } else {
+            (at(q) >> r) | (at(q + 1) << (64 - r))
+        }
+    }
+
+    /// Calls `f(k)` for each flat node index `k < self.len - s` whose
+    /// state differs from node `k + s`'s (in `other` when given, else in
+    /// `self`), in increasing `k`. Word-wise: the cost is the plane's words
+    /// plus the changes, not its nodes.
+    fn for_each_difference(&self, other: Option<&NodeStates>, s: usize, mut f: impl FnMut(usize)) {
+        let end = self.len.saturating_sub(s);
+        for w in 0..end.div_ceil(64) {
+            let there = match other {
+                Some(o) => o.shifted_word(w, s),
+                None => self.shifted_word(w, s),
+            };
+            let mut d = self.bits[w] ^ there;
+            let rem = end - 64 * w;
+            if rem < 64 {
+                d &= (1u64 << rem) - 1;
+            }
+            while d != 0 {
+                f(64 * w + d.trailing_zeros() as usize);
+                d &= d - 1;
+            }
+        }
+    }
+
+    /// The nodes `(i, j)`, `i < na`, whose state differs from `(i + 1, j)`'s,
+    /// ordered by `j`, then `i` (the order of family-A edge vertices).
+    pub fn changes_along_a(&self, mut f: impl FnMut(u32, u32)) {
+        let width = self.width;
+        self.for_each_difference(None, 1, |k| {
+            let (i, j) = (k % width, k / width);
+            if i + 1 < width {
+                f(i as u32, j as u32);
+            }
+        });
+    }
+
+    /// The nodes `(i, j)`, `j < nb`, whose state differs from `(i, j + 1)`'s,
+    /// ordered by `i`, then `j` (the order of family-B edge vertices).
+    pub fn changes_along_b(&self) -> Vec<(u32, u32)> {
+        let width = self.width;
+        let mut keys = Vec::new();
+        self.for_each_difference(None, width, |k| keys.push(((k % width) as u64) << 32 | (k / width) as u64));
+        keys.sort_unstable();
+        keys.into_iter().map(|key| ((key >> 32) as u32, key as u32)).collect()
+    }
+
+    /// The nodes `(i, j)` whose state here differs from `upper`'s, ordered by
+    /// `i`, then `j` (the order of family-S edge vertices).
+    pub fn changes_to(&self, upper: &NodeStates) -> Vec<(u32, u32)> {
+        assert_eq!((self.width, self.len), (upper.width, upper.len), "node states of different planes");
+        let width = self.width;
+        let mut keys = Vec::new();
+        self.for_each_difference(Some(upper), 0, |k| keys.push(((k % width) as u64) << 32 | (k / width) as u64));
+        keys.sort_unstable();
+        keys.into_iter().map(|key| ((key >> 32) as u32, key as u32)).collect()
     }
 }
 
@@ -341,5 +421,44 @@ mod tests {
         assert!(c.open());
         assert_eq!(c.resolve(), SignRule::Sheet);
         assert_eq!(c.resolve_closed(), SignRule::Union);
+    }
+
+    /// Node states from runs: `(row, first, length)` set with `set_run`.
+    fn states_of(na: u32, nb: u32, runs: &[(u32, u32, u32)]) -> NodeStates {
+        let mut st = NodeStates::new(na, nb);
+        for &(j, i0, len) in runs {
+            let (j, i0) = (j % (nb + 1), i0 % (na + 1));
+            st.set_run(j, i0, (i0 + len).min(na + 1));
+        }
+        st
+    }
+
+    proptest::proptest! {
+        /// The word-wise runs and change scans equal the per-node loops
+        /// they replace, on planes whose rows straddle word boundaries.
+        #[test]
+        fn word_wise_scans_equal_node_loops(
+            na in 0u32..150, nb in 0u32..9,
+            runs in proptest::collection::vec((0u32..10, 0u32..151, 0u32..151), 0..12),
+            runs2 in proptest::collection::vec((0u32..10, 0u32..151, 0u32..151), 0..12),
+        ) {
+            let (st, up) = (states_of(na, nb, &runs), states_of(na, nb, &runs2));
+            let mut want = NodeStates::new(na, nb);
+            for &(j, i0, len) in &runs {
+                let (j, i0) = (j % (nb + 1), i0 % (na + 1));
+                for i in i0..(i0 + len).min(na + 1) {
+                    want.set(i, j);
+                }
+            }
+            proptest::prop_assert_eq!(&st.bits, &want.bits);
+            let mut a = Vec::new();
+            st.changes_along_a(|i, j| a.push((i, j)));
+            let naive_a: Vec<(u32, u32)> = (0..=nb).flat_map(|j| (0..na).map(move |i| (i, j))).filter(|&(i, j)| st.get(i, j) != st.get(i + 1, j)).collect();
+            proptest::prop_assert_eq!(a, naive_a);
+            let naive_b: Vec<(u32, u32)> = (0..=na).flat_map(|i| (0..nb).map(move |j| (i, j))).filter(|&(i, j)| st.get(i, j) != st.get(i, j + 1)).collect();
+            proptest::prop_assert_eq!(st.changes_along_b(), naive_b);
+            let naive_s: Vec<(u32, u32)> = (0..=na).flat_map(|i| (0..=nb).map(move |j| (i, j))).filter(|&(i, j)| st.get(i, j) != up.get(i, j)).collect();
+            proptest::prop_assert_eq!(st.changes_to(&up), naive_s);
+        }
     }
 }
