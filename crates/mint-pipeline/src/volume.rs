@@ -79,21 +79,22 @@ fn sample_stats(values: &[f32], stats: &mut VolumeStats) {
     const L: usize = 8;
     let (mut lo, mut hi, mut nan) = (f32::INFINITY, f32::NEG_INFINITY, 0u64);
     for c in values.chunks(4096) {
-        let (mut l, mut h, mut n) = ([f32::INFINITY; L], [f32::NEG_INFINITY; L], [0u32; L]);
+        // (NaN counted in f32 lanes, exact below 2^24: a chunk is 4096.)
+        let (mut l, mut h, mut n) = ([f32::INFINITY; L], [f32::NEG_INFINITY; L], [0f32; L]);
         let mut lanes = c.chunks_exact(L);
         for v in &mut lanes {
             for k in 0..L {
                 let f = if v[k].abs() < f32::INFINITY { v[k] } else { f32::NAN };
                 l[k] = if f < l[k] { f } else { l[k] };
                 h[k] = if f > h[k] { f } else { h[k] };
-                n[k] += (v[k] != v[k]) as u32;
+                n[k] += if v[k] != v[k] { 1.0 } else { 0.0 };
             }
         }
         for &v in lanes.remainder() {
             let f = if v.abs() < f32::INFINITY { v } else { f32::NAN };
             l[0] = if f < l[0] { f } else { l[0] };
             h[0] = if f > h[0] { f } else { h[0] };
-            n[0] += v.is_nan() as u32;
+            n[0] += if v.is_nan() { 1.0 } else { 0.0 };
         }
         for k in 0..L {
             lo = if l[k] < lo { l[k] } else { lo };
@@ -493,8 +494,9 @@ pub fn discretize_planes(
     let slice_len = info.slice_len();
     let slice_bytes = slice_len as u64 * 4;
     let threads = threads.max(1);
-    // Two node planes with their bits, two slices, one band per thread.
-    let planes_bytes = 2 * (na1 * nb1 * 4 + nb1 * words * 8) as u64;
+    // Two node planes with their bits, two slices, one band per thread,
+    // and a slice of stored bytes for each extra reader of the slices.
+    let planes_bytes = 2 * (na1 * nb1 * 4 + nb1 * words * 8) as u64 + (threads.max(1) - 1) as u64 * volume.reader_bytes();
     let band_bytes = (band_capacity(na1, rows) * std::mem::size_of::<Intercept>()) as u64;
     let least_group = threads.min(bands);
     let least = planes_bytes + 2 * slice_bytes + least_group as u64 * band_bytes;
@@ -555,7 +557,7 @@ pub fn discretize_planes(
             slices.resize(((z1 - z0) as usize) * slice_len, 0.0);
             if from < z1 {
                 let at = (from - z0) as usize * slice_len;
-                volume.read_slices(from, z1 - from, &mut slices[at..])?;
+                volume.read_slices_on(from, z1 - from, &mut slices[at..], threads)?;
                 stats.slices += z1 - from;
                 stats.samples += (z1 - from) * slice_len as u64;
                 fresh = at..slices.len();

@@ -905,6 +905,10 @@ impl SliceSource for DicomSlices {
     fn try_clone(&self) -> Result<Box<dyn SliceSource>, VolumeError> {
         Ok(Box::new(DicomSlices { layout: self.layout, slices: self.slices.clone() }))
     }
+
+    fn random_access(&self) -> bool {
+        true
+    }
 }
 
 #[cfg(test)]

@@ -154,6 +154,8 @@ pub struct OpenOptions {
 pub struct Volume {
     info: VolumeInfo,
     source: Box<dyn SliceSource>,
+    /// More readers of the same data, for [`Volume::read_slices_on`].
+    helpers: Vec<Box<dyn SliceSource>>,
 }
 
 impl std::fmt::Debug for Volume {
@@ -199,7 +201,7 @@ impl Volume {
             }
         };
         source::check_info(path, &info)?;
-        Ok(Volume { info, source })
+        Ok(Volume { info, source, helpers: Vec::new() })
     }
 
     /// The header.
@@ -211,6 +213,17 @@ impl Volume {
     /// [`VolumeInfo::slice_len`]), sample (i, j) of slice k at
     /// `(k - k0) · slice_len + j · dims[0] + i`, rescaled to `f32`.
     pub fn read_slices(&mut self, k0: u64, count: u64, out: &mut [f32]) -> Result<(), VolumeError> {
+        self.read_slices_on(k0, count, out, 1)
+    }
+
+    /// [`Volume::read_slices`] on up to `threads` threads when the volume
+    /// reads any slice as cheaply as the next (uncompressed files, one file
+    /// a slice): one run of consecutive slices a thread, each read and
+    /// decoded by a reader of its own (kept for the next call; each holds
+    /// at most one slice of the file's bytes, [`Volume::reader_bytes`]).
+    /// Each slice is decoded alone, so the values do not depend on
+    /// `threads`; of several errors, the first slice's is returned.
+    pub fn read_slices_on(&mut self, k0: u64, count: u64, out: &mut [f32], threads: usize) -> Result<(), VolumeError> {
         let n = self.info.slice_len();
         let end = k0.checked_add(count).filter(|&e| e <= self.info.dims[2]);
         if end.is_none() || out.len() as u64 != count * n as u64 {
@@ -220,16 +233,54 @@ impl Volume {
                 format!("slices {k0}..{} asked of a volume of {} slices into {} values", k0.saturating_add(count), self.info.dims[2], out.len()),
             ));
         }
-        for (c, chunk) in out.chunks_exact_mut(n.max(1)).enumerate().take(count as usize) {
-            self.source.read_slice(k0 + c as u64, chunk)?;
+        let t = (threads.max(1) as u64).min(count).max(1) as usize;
+        if t == 1 || n == 0 || !self.source.random_access() {
+            for (c, chunk) in out.chunks_exact_mut(n.max(1)).enumerate().take(count as usize) {
+                self.source.read_slice(k0 + c as u64, chunk)?;
+            }
+            return Ok(());
         }
-        Ok(())
+        while self.helpers.len() < t - 1 {
+            let h = self.source.try_clone()?;
+            self.helpers.push(h);
+        }
+        let run = |src: &mut Box<dyn SliceSource>, first: u64, values: &mut [f32]| -> Result<(), VolumeError> {
+            for (c, chunk) in values.chunks_exact_mut(n).enumerate() {
+                src.read_slice(first + c as u64, chunk)?;
+            }
+            Ok(())
+        };
+        let mut results: Vec<Result<(), VolumeError>> = Vec::with_capacity(t);
+        std::thread::scope(|s| {
+            let mut rest = &mut out[..];
+            let mut runs = Vec::with_capacity(t);
+            for r in 0..t as u64 {
+                let (a, b) = (count * r / t as u64, count * (r + 1) / t as u64);
+                let (mine, tail) = std::mem::take(&mut rest).split_at_mut((b - a) as usize * n);
+                rest = tail;
+                runs.push((k0 + a, mine));
+            }
+            let mut runs = runs.into_iter();
+            let (first, mine) = runs.next().expect("one run at least");
+            let handles: Vec<_> = runs.zip(self.helpers.iter_mut()).map(|((at, values), src)| s.spawn(move || run(src, at, values))).collect();
+            results.push(run(&mut self.source, first, mine));
+            for h in handles {
+                results.push(h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)));
+            }
+        });
+        results.into_iter().collect()
+    }
+
+    /// The bytes each extra reader of [`Volume::read_slices_on`] holds: one
+    /// slice of samples as stored.
+    pub fn reader_bytes(&self) -> u64 {
+        self.info.slice_len() as u64 * self.info.sample.size() as u64
     }
 
     /// A second reader of the same volume (its own file handles), for a
     /// task on another thread.
     pub fn try_clone(&self) -> Result<Volume, VolumeError> {
-        Ok(Volume { info: self.info.clone(), source: self.source.try_clone()? })
+        Ok(Volume { info: self.info.clone(), source: self.source.try_clone()?, helpers: Vec::new() })
     }
 }
 

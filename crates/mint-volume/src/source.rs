@@ -20,6 +20,9 @@ pub(crate) trait SliceSource: Send {
     fn read_slice(&mut self, k: u64, out: &mut [f32]) -> Result<(), VolumeError>;
     /// An independent reader of the same data.
     fn try_clone(&self) -> Result<Box<dyn SliceSource>, VolumeError>;
+    /// Whether any slice costs what the next one does (no stream to wind
+    /// forward), so that runs of slices can be read by several readers.
+    fn random_access(&self) -> bool;
 }
 
 /// How a data file is compressed.
@@ -202,6 +205,10 @@ impl SliceSource for FileSlices {
             open: None,
             stream: None,
         }))
+    }
+
+    fn random_access(&self) -> bool {
+        self.compression == Compression::None
     }
 }
 

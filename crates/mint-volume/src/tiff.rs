@@ -255,6 +255,11 @@ impl SliceSource for TiffSlices {
     fn try_clone(&self) -> Result<Box<dyn SliceSource>, VolumeError> {
         Ok(Box::new(TiffSlices { files: self.files.clone(), multipage: self.multipage, page: self.page, open: None }))
     }
+
+    fn random_access(&self) -> bool {
+        // (A multi-page file is walked from directory to directory.)
+        !self.multipage
+    }
 }
 
 #[cfg(test)]

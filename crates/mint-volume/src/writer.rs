@@ -259,6 +259,51 @@ mod tests {
     }
 
     #[test]
+    fn slices_read_on_threads_equal_the_serial_read_and_name_the_first_bad_slice() {
+        let dir = tempfile::tempdir().unwrap();
+        let dims = [5u64, 3, 11];
+        let values: Vec<f32> = (0..165).map(|v| (v * 7 % 23) as f32 - 5.0).collect();
+        // Uncompressed (read on threads) and gzip (one stream, read in order).
+        for name in ["a.nhdr", "b.nrrd", "c.nii.gz"] {
+            let p = dir.path().join(name);
+            let plain = dir.path().join(name.trim_end_matches(".gz"));
+            let mut w = VolumeWriter::create(&plain, dims, Sample::I16, crate::diagonal_affine([1.0; 3], [0.0; 3]), Frame::Lps).unwrap();
+            for k in 0..11 {
+                w.write_slice(&values[k * 15..(k + 1) * 15]).unwrap();
+            }
+            w.finish().unwrap();
+            if plain != p {
+                let mut z = flate2::write::GzEncoder::new(std::fs::File::create(&p).unwrap(), flate2::Compression::fast());
+                std::io::Write::write_all(&mut z, &std::fs::read(&plain).unwrap()).unwrap();
+                z.finish().unwrap();
+            }
+            let mut v = Volume::open(&p, &OpenOptions::default()).unwrap();
+            for threads in [1, 2, 3, 4, 16] {
+                for (k0, count) in [(0u64, 11u64), (3, 5), (10, 1), (4, 0)] {
+                    let mut back = vec![f32::NAN; count as usize * 15];
+                    v.read_slices_on(k0, count, &mut back, threads).unwrap();
+                    assert_eq!(back, values[k0 as usize * 15..(k0 + count) as usize * 15], "{name}, {threads} threads, slices {k0}+{count}");
+                }
+            }
+            let mut short = vec![0.0; 14];
+            assert!(v.read_slices_on(0, 1, &mut short, 2).is_err(), "{name}: a buffer of the wrong size");
+        }
+        // A raw file that shrank after it was opened: slices 7.. are gone,
+        // and whatever the threads, the error names slice 7.
+        let p = dir.path().join("d.raw");
+        std::fs::write(&p, values.iter().flat_map(|&v| (v as i16).to_le_bytes()).collect::<Vec<u8>>()).unwrap();
+        let opts = OpenOptions { raw: Some(RawSpec { dims, sample: Sample::I16, big_endian: false, spacing: [1.0; 3], header_bytes: 0 }) };
+        for threads in [1, 2, 3, 4] {
+            let mut v = Volume::open(&p, &opts).unwrap();
+            std::fs::OpenOptions::new().write(true).open(&p).unwrap().set_len(7 * 15 * 2).unwrap();
+            let mut back = vec![0.0; 165];
+            let e = v.read_slices_on(0, 11, &mut back, threads).unwrap_err().to_string();
+            assert!(e.contains("slice 7 "), "{threads} threads: {e}");
+            std::fs::write(&p, values.iter().flat_map(|&v| (v as i16).to_le_bytes()).collect::<Vec<u8>>()).unwrap();
+        }
+    }
+
+    #[test]
     fn an_unfinished_volume_leaves_nothing() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("a.nhdr");
