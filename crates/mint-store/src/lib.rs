@@ -151,6 +151,9 @@ struct OpenShard {
     len: u64,
 }
 
+/// The most bytes of records written and checksummed at once.
+const RUN_BYTES: usize = 1 << 16;
+
 /// What a [`ShardWriter`] held at one point ([`ShardWriter::checkpoint`]).
 pub struct Checkpoint {
     shards: Vec<Option<(u64, crc32fast::Hasher)>>,
@@ -165,6 +168,8 @@ pub struct ShardWriter {
     open: Vec<Option<OpenShard>>,
     counts: Vec<u64>,
     colour: bool,
+    /// The bytes of the run of records being appended.
+    scratch: Vec<u8>,
 }
 
 impl ShardWriter {
@@ -192,6 +197,7 @@ impl ShardWriter {
             open: (0..shards).map(|_| None).collect(),
             counts: vec![0; planes as usize],
             colour: false,
+            scratch: Vec::new(),
         }
     }
 
@@ -210,27 +216,42 @@ impl ShardWriter {
 
     fn append_with(&mut self, records: &[Intercept], colour: impl Fn(usize) -> Rgba) -> Result<(), StoreError> {
         let record = if self.colour { COLOURED_RECORD } else { RECORD };
-        for (i, r) in records.iter().enumerate() {
-            debug_assert!(r.plane < self.planes);
-            let shard = (r.plane / self.planes_per_shard) as usize;
+        // Runs of records bound for one shard are written and checksummed
+        // at once (a checksum update per 16-byte record costs more than the
+        // copy); the state after the call is the same.
+        let mut run = std::mem::take(&mut self.scratch);
+        let mut at = 0;
+        while at < records.len() {
+            let shard = (records[at].plane / self.planes_per_shard) as usize;
+            run.clear();
+            let mut end = at;
+            while end < records.len() && (records[end].plane / self.planes_per_shard) as usize == shard && run.len() < RUN_BYTES {
+                let r = &records[end];
+                debug_assert!(r.plane < self.planes);
+                run.extend_from_slice(&r.to_le_bytes());
+                if self.colour {
+                    run.extend_from_slice(&colour(end));
+                }
+                end += 1;
+            }
             if self.open[shard].is_none() {
                 let path = self.dir.join(shard_name(shard as u32));
                 let f = File::create(&path).map_err(io_err(&path, "creating a shard"))?;
                 self.open[shard] = Some(OpenShard { file: BufWriter::with_capacity(WRITE_BUFFER, f), crc: crc32fast::Hasher::new(), len: 0 });
             }
             let s = self.open[shard].as_mut().unwrap();
-            let mut bytes = [0u8; COLOURED_RECORD];
-            bytes[..RECORD].copy_from_slice(&r.to_le_bytes());
-            bytes[RECORD..].copy_from_slice(&colour(i));
-            let bytes = &bytes[..record];
-            if let Err(e) = s.file.write_all(bytes) {
+            if let Err(e) = s.file.write_all(&run) {
                 let path = self.dir.join(shard_name(shard as u32));
                 return Err(io_err(&path, "writing a shard")(e));
             }
-            s.crc.update(bytes);
-            s.len += record as u64;
-            self.counts[r.plane as usize] += 1;
+            s.crc.update(&run);
+            s.len += ((end - at) * record) as u64;
+            for r in &records[at..end] {
+                self.counts[r.plane as usize] += 1;
+            }
+            at = end;
         }
+        self.scratch = run;
         Ok(())
     }
 
