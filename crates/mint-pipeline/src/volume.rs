@@ -71,46 +71,6 @@ impl VolumeStats {
     }
 }
 
-/// Adds the NaN count and the finite range of `values` to `stats`.
-/// Branch-free folds over 8 lanes that compile to packed compares and
-/// blends: a comparison with NaN is false, so NaN (and an infinity, made
-/// NaN first: it is not a value of the range) never moves a bound.
-fn sample_stats(values: &[f32], stats: &mut VolumeStats) {
-    const L: usize = 8;
-    let (mut lo, mut hi, mut nan) = (f32::INFINITY, f32::NEG_INFINITY, 0u64);
-    for c in values.chunks(4096) {
-        // (NaN counted in f32 lanes, exact below 2^24: a chunk is 4096.)
-        let (mut l, mut h, mut n) = ([f32::INFINITY; L], [f32::NEG_INFINITY; L], [0f32; L]);
-        let mut lanes = c.chunks_exact(L);
-        for v in &mut lanes {
-            for k in 0..L {
-                let f = if v[k].abs() < f32::INFINITY { v[k] } else { f32::NAN };
-                l[k] = if f < l[k] { f } else { l[k] };
-                h[k] = if f > h[k] { f } else { h[k] };
-                n[k] += if v[k] != v[k] { 1.0 } else { 0.0 };
-            }
-        }
-        for &v in lanes.remainder() {
-            let f = if v.abs() < f32::INFINITY { v } else { f32::NAN };
-            l[0] = if f < l[0] { f } else { l[0] };
-            h[0] = if f > h[0] { f } else { h[0] };
-            n[0] += if v.is_nan() { 1.0 } else { 0.0 };
-        }
-        for k in 0..L {
-            lo = if l[k] < lo { l[k] } else { lo };
-            hi = if h[k] > hi { h[k] } else { hi };
-            nan += n[k] as u64;
-        }
-    }
-    stats.nan += nan;
-    if lo <= hi {
-        stats.range = Some(match stats.range {
-            Some([a, b]) => [a.min(lo), b.max(hi)],
-            None => [lo, hi],
-        });
-    }
-}
-
 /// The engine frame's scale per axis (see the module docs).
 pub fn scale(job: &VolumeJob, info: &VolumeInfo) -> [f64; 3] {
     if job.own_grid {
@@ -543,7 +503,6 @@ pub fn discretize_planes(
     while q <= last {
         let end = (q + batch - 1).min(last);
         let (z0, z1) = p.slice_range(q, end);
-        let mut fresh = 0..0;
         if z1 > z0 && (z0, z1) != have {
             // Keep the slices this batch shares with the last one (moved to
             // the front of the one buffer, which is reused, never zeroed again).
@@ -557,27 +516,17 @@ pub fn discretize_planes(
             slices.resize(((z1 - z0) as usize) * slice_len, 0.0);
             if from < z1 {
                 let at = (from - z0) as usize * slice_len;
-                volume.read_slices_on(from, z1 - from, &mut slices[at..], threads)?;
+                let seen = volume.read_slices_on(from, z1 - from, &mut slices[at..], threads)?;
+                stats.nan += seen.nan;
+                stats.range = match (stats.range, seen.range) {
+                    (Some(a), Some(b)) => Some([a[0].min(b[0]), a[1].max(b[1])]),
+                    (a, b) => a.or(b),
+                };
                 stats.slices += z1 - from;
                 stats.samples += (z1 - from) * slice_len as u64;
-                fresh = at..slices.len();
             }
             have = (z0, z1);
         }
-        let fresh_stats = pool.install(|| {
-            slices[fresh]
-                .par_chunks(slice_len.max(1))
-                .map(|s| {
-                    let mut st = VolumeStats::default();
-                    sample_stats(s, &mut st);
-                    st
-                })
-                .reduce(VolumeStats::default, |mut a, b| {
-                    a.merge(&b);
-                    a
-                })
-        });
-        stats.merge(&fresh_stats);
         let slice_of = |z: u64| -> &[f32] {
             let i = (z - have.0) as usize;
             &slices[i * slice_len..(i + 1) * slice_len]
@@ -630,37 +579,6 @@ pub fn discretize_planes(
 mod tests {
     use super::*;
     use crate::scene::VolumeSurface;
-
-    #[test]
-    fn sample_stats_count_nan_and_skip_infinities() {
-        // Lengths around the 8 lanes and the 4096 chunks, values placed
-        // anywhere: the same as the plain fold.
-        let mut rng = 0x9E37_79B9_7F4A_7C15u64;
-        for len in [0usize, 1, 7, 8, 9, 4095, 4096, 4097, 9000] {
-            let v: Vec<f32> = (0..len)
-                .map(|_| {
-                    rng ^= rng << 13;
-                    rng ^= rng >> 7;
-                    rng ^= rng << 17;
-                    match rng % 10 {
-                        0 => f32::NAN,
-                        1 => f32::INFINITY,
-                        2 => f32::NEG_INFINITY,
-                        _ => (rng >> 40) as f32 - 8e6,
-                    }
-                })
-                .collect();
-            let mut st = VolumeStats::default();
-            sample_stats(&v, &mut st);
-            let finite: Vec<f32> = v.iter().copied().filter(|x| x.is_finite()).collect();
-            let want = (!finite.is_empty()).then(|| [finite.iter().copied().fold(f32::INFINITY, f32::min), finite.iter().copied().fold(f32::NEG_INFINITY, f32::max)]);
-            assert_eq!(st.range, want, "len {len}");
-            assert_eq!(st.nan, v.iter().filter(|x| x.is_nan()).count() as u64, "len {len}");
-        }
-        let mut st = VolumeStats::default();
-        sample_stats(&[f32::INFINITY, f32::NAN], &mut st);
-        assert_eq!((st.range, st.nan), (None, 1));
-    }
 
     fn job(own: bool) -> VolumeJob {
         VolumeJob { input: "v.nrrd".into(), raw: None, surface: VolumeSurface::Iso(0.5), own_grid: own, open_border: false }

@@ -150,6 +150,67 @@ pub struct OpenOptions {
     pub raw: Option<RawSpec>,
 }
 
+/// What a read saw of the samples (after the rescale): how many were NaN,
+/// and the range of the finite ones (`None` when none was).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SampleStats {
+    /// NaN samples.
+    pub nan: u64,
+    /// The least and greatest finite sample.
+    pub range: Option<[f32; 2]>,
+}
+
+impl SampleStats {
+    /// Both reads together.
+    pub fn merge(&mut self, o: &SampleStats) {
+        self.nan += o.nan;
+        self.range = match (self.range, o.range) {
+            (Some(a), Some(b)) => Some([a[0].min(b[0]), a[1].max(b[1])]),
+            (a, b) => a.or(b),
+        };
+    }
+}
+
+/// Adds the NaN count and the finite range of `values` to `stats`.
+/// Branch-free folds over 8 lanes that compile to packed compares and
+/// blends: a comparison with NaN is false, so NaN (and an infinity, made
+/// NaN first: it is not a value of the range) never moves a bound.
+pub(crate) fn sample_stats(values: &[f32], stats: &mut SampleStats) {
+    const L: usize = 8;
+    let (mut lo, mut hi, mut nan) = (f32::INFINITY, f32::NEG_INFINITY, 0u64);
+    for c in values.chunks(4096) {
+        // (NaN counted in f32 lanes, exact below 2^24: a chunk is 4096.)
+        let (mut l, mut h, mut n) = ([f32::INFINITY; L], [f32::NEG_INFINITY; L], [0f32; L]);
+        let mut lanes = c.chunks_exact(L);
+        for v in &mut lanes {
+            for k in 0..L {
+                let f = if v[k].abs() < f32::INFINITY { v[k] } else { f32::NAN };
+                l[k] = if f < l[k] { f } else { l[k] };
+                h[k] = if f > h[k] { f } else { h[k] };
+                n[k] += if v[k] != v[k] { 1.0 } else { 0.0 };
+            }
+        }
+        for &v in lanes.remainder() {
+            let f = if v.abs() < f32::INFINITY { v } else { f32::NAN };
+            l[0] = if f < l[0] { f } else { l[0] };
+            h[0] = if f > h[0] { f } else { h[0] };
+            n[0] += if v.is_nan() { 1.0 } else { 0.0 };
+        }
+        for k in 0..L {
+            lo = if l[k] < lo { l[k] } else { lo };
+            hi = if h[k] > hi { h[k] } else { hi };
+            nan += n[k] as u64;
+        }
+    }
+    stats.nan += nan;
+    if lo <= hi {
+        stats.range = Some(match stats.range {
+            Some([a, b]) => [a.min(lo), b.max(hi)],
+            None => [lo, hi],
+        });
+    }
+}
+
 /// An open volume: its header and a reader of its slices.
 pub struct Volume {
     info: VolumeInfo,
@@ -213,7 +274,7 @@ impl Volume {
     /// [`VolumeInfo::slice_len`]), sample (i, j) of slice k at
     /// `(k - k0) · slice_len + j · dims[0] + i`, rescaled to `f32`.
     pub fn read_slices(&mut self, k0: u64, count: u64, out: &mut [f32]) -> Result<(), VolumeError> {
-        self.read_slices_on(k0, count, out, 1)
+        self.read_slices_on(k0, count, out, 1).map(|_| ())
     }
 
     /// [`Volume::read_slices`] on up to `threads` threads when the volume
@@ -222,8 +283,10 @@ impl Volume {
     /// decoded by a reader of its own (kept for the next call; each holds
     /// at most one slice of the file's bytes, [`Volume::reader_bytes`]).
     /// Each slice is decoded alone, so the values do not depend on
-    /// `threads`; of several errors, the first slice's is returned.
-    pub fn read_slices_on(&mut self, k0: u64, count: u64, out: &mut [f32], threads: usize) -> Result<(), VolumeError> {
+    /// `threads`; of several errors, the first slice's is returned. Returns
+    /// the samples' statistics, each slice's taken by its thread while the
+    /// slice is still in cache.
+    pub fn read_slices_on(&mut self, k0: u64, count: u64, out: &mut [f32], threads: usize) -> Result<SampleStats, VolumeError> {
         let n = self.info.slice_len();
         let end = k0.checked_add(count).filter(|&e| e <= self.info.dims[2]);
         if end.is_none() || out.len() as u64 != count * n as u64 {
@@ -234,23 +297,27 @@ impl Volume {
             ));
         }
         let t = (threads.max(1) as u64).min(count).max(1) as usize;
+        let mut stats = SampleStats::default();
         if t == 1 || n == 0 || !self.source.random_access() {
             for (c, chunk) in out.chunks_exact_mut(n.max(1)).enumerate().take(count as usize) {
                 self.source.read_slice(k0 + c as u64, chunk)?;
+                sample_stats(chunk, &mut stats);
             }
-            return Ok(());
+            return Ok(stats);
         }
         while self.helpers.len() < t - 1 {
             let h = self.source.try_clone()?;
             self.helpers.push(h);
         }
-        let run = |src: &mut Box<dyn SliceSource>, first: u64, values: &mut [f32]| -> Result<(), VolumeError> {
+        let run = |src: &mut Box<dyn SliceSource>, first: u64, values: &mut [f32]| -> Result<SampleStats, VolumeError> {
+            let mut stats = SampleStats::default();
             for (c, chunk) in values.chunks_exact_mut(n).enumerate() {
                 src.read_slice(first + c as u64, chunk)?;
+                sample_stats(chunk, &mut stats);
             }
-            Ok(())
+            Ok(stats)
         };
-        let mut results: Vec<Result<(), VolumeError>> = Vec::with_capacity(t);
+        let mut results: Vec<Result<SampleStats, VolumeError>> = Vec::with_capacity(t);
         std::thread::scope(|s| {
             let mut rest = &mut out[..];
             let mut runs = Vec::with_capacity(t);
@@ -268,7 +335,10 @@ impl Volume {
                 results.push(h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)));
             }
         });
-        results.into_iter().collect()
+        for r in results {
+            stats.merge(&r?);
+        }
+        Ok(stats)
     }
 
     /// The bytes each extra reader of [`Volume::read_slices_on`] holds: one

@@ -25,6 +25,10 @@ pub(crate) trait SliceSource: Send {
     fn random_access(&self) -> bool;
 }
 
+/// The bytes of an uncompressed slice read and decoded at once: a piece
+/// stays in a core's cache between the two.
+const PIECE_BYTES: usize = 128 << 10;
+
 /// How a data file is compressed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Compression {
@@ -119,7 +123,8 @@ impl FileSlices {
         self
     }
 
-    fn read_plain(&mut self, f: usize, local: u64) -> Result<(), VolumeError> {
+    /// Reads bytes `from .. from + buf.len()` of slice `local` of file `f`.
+    fn read_plain(&mut self, f: usize, local: u64, from: u64, buf: &mut [u8]) -> Result<(), VolumeError> {
         if self.open.as_ref().map(|o| o.0) != Some(f) {
             let path = &self.files[f];
             let file = File::open(path).map_err(|e| VolumeError::io(path, "opening the data file", e))?;
@@ -133,8 +138,8 @@ impl FileSlices {
             self.open = Some((f, file, start));
         }
         let (_, file, start) = self.open.as_ref().unwrap();
-        let at = start + local * self.slice_bytes;
-        file.read_exact_at(&mut self.buf, at)
+        let at = start + local * self.slice_bytes + from;
+        file.read_exact_at(buf, at)
             .map_err(|e| VolumeError::io(&self.files[f], &format!("reading slice {} at byte {at}", f as u64 * self.per_file + local), e))
     }
 
@@ -182,12 +187,27 @@ impl FileSlices {
 
 impl SliceSource for FileSlices {
     fn read_slice(&mut self, k: u64, out: &mut [f32]) -> Result<(), VolumeError> {
-        self.buf.resize(self.slice_bytes as usize, 0);
         let (f, local) = ((k / self.per_file) as usize, k % self.per_file);
-        match self.compression {
-            Compression::None => self.read_plain(f, local)?,
-            _ => self.read_stream(f, local)?,
+        if self.compression == Compression::None {
+            // In pieces, each decoded while its bytes are still in cache.
+            let size = self.decoder.sample.size();
+            let per = (PIECE_BYTES / size).max(1);
+            let mut buf = std::mem::take(&mut self.buf);
+            buf.resize(per.min(out.len()) * size, 0);
+            let mut result = Ok(());
+            for (p, piece) in out.chunks_mut(per).enumerate() {
+                let bytes = &mut buf[..piece.len() * size];
+                result = self.read_plain(f, local, (p * per * size) as u64, bytes);
+                if result.is_err() {
+                    break;
+                }
+                self.decoder.decode(bytes, piece);
+            }
+            self.buf = buf;
+            return result;
         }
+        self.buf.resize(self.slice_bytes as usize, 0);
+        self.read_stream(f, local)?;
         self.decoder.decode(&self.buf, out);
         Ok(())
     }
