@@ -172,34 +172,43 @@ impl SampleStats {
 }
 
 /// Adds the NaN count and the finite range of `values` to `stats`.
-/// Branch-free folds over 8 lanes that compile to packed compares and
-/// blends: a comparison with NaN is false, so NaN (and an infinity, made
-/// NaN first: it is not a value of the range) never moves a bound.
+/// Chunk by chunk, a branch-free fold over 16 lanes (packed compares and
+/// blends) takes the bounds and notes whether any value is not finite; a
+/// comparison with NaN is false, so NaN never moves a bound. Only a chunk
+/// with a NaN or an infinity is folded again, value by value, counting NaN
+/// and leaving infinities out of the range (they are not values of it).
 pub(crate) fn sample_stats(values: &[f32], stats: &mut SampleStats) {
-    const L: usize = 8;
+    const L: usize = 16;
     let (mut lo, mut hi, mut nan) = (f32::INFINITY, f32::NEG_INFINITY, 0u64);
     for c in values.chunks(4096) {
-        // (NaN counted in f32 lanes, exact below 2^24: a chunk is 4096.)
-        let (mut l, mut h, mut n) = ([f32::INFINITY; L], [f32::NEG_INFINITY; L], [0f32; L]);
+        let (mut l, mut h, mut odd) = ([f32::INFINITY; L], [f32::NEG_INFINITY; L], [0u32; L]);
         let mut lanes = c.chunks_exact(L);
         for v in &mut lanes {
             for k in 0..L {
-                let f = if v[k].abs() < f32::INFINITY { v[k] } else { f32::NAN };
-                l[k] = if f < l[k] { f } else { l[k] };
-                h[k] = if f > h[k] { f } else { h[k] };
-                n[k] += if v[k] != v[k] { 1.0 } else { 0.0 };
+                let x = v[k];
+                l[k] = if x < l[k] { x } else { l[k] };
+                h[k] = if x > h[k] { x } else { h[k] };
+                odd[k] |= (x.to_bits() & 0x7f80_0000 == 0x7f80_0000) as u32;
             }
         }
-        for &v in lanes.remainder() {
-            let f = if v.abs() < f32::INFINITY { v } else { f32::NAN };
-            l[0] = if f < l[0] { f } else { l[0] };
-            h[0] = if f > h[0] { f } else { h[0] };
-            n[0] += if v.is_nan() { 1.0 } else { 0.0 };
+        let rest = lanes.remainder();
+        if odd.iter().any(|&o| o != 0) || rest.iter().any(|x| !x.is_finite()) {
+            for &x in c {
+                if x.is_finite() {
+                    lo = lo.min(x);
+                    hi = hi.max(x);
+                }
+                nan += x.is_nan() as u64;
+            }
+            continue;
         }
         for k in 0..L {
             lo = if l[k] < lo { l[k] } else { lo };
             hi = if h[k] > hi { h[k] } else { hi };
-            nan += n[k] as u64;
+        }
+        for &x in rest {
+            lo = lo.min(x);
+            hi = hi.max(x);
         }
     }
     stats.nan += nan;

@@ -260,29 +260,34 @@ mod tests {
 
     #[test]
     fn sample_stats_count_nan_and_skip_infinities() {
-        // Lengths around the 8 lanes and the 4096 chunks, values placed
-        // anywhere: the same as the plain fold.
+        // Lengths around the 16 lanes and the 4096 chunks; every value
+        // finite (the packed fold), a tenth each NaN and infinities, or one
+        // odd value in one chunk (that chunk folded again): the same as
+        // the plain fold.
         let mut rng = 0x9E37_79B9_7F4A_7C15u64;
-        for len in [0usize, 1, 7, 8, 9, 4095, 4096, 4097, 9000] {
-            let v: Vec<f32> = (0..len)
+        let odd = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY];
+        for (len, mix) in [0usize, 1, 15, 16, 17, 4095, 4096, 4097, 9000].into_iter().flat_map(|l| (0..5).map(move |m| (l, m))) {
+            let mut v: Vec<f32> = (0..len)
                 .map(|_| {
                     rng ^= rng << 13;
                     rng ^= rng >> 7;
                     rng ^= rng << 17;
-                    match rng % 10 {
-                        0 => f32::NAN,
-                        1 => f32::INFINITY,
-                        2 => f32::NEG_INFINITY,
+                    match (mix, rng % 10) {
+                        (0, k) if k < 3 => odd[k as usize],
                         _ => (rng >> 40) as f32 - 8e6,
                     }
                 })
                 .collect();
+            if mix >= 2 && len > 0 {
+                let at = (rng as usize) % len;
+                v[at] = odd[mix - 2];
+            }
             let mut st = crate::SampleStats::default();
             crate::sample_stats(&v, &mut st);
             let finite: Vec<f32> = v.iter().copied().filter(|x| x.is_finite()).collect();
             let want = (!finite.is_empty()).then(|| [finite.iter().copied().fold(f32::INFINITY, f32::min), finite.iter().copied().fold(f32::NEG_INFINITY, f32::max)]);
-            assert_eq!(st.range, want, "len {len}");
-            assert_eq!(st.nan, v.iter().filter(|x| x.is_nan()).count() as u64, "len {len}");
+            assert_eq!(st.range, want, "len {len}, mix {mix}");
+            assert_eq!(st.nan, v.iter().filter(|x| x.is_nan()).count() as u64, "len {len}, mix {mix}");
         }
         let mut st = crate::SampleStats::default();
         crate::sample_stats(&[f32::INFINITY, f32::NAN], &mut st);
