@@ -426,3 +426,54 @@ fn compressed_and_multi_frame_dicom_give_the_bytes_of_their_uncompressed_series(
         assert!(got == want, "{name}: other bytes than the single-frame series");
     }
 }
+
+/// `bytes` (an explicit-VR little-endian DICOM file) with the last digit of
+/// its SeriesInstanceUID (0020,000E) changed: another series, same length.
+fn other_series(bytes: &[u8]) -> Vec<u8> {
+    let tag = [0x20, 0x00, 0x0E, 0x00, b'U', b'I'];
+    let i = bytes.windows(6).position(|w| w == tag).expect("a SeriesInstanceUID");
+    let len = u16::from_le_bytes([bytes[i + 6], bytes[i + 7]]) as usize;
+    let mut b = bytes.to_vec();
+    let value = &mut b[i + 8..i + 8 + len];
+    let last = value.iter().rposition(u8::is_ascii_digit).unwrap();
+    value[last] = if value[last] == b'9' { b'0' } else { value[last] + 1 };
+    b
+}
+
+#[test]
+fn dicom_series_chooses_one_of_the_series_in_a_folder() {
+    // Slices 1-4 of the shared chest series, 5-7 moved to another series.
+    let src = shared("ct-chest-dicom-series-lungpetctdx");
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path().join("study");
+    std::fs::create_dir(&dir).unwrap();
+    for n in 1..=7 {
+        let b = std::fs::read(src.join(format!("1-{n:02}.dcm"))).unwrap();
+        std::fs::write(dir.join(format!("1-{n:02}.dcm")), if n <= 4 { b } else { other_series(&b) }).unwrap();
+    }
+    let out = d.path().join("out.ply");
+    let o = run(&["volume", p(&dir), p(&out), "--iso", "300"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("holds 2 series") && e.contains("--dicom-series") && e.lines().count() == 1, "{e}");
+    assert!(!out.exists(), "nothing written on error");
+    let slices = |args: &[&str]| -> u64 {
+        let mut a = vec!["volume"];
+        a.extend(args);
+        a.extend([p(&out), "--iso", "300", "--json"]);
+        let j: serde_json::Value = serde_json::from_str(&ok(&a)).unwrap();
+        watertight(&out);
+        j["volume"]["slices_read"].as_u64().unwrap()
+    };
+    assert_eq!(slices(&[p(&dir), "--dicom-series", "1"]), 4);
+    assert_eq!(slices(&[p(&dir), "--dicom-series", "2"]), 3);
+    let f6 = dir.join("1-06.dcm");
+    assert_eq!(slices(&[p(&f6)]), 3, "a file picks its own series");
+    let o = run(&["volume", p(&dir), p(&out), "--iso", "300", "--dicom-series", "3"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("no series number 3"), "{e}");
+    // A csg scene names the series the same way.
+    let scene = d.path().join("s.json");
+    std::fs::write(&scene, format!("{{\"volume\": {{\"file\": \"{}\", \"iso\": 300, \"dicom_series\": 2}}}}", dir.display())).unwrap();
+    let j: serde_json::Value = serde_json::from_str(&ok(&["csg", p(&scene), p(&out), "--cells", "20000", "--json"])).unwrap();
+    assert!(j["output_faces"].as_u64().unwrap() > 0, "{j}");
+}

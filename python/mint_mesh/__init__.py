@@ -784,7 +784,10 @@ def volume_file(input: PathLike, output: PathLike, *, iso: Optional[float] = Non
     surface at ``iso``, in the frame
     the file declares (the summary's ``volume.frame``), or with ``labels``
     (``True`` or "all" for every label but 0, or a list such as ``[1, 2]``)
-    one surface per label, one file each unless ``one_file=True``. Options
+    one surface per label, one file each unless ``one_file=True``. Of a
+    DICOM folder that holds several series, ``dicom_series`` picks one (its
+    SeriesInstanceUID, or its number from 1 in the list the error gives
+    without it); a ``.dcm`` file as ``input`` picks its own series. Options
     as ``mint volume`` (``cells``, ``cell_size``, ``open_border``,
     ``mem``, ``threads``, ``work``...). Returns the ``--json`` summary (for
     labels: ``{"labels": [...]}``).

@@ -248,6 +248,7 @@ def volume_file(
     cells: Optional[float] = ...,
     cell_size: Optional[float] = ...,
     open_border: bool = ...,
+    dicom_series: Optional[Union[str, int]] = ...,
     raw_dims: Optional[str] = ...,
     raw_type: Optional[Literal["u8", "i8", "u16", "i16", "u32", "i32", "u64", "i64", "f32", "f64"]] = ...,
     raw_spacing: Optional[str] = ...,

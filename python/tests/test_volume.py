@@ -116,3 +116,31 @@ def test_a_broken_volume_file_raises_the_cli_line_and_writes_nothing(mint_exe, t
     assert p.returncode != 0
     assert str(e.value) in p.stderr and "\n" not in str(e.value)
     assert not (tmp_path / "o.ply").exists()
+
+
+def _other_series(b: bytes) -> bytes:
+    """The file with the last digit of its SeriesInstanceUID changed."""
+    i = b.index(bytes([0x20, 0x00, 0x0E, 0x00]) + b"UI")
+    n = int.from_bytes(b[i + 6:i + 8], "little")
+    v = bytearray(b[i + 8:i + 8 + n])
+    k = max(j for j, c in enumerate(v) if chr(c).isdigit())
+    v[k] = ord("0") if v[k] == ord("9") else v[k] + 1
+    return b[:i + 8] + bytes(v) + b[i + 8 + n:]
+
+
+def test_dicom_series_picks_one_series_of_a_folder(shared_data, tmp_path):
+    src = shared_data / "volumes/ct-chest-dicom-series-lungpetctdx"
+    study = tmp_path / "study"
+    study.mkdir()
+    for n in range(1, 6):
+        b = (src / f"1-{n:02}.dcm").read_bytes()
+        (study / f"1-{n:02}.dcm").write_bytes(b if n <= 2 else _other_series(b))
+    with pytest.raises(mint_mesh.InputError, match="holds 2 series"):
+        mint_mesh.volume_file(study, tmp_path / "o.ply", iso=300)
+    assert not (tmp_path / "o.ply").exists()
+    s = mint_mesh.volume_file(study, tmp_path / "o.ply", iso=300, dicom_series=2)
+    assert s["volume"]["slices_read"] == 3
+    s = mint_mesh.volume_file(study / "1-01.dcm", tmp_path / "o.ply", iso=300)
+    assert s["volume"]["slices_read"] == 2
+    with pytest.raises(mint_mesh.MintError, match="no series number 7"):
+        mint_mesh.volume_file(study, tmp_path / "o.ply", iso=300, dicom_series=7)

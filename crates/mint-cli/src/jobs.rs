@@ -320,6 +320,13 @@ pub struct VolumeArgs {
     /// surface cut by it is closed on it].
     #[arg(long)]
     pub open_border: bool,
+    /// Of a DICOM folder that holds several series (a CT with its scout
+    /// and dose report, say), the one to mesh: its SeriesInstanceUID, or its
+    /// number in the list that `mint volume FOLDER` prints without this
+    /// option. Giving one of the series' .dcm files instead of the folder
+    /// picks that file's series.
+    #[arg(long, value_name = "UID|N")]
+    pub dicom_series: Option<String>,
     /// Raw samples: dimensions X,Y,Z (X fastest in the file).
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_dims, requires = "raw_type")]
     pub raw_dims: Option<[u64; 3]>,
@@ -369,7 +376,14 @@ impl VolumeArgs {
             spacing: self.raw_spacing.unwrap_or([1.0; 3]),
             header_bytes: self.raw_header,
         });
-        mint_pipeline::VolumeJob { input: self.input.clone(), raw, surface, own_grid: self.cells.is_none() && self.cell_size.is_none(), open_border: self.open_border }
+        mint_pipeline::VolumeJob {
+            input: self.input.clone(),
+            raw,
+            surface,
+            own_grid: self.cells.is_none() && self.cell_size.is_none(),
+            open_border: self.open_border,
+            dicom_series: self.dicom_series.clone(),
+        }
     }
 
     /// The run's spec for `surface`, written to `output`.

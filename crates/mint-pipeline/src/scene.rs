@@ -362,10 +362,13 @@ impl Builder<'_> {
             }
             "volume" => {
                 let Value::Obj(items) = x else { return self.err(l, "key 'volume': expected an object such as {\"file\": \"ct.nii.gz\", \"iso\": 300}") };
-                let (mut file, mut surface) = (None, None);
+                let (mut file, mut surface, mut dicom_series) = (None, None, None);
                 for (k, kl, v) in items {
                     match (k.as_str(), v) {
                         ("file", Value::Str(p)) => file = Some((*kl, self.base.join(p))),
+                        ("dicom_series", Value::Str(s)) => dicom_series = Some(s.clone()),
+                        ("dicom_series", Value::Num(n)) if *n >= 1.0 && n.fract() == 0.0 && *n <= u32::MAX as f64 => dicom_series = Some(format!("{}", *n as u64)),
+                        ("dicom_series", _) => return self.err(*kl, "key 'dicom_series': expected a SeriesInstanceUID (a string) or a series number from 1"),
                         ("file", _) => return self.err(*kl, "key 'file': expected a path to a volume (a file, or a DICOM or TIFF folder)"),
                         ("iso" | "label", v) => {
                             if surface.is_some() {
@@ -377,7 +380,7 @@ impl Builder<'_> {
                             }
                             surface = Some(if k == "iso" { VolumeSurface::Iso(x as f32) } else { VolumeSurface::Label(x as f32) });
                         }
-                        _ => return self.err(*kl, format!("key '{k}': unknown parameter of volume (file, iso, label)")),
+                        _ => return self.err(*kl, format!("key '{k}': unknown parameter of volume (file, iso, label, dicom_series)")),
                     }
                 }
                 let Some((fl, input)) = file else { return self.err(l, "volume: missing key 'file'") };
@@ -388,7 +391,7 @@ impl Builder<'_> {
                 if xf != Transform::default() {
                     return self.err(l, "volume: a volume is placed by its own header; 'scale', 'rotate' and 'translate' on it (or on a node above it) are not supported");
                 }
-                Operand::Volume(Box::new(VolumeJob { input, raw: None, surface, own_grid: false, open_border: false }))
+                Operand::Volume(Box::new(VolumeJob { input, raw: None, surface, own_grid: false, open_border: false, dicom_series }))
             }
             "sphere" => Operand::Primitive(prim(Shape::Sphere { radius: { let (fl, f) = self.field(l, k, x, "radius")?; self.positive(fl, "radius", f)? } })),
             "box" => {
@@ -510,6 +513,10 @@ pub struct VolumeJob {
     /// closing it there.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub open_border: bool,
+    /// `--dicom-series`: of a DICOM folder holding several series, the one
+    /// to read (its SeriesInstanceUID, or its number from 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dicom_series: Option<String>,
 }
 
 /// Which surface of a volume.

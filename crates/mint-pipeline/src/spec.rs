@@ -95,7 +95,7 @@ impl Job {
             Job::Resample { inputs } => Scene { expr: Expr::Operand(0), operands: vec![mesh(inputs)] },
             Job::Bool { op, a, b, iso_a, iso_b } => {
                 let side = |p: &[PathBuf], iso: Option<f32>| match (iso, p) {
-                    (Some(v), [input]) => Operand::Volume(Box::new(VolumeJob { input: input.clone(), raw: None, surface: crate::scene::VolumeSurface::Iso(v), own_grid: false, open_border: false })),
+                    (Some(v), [input]) => Operand::Volume(Box::new(VolumeJob { input: input.clone(), raw: None, surface: crate::scene::VolumeSurface::Iso(v), own_grid: false, open_border: false, dicom_series: None })),
                     _ => mesh(p),
                 };
                 Scene { expr: Expr::Op(*op, vec![Expr::Operand(0), Expr::Operand(1)]), operands: vec![side(a, *iso_a), side(b, *iso_b)] }

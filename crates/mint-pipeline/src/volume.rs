@@ -38,7 +38,7 @@ impl VolumeJob {
             }
             None => None,
         };
-        Ok(mint_volume::Volume::open(&self.input, &mint_volume::OpenOptions { raw })?)
+        Ok(mint_volume::Volume::open(&self.input, &mint_volume::OpenOptions { raw, dicom_series: self.dicom_series.clone() })?)
     }
 }
 
@@ -581,7 +581,7 @@ mod tests {
     use crate::scene::VolumeSurface;
 
     fn job(own: bool) -> VolumeJob {
-        VolumeJob { input: "v.nrrd".into(), raw: None, surface: VolumeSurface::Iso(0.5), own_grid: own, open_border: false }
+        VolumeJob { input: "v.nrrd".into(), raw: None, surface: VolumeSurface::Iso(0.5), own_grid: own, open_border: false, dicom_series: None }
     }
 
     fn info(dims: [u64; 3], m: [[f64; 4]; 3]) -> VolumeInfo {

@@ -117,6 +117,14 @@ fn chain(e: &dyn std::error::Error) -> String {
 }
 
 /// The file's name (for naming a second file in a message).
+/// Whether two paths name one file (by canonical path, else as given).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => a == b,
+    }
+}
+
 fn short(p: &Path) -> String {
     p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| p.display().to_string())
 }
@@ -472,8 +480,10 @@ struct SliceMeta {
     frame: Option<FrameOf>,
 }
 
-/// Opens the DICOM series in the folder `dir`.
-pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), VolumeError> {
+/// Opens a DICOM series in the folder `dir`: the one `pick` names (a
+/// SeriesInstanceUID, or a number from 1 in the folder's list), else the
+/// series of the file `of_file`, else the folder's only series.
+pub(crate) fn open(dir: &Path, pick: Option<&str>, of_file: Option<&Path>) -> Result<(VolumeInfo, Box<dyn SliceSource>), VolumeError> {
     let rd = std::fs::read_dir(dir).map_err(|e| VolumeError::io(dir, "listing the folder", e))?;
     let mut paths = Vec::new();
     for ent in rd {
@@ -503,7 +513,7 @@ pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vol
             ),
         ));
     }
-    // One series.
+    // One series: the one asked for, the given file's, or the only one.
     let mut series: Vec<(String, usize, PathBuf)> = Vec::new();
     for h in &heads {
         match series.iter_mut().find(|s| s.0 == h.series) {
@@ -511,16 +521,36 @@ pub(crate) fn open(dir: &Path) -> Result<(VolumeInfo, Box<dyn SliceSource>), Vol
             None => series.push((h.series.clone(), 1, h.path.clone())),
         }
     }
-    if series.len() > 1 {
-        let list: Vec<String> = series
+    let list = || -> String {
+        series
             .iter()
-            .map(|(uid, n, p)| format!("{} ({n} file{}, e.g. {})", if uid.is_empty() { "(no SeriesInstanceUID)" } else { uid }, if *n == 1 { "" } else { "s" }, short(p)))
-            .collect();
-        return Err(VolumeError::format(
-            dir,
-            format!("the folder holds {} series (0020,000E) SeriesInstanceUID: {}; give a folder with one", series.len(), list.join(", ")),
-        ));
-    }
+            .enumerate()
+            .map(|(i, (uid, n, p))| format!("{}: {} ({n} image{}, e.g. {})", i + 1, if uid.is_empty() { "(no SeriesInstanceUID)" } else { uid }, if *n == 1 { "" } else { "s" }, short(p)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let chosen = match (pick, of_file) {
+        (Some(p), _) if !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()) => match p.parse::<usize>().ok().filter(|&n| n >= 1 && n <= series.len()) {
+            Some(n) => series[n - 1].0.clone(),
+            None => return Err(VolumeError::new(crate::VolumeErrorKind::Value, dir, format!("no series number {p}: the folder holds {} series: {}", series.len(), list()))),
+        },
+        (Some(p), _) => match series.iter().find(|s| s.0 == p) {
+            Some(s) => s.0.clone(),
+            None => return Err(VolumeError::new(crate::VolumeErrorKind::Value, dir, format!("no series with SeriesInstanceUID {p}: the folder holds {}", list()))),
+        },
+        (None, Some(f)) => match heads.iter().find(|h| same_file(&h.path, f)) {
+            Some(h) => h.series.clone(),
+            None => return Err(VolumeError::format(f, "not a DICOM image (no pixel data, or not DICOM): give a slice of the series, or its folder")),
+        },
+        (None, None) if series.len() > 1 => {
+            return Err(VolumeError::format(
+                dir,
+                format!("the folder holds {} series (0020,000E) SeriesInstanceUID: {}; choose one (--dicom-series N or UID, or give one of its files)", series.len(), list()),
+            ));
+        }
+        (None, None) => series[0].0.clone(),
+    };
+    heads.retain(|h| h.series == chosen);
     // The same grid in every file.
     let h0 = heads[0].clone();
     for h in &heads[1..] {
@@ -1025,6 +1055,38 @@ mod tests {
 
     fn compressed(what: &str) -> PathBuf {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/data/dicom-compressed").join(what)
+    }
+
+    #[test]
+    fn one_series_of_several_is_chosen_by_uid_number_or_file() {
+        // Slices 1, 2 of the shared series and 3, 4, 5 moved to series 1.2.3.4.
+        let other = |n: usize| edit(&slice(n), (0x0020, 0x000E), b"1.2.3.4");
+        let d = folder(&[("a1.dcm", slice(1)), ("a2.dcm", slice(2)), ("b3.dcm", other(3)), ("b4.dcm", other(4)), ("b5.dcm", other(5)), ("notes.dcm", b"not dicom".to_vec())]);
+        let e = open_err(&d);
+        assert!(e.contains("holds 2 series") && e.contains("1: ") && e.contains("2: 1.2.3.4 (3 images, e.g. b3.dcm)") && e.contains("--dicom-series"), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+        let with = |pick: &str| OpenOptions { dicom_series: Some(pick.to_string()), ..OpenOptions::default() };
+        let own_uid = {
+            let v = Volume::open(&d.path().join("a1.dcm"), &OpenOptions::default()).unwrap();
+            assert_eq!(v.info().dims[2], 2, "a .dcm file reads its own series");
+            v.info().files.len()
+        };
+        assert_eq!(own_uid, 2);
+        for (pick, slices) in [("1", 2u64), ("2", 3), ("1.2.3.4", 3)] {
+            let mut v = Volume::open(d.path(), &with(pick)).unwrap();
+            assert_eq!(v.info().dims[2], slices, "--dicom-series {pick}");
+            let mut s = vec![0.0; (v.info().slice_len() as u64 * slices) as usize];
+            v.read_slices(0, slices, &mut s).unwrap();
+        }
+        assert_eq!(Volume::open(&d.path().join("b4.dcm"), &OpenOptions::default()).unwrap().info().dims[2], 3);
+        // The option wins over the file's own series.
+        assert_eq!(Volume::open(&d.path().join("b4.dcm"), &with("1")).unwrap().info().dims[2], 2);
+        for (pick, want) in [("3", "no series number 3: the folder holds 2 series"), ("0", "no series number 0"), ("9.9.9", "no series with SeriesInstanceUID 9.9.9")] {
+            let e = Volume::open(d.path(), &with(pick)).unwrap_err().to_string();
+            assert!(e.contains(want) && e.contains("2: 1.2.3.4") && !e.contains('\n'), "{pick}: {e}");
+        }
+        let e = Volume::open(&d.path().join("notes.dcm"), &OpenOptions::default()).unwrap_err().to_string();
+        assert!(e.contains("notes.dcm") && e.contains("not a DICOM image"), "{e}");
     }
 
     fn slices(dir: &Path) -> (VolumeInfo, Vec<f32>) {

@@ -148,6 +148,11 @@ pub struct OpenOptions {
     /// Read the file as raw samples with this layout (required for `.raw`
     /// and any file without a header mint knows).
     pub raw: Option<RawSpec>,
+    /// Of a DICOM folder that holds several series, the one to read: its
+    /// SeriesInstanceUID, or its number (from 1) in the list that opening
+    /// the folder without it gives. Without it a folder must hold one
+    /// series, and a `.dcm` file reads its own.
+    pub dicom_series: Option<String>,
 }
 
 /// What a read saw of the samples (after the rescale): how many were NaN,
@@ -250,7 +255,7 @@ impl Volume {
                 if tiff::is_stack_dir(path)? {
                     tiff::open(path)?
                 } else {
-                    dicom::open(path)?
+                    dicom::open(path, options.dicom_series.as_deref(), None)?
                 }
             } else if ext(".nhdr") || ext(".nrrd") {
                 nrrd::open(path)?
@@ -259,7 +264,7 @@ impl Volume {
             } else if ext(".nii") || ext(".nii.gz") || ext(".hdr") {
                 nifti::open(path)?
             } else if ext(".dcm") {
-                dicom::open(path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")))?
+                dicom::open(path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")), options.dicom_series.as_deref(), Some(path))?
             } else if ext(".tif") || ext(".tiff") {
                 tiff::open(path)?
             } else {

@@ -232,7 +232,7 @@ mod tests {
             let files = w.finish().unwrap();
             assert!(files.iter().all(|f| f.exists()));
             let opts = if name.ends_with(".raw") {
-                OpenOptions { raw: Some(RawSpec { dims, sample: Sample::I16, big_endian: false, spacing: [1.0; 3], header_bytes: 0 }) }
+                OpenOptions { raw: Some(RawSpec { dims, sample: Sample::I16, big_endian: false, spacing: [1.0; 3], header_bytes: 0 }), dicom_series: None }
             } else {
                 OpenOptions::default()
             };
@@ -328,7 +328,7 @@ mod tests {
         // and whatever the threads, the error names slice 7.
         let p = dir.path().join("d.raw");
         std::fs::write(&p, values.iter().flat_map(|&v| (v as i16).to_le_bytes()).collect::<Vec<u8>>()).unwrap();
-        let opts = OpenOptions { raw: Some(RawSpec { dims, sample: Sample::I16, big_endian: false, spacing: [1.0; 3], header_bytes: 0 }) };
+        let opts = OpenOptions { raw: Some(RawSpec { dims, sample: Sample::I16, big_endian: false, spacing: [1.0; 3], header_bytes: 0 }), dicom_series: None };
         for threads in [1, 2, 3, 4] {
             let mut v = Volume::open(&p, &opts).unwrap();
             std::fs::OpenOptions::new().write(true).open(&p).unwrap().set_len(7 * 15 * 2).unwrap();
