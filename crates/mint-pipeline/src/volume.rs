@@ -524,6 +524,16 @@ pub fn discretize_planes(
                 };
                 stats.slices += z1 - from;
                 stats.samples += (z1 - from) * slice_len as u64;
+                // The next batch's new slices are read ahead by the system
+                // while this batch is worked: a volume larger than memory
+                // then costs about its reading or its work, not both.
+                if end < last {
+                    let (n0, n1) = p.slice_range(end + 1, (end + batch).min(last));
+                    let n0 = n0.max(z1);
+                    if n1 > n0 {
+                        volume.prefetch(n0, n1 - n0);
+                    }
+                }
             }
             have = (z0, z1);
         }

@@ -355,6 +355,17 @@ impl Volume {
         Ok(stats)
     }
 
+    /// Asks the system to start reading slices `k0 .. k0 + count` into its
+    /// cache (uncompressed files), so that reading them later overlaps
+    /// with work on the slices read before. Only a hint: nothing is
+    /// checked or returned, and a read of those slices reports any error.
+    pub fn prefetch(&mut self, k0: u64, count: u64) {
+        let end = k0.saturating_add(count).min(self.info.dims[2]);
+        if k0 < end {
+            self.source.prefetch(k0, end - k0);
+        }
+    }
+
     /// The bytes each extra reader of [`Volume::read_slices_on`] holds: one
     /// slice of samples as stored.
     pub fn reader_bytes(&self) -> u64 {

@@ -23,6 +23,9 @@ pub(crate) trait SliceSource: Send {
     /// Whether any slice costs what the next one does (no stream to wind
     /// forward), so that runs of slices can be read by several readers.
     fn random_access(&self) -> bool;
+    /// Asks the system to start reading slices `k0 .. k0 + count` into its
+    /// cache now, for a read to come (a hint: errors are the read's).
+    fn prefetch(&mut self, _k0: u64, _count: u64) {}
 }
 
 /// The bytes of an uncompressed slice read and decoded at once: a piece
@@ -125,6 +128,15 @@ impl FileSlices {
 
     /// Reads bytes `from .. from + buf.len()` of slice `local` of file `f`.
     fn read_plain(&mut self, f: usize, local: u64, from: u64, buf: &mut [u8]) -> Result<(), VolumeError> {
+        self.open_plain(f)?;
+        let (_, file, start) = self.open.as_ref().unwrap();
+        let at = start + local * self.slice_bytes + from;
+        file.read_exact_at(buf, at)
+            .map_err(|e| VolumeError::io(&self.files[f], &format!("reading slice {} at byte {at}", f as u64 * self.per_file + local), e))
+    }
+
+    /// Makes data file `f` the open one.
+    fn open_plain(&mut self, f: usize) -> Result<(), VolumeError> {
         if self.open.as_ref().map(|o| o.0) != Some(f) {
             let path = &self.files[f];
             let file = File::open(path).map_err(|e| VolumeError::io(path, "opening the data file", e))?;
@@ -137,10 +149,7 @@ impl FileSlices {
             };
             self.open = Some((f, file, start));
         }
-        let (_, file, start) = self.open.as_ref().unwrap();
-        let at = start + local * self.slice_bytes + from;
-        file.read_exact_at(buf, at)
-            .map_err(|e| VolumeError::io(&self.files[f], &format!("reading slice {} at byte {at}", f as u64 * self.per_file + local), e))
+        Ok(())
     }
 
     fn read_stream(&mut self, f: usize, local: u64) -> Result<(), VolumeError> {
@@ -229,6 +238,30 @@ impl SliceSource for FileSlices {
 
     fn random_access(&self) -> bool {
         self.compression == Compression::None
+    }
+
+    fn prefetch(&mut self, k0: u64, count: u64) {
+        if self.compression != Compression::None || count == 0 {
+            return;
+        }
+        // File by file: the byte range of the slices each holds.
+        let mut k = k0;
+        while k < k0 + count {
+            let (f, local) = ((k / self.per_file) as usize, k % self.per_file);
+            let n = (self.per_file - local).min(k0 + count - k);
+            if f >= self.files.len() || self.open_plain(f).is_err() {
+                return;
+            }
+            if let Some((_, file, start)) = &self.open {
+                use std::os::unix::io::AsRawFd;
+                let at = start + local * self.slice_bytes;
+                // SAFETY: a valid descriptor of an open file; the call only advises.
+                unsafe {
+                    libc::posix_fadvise(file.as_raw_fd(), at as libc::off_t, (n * self.slice_bytes) as libc::off_t, libc::POSIX_FADV_WILLNEED);
+                }
+            }
+            k += n;
+        }
     }
 }
 
