@@ -14,7 +14,7 @@
 //! code and its edge vertices into triangles by [`mc_table`].
 
 use crate::grid::Grid;
-use crate::intercept::{line_id, Intercept, PlaneLines, FAMILY_A, FAMILY_B, FAMILY_S};
+use crate::intercept::{Intercept, PlaneLines, FAMILY_A, FAMILY_B, FAMILY_S};
 use crate::mc_table::{corner_offset, mc_table, EDGE_CORNERS};
 use std::ops::Range;
 
@@ -152,11 +152,8 @@ impl<'a> Layer<'a> {
             }
             _ => {
                 let (p, st) = (&self.planes[0], &self.starts[0]);
-                let id = line_id(FAMILY_S, (i + o[0]) * (self.nb + 1) + (j + o[1]));
-                let s = &p.records()[st.s..];
-                let start = s.partition_point(|r| r.line < id);
-                let len = s[start..].partition_point(|r| r.line == id);
-                (0, p.in_cell(st.s + start..st.s + start + len, self.k))
+                let line = PlaneLines::new(&p.records()[st.s..]).line(FAMILY_S, (i + o[0]) * (self.nb + 1) + (j + o[1]));
+                (0, p.in_cell(st.s + line.start..st.s + line.end, self.k))
             }
         }
     }

@@ -626,20 +626,18 @@ fn combine_s(prepared: &[Vec<Prepared>], s_finals: &[Vec<EdgeVertices>], p: usiz
     let mut synthesized = vec![false; m];
     let mut changes = Vec::with_capacity(m);
     for (i, j) in lo.changes_to(hi) {
-        {
-            let s1 = hi.get(i, j);
-            let idx = i * (nb + 1) + j;
-            changes.clear();
-            for o in 0..m {
-                lower[o] = prepared[o][p].states.get(i, j);
-                if let Some((v, synth)) = s_finals[o][p].on_edge(FAMILY_S, idx, k) {
-                    changes.push((v, o));
-                    synthesized[o] = synth;
-                }
+        let s1 = hi.get(i, j);
+        let idx = i * (nb + 1) + j;
+        changes.clear();
+        for o in 0..m {
+            lower[o] = prepared[o][p].states.get(i, j);
+            if let Some((v, synth)) = s_finals[o][p].on_edge(FAMILY_S, idx, k) {
+                changes.push((v, o));
+                synthesized[o] = synth;
             }
-            let (v, synth) = combined_vertex(expr, &mut lower, &mut changes, &synthesized, k);
-            out.push((Intercept::new(k, FAMILY_S, idx, v, s1), synth));
         }
+        let (v, synth) = combined_vertex(expr, &mut lower, &mut changes, &synthesized, k);
+        out.push((Intercept::new(k, FAMILY_S, idx, v, s1), synth));
     }
     out
 }

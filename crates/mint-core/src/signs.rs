@@ -272,20 +272,22 @@ impl NodeStates {
     /// The nodes `(i, j)`, `j < nb`, whose state differs from `(i, j + 1)`'s,
     /// ordered by `i`, then `j` (the order of family-B edge vertices).
     pub fn changes_along_b(&self) -> Vec<(u32, u32)> {
-        let width = self.width;
-        let mut keys = Vec::new();
-        self.for_each_difference(None, width, |k| keys.push(((k % width) as u64) << 32 | (k / width) as u64));
-        keys.sort_unstable();
-        keys.into_iter().map(|key| ((key >> 32) as u32, key as u32)).collect()
+        self.differences_by_column(None, self.width)
     }
 
     /// The nodes `(i, j)` whose state here differs from `upper`'s, ordered by
     /// `i`, then `j` (the order of family-S edge vertices).
     pub fn changes_to(&self, upper: &NodeStates) -> Vec<(u32, u32)> {
         assert_eq!((self.width, self.len), (upper.width, upper.len), "node states of different planes");
+        self.differences_by_column(Some(upper), 0)
+    }
+
+    /// [`NodeStates::for_each_difference`]'s nodes as `(i, j)`, ordered by
+    /// `i`, then `j`.
+    fn differences_by_column(&self, other: Option<&NodeStates>, s: usize) -> Vec<(u32, u32)> {
         let width = self.width;
         let mut keys = Vec::new();
-        self.for_each_difference(Some(upper), 0, |k| keys.push(((k % width) as u64) << 32 | (k / width) as u64));
+        self.for_each_difference(other, s, |k| keys.push(((k % width) as u64) << 32 | (k / width) as u64));
         keys.sort_unstable();
         keys.into_iter().map(|key| ((key >> 32) as u32, key as u32)).collect()
     }
