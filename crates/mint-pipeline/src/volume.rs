@@ -455,8 +455,9 @@ pub fn discretize_planes(
     let slice_bytes = slice_len as u64 * 4;
     let threads = threads.max(1);
     // Two node planes with their bits, two slices, one band per thread,
-    // and a slice of stored bytes for each extra reader of the slices.
-    let planes_bytes = 2 * (na1 * nb1 * 4 + nb1 * words * 8) as u64 + (threads.max(1) - 1) as u64 * volume.reader_bytes();
+    // a slice of stored bytes for each extra reader of the slices, and
+    // the read-ahead's buffer.
+    let planes_bytes = 2 * (na1 * nb1 * 4 + nb1 * words * 8) as u64 + (threads.max(1) - 1) as u64 * volume.reader_bytes() + Volume::READ_AHEAD_BYTES;
     let band_bytes = (band_capacity(na1, rows) * std::mem::size_of::<Intercept>()) as u64;
     let least_group = threads.min(bands);
     let least = planes_bytes + 2 * slice_bytes + least_group as u64 * band_bytes;
@@ -524,14 +525,14 @@ pub fn discretize_planes(
                 };
                 stats.slices += z1 - from;
                 stats.samples += (z1 - from) * slice_len as u64;
-                // The next batch's new slices are read ahead by the system
+                // The next batch's new slices are read ahead on a thread
                 // while this batch is worked: a volume larger than memory
                 // then costs about its reading or its work, not both.
                 if end < last {
                     let (n0, n1) = p.slice_range(end + 1, (end + batch).min(last));
                     let n0 = n0.max(z1);
                     if n1 > n0 {
-                        volume.prefetch(n0, n1 - n0);
+                        volume.read_ahead(n0, n1 - n0);
                     }
                 }
             }

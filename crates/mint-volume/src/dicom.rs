@@ -939,6 +939,13 @@ impl SliceSource for DicomSlices {
     fn random_access(&self) -> bool {
         true
     }
+
+    fn stored(&mut self, k0: u64, count: u64) -> Vec<crate::ahead::Stored> {
+        // Single-frame files, read whole (a multi-frame file's frames are
+        // read where they lie).
+        let slices = self.slices.iter().skip(k0 as usize).take(count as usize).filter(|s| s.frame.is_none());
+        slices.map(|s| crate::ahead::Stored { path: s.path.clone(), at: 0, len: None }).collect()
+    }
 }
 
 #[cfg(test)]

@@ -28,6 +28,7 @@
 
 #![warn(missing_docs)]
 
+mod ahead;
 mod decode;
 mod dicom;
 pub mod dicom_lengths;
@@ -231,6 +232,8 @@ pub struct Volume {
     source: Box<dyn SliceSource>,
     /// More readers of the same data, for [`Volume::read_slices_on`].
     helpers: Vec<Box<dyn SliceSource>>,
+    /// The thread of [`Volume::read_ahead`], started by its first call.
+    ahead: Option<ahead::ReadAhead>,
 }
 
 impl std::fmt::Debug for Volume {
@@ -276,7 +279,7 @@ impl Volume {
             }
         };
         source::check_info(path, &info)?;
-        Ok(Volume { info, source, helpers: Vec::new() })
+        Ok(Volume { info, source, helpers: Vec::new(), ahead: None })
     }
 
     /// The header.
@@ -355,16 +358,32 @@ impl Volume {
         Ok(stats)
     }
 
-    /// Asks the system to start reading slices `k0 .. k0 + count` into its
-    /// cache (uncompressed files), so that reading them later overlaps
-    /// with work on the slices read before. Only a hint: nothing is
-    /// checked or returned, and a read of those slices reports any error.
-    pub fn prefetch(&mut self, k0: u64, count: u64) {
+    /// Starts reading slices `k0 .. k0 + count` into the system's cache on
+    /// a thread of the volume's own (uncompressed data; one file a slice),
+    /// after the slices asked for before, so that reading them later
+    /// overlaps with work on the slices read before. Only a hint: nothing
+    /// is checked or returned, and a read of those slices reports any
+    /// error. The thread holds [`Volume::READ_AHEAD_BYTES`] and ends with
+    /// the volume.
+    pub fn read_ahead(&mut self, k0: u64, count: u64) {
         let end = k0.saturating_add(count).min(self.info.dims[2]);
-        if k0 < end {
-            self.source.prefetch(k0, end - k0);
+        if k0 >= end {
+            return;
+        }
+        let ranges = self.source.stored(k0, end - k0);
+        if ranges.is_empty() {
+            return;
+        }
+        if self.ahead.is_none() {
+            self.ahead = ahead::ReadAhead::start();
+        }
+        if let Some(a) = &self.ahead {
+            a.ask(ranges);
         }
     }
+
+    /// The memory the thread of [`Volume::read_ahead`] holds.
+    pub const READ_AHEAD_BYTES: u64 = ahead::PIECE as u64;
 
     /// The bytes each extra reader of [`Volume::read_slices_on`] holds: one
     /// slice of samples as stored.
@@ -375,7 +394,7 @@ impl Volume {
     /// A second reader of the same volume (its own file handles), for a
     /// task on another thread.
     pub fn try_clone(&self) -> Result<Volume, VolumeError> {
-        Ok(Volume { info: self.info.clone(), source: self.source.try_clone()?, helpers: Vec::new() })
+        Ok(Volume { info: self.info.clone(), source: self.source.try_clone()?, helpers: Vec::new(), ahead: None })
     }
 }
 

@@ -11,6 +11,7 @@ use std::io::{BufReader, Read};
 use std::os::unix::fs::FileExt;
 use std::path::{Path, PathBuf};
 
+use crate::ahead::Stored;
 use crate::decode::Decoder;
 use crate::{diagonal_affine, Frame, RawSpec, VolumeError, VolumeErrorKind, VolumeInfo};
 
@@ -23,9 +24,13 @@ pub(crate) trait SliceSource: Send {
     /// Whether any slice costs what the next one does (no stream to wind
     /// forward), so that runs of slices can be read by several readers.
     fn random_access(&self) -> bool;
-    /// Asks the system to start reading slices `k0 .. k0 + count` into its
-    /// cache now, for a read to come (a hint: errors are the read's).
-    fn prefetch(&mut self, _k0: u64, _count: u64) {}
+    /// The stored bytes of slices `k0 .. k0 + count`, for reading them
+    /// ahead into the system's cache; none where reading ahead cannot
+    /// help (compressed streams, multi-page files). A hint: errors are
+    /// the read's.
+    fn stored(&mut self, _k0: u64, _count: u64) -> Vec<Stored> {
+        Vec::new()
+    }
 }
 
 /// The bytes of an uncompressed slice read and decoded at once: a piece
@@ -240,9 +245,10 @@ impl SliceSource for FileSlices {
         self.compression == Compression::None
     }
 
-    fn prefetch(&mut self, k0: u64, count: u64) {
-        if self.compression != Compression::None || count == 0 {
-            return;
+    fn stored(&mut self, k0: u64, count: u64) -> Vec<Stored> {
+        let mut out = Vec::new();
+        if self.compression != Compression::None {
+            return out;
         }
         // File by file: the byte range of the slices each holds.
         let mut k = k0;
@@ -250,18 +256,14 @@ impl SliceSource for FileSlices {
             let (f, local) = ((k / self.per_file) as usize, k % self.per_file);
             let n = (self.per_file - local).min(k0 + count - k);
             if f >= self.files.len() || self.open_plain(f).is_err() {
-                return;
+                break;
             }
-            if let Some((_, file, start)) = &self.open {
-                use std::os::unix::io::AsRawFd;
-                let at = start + local * self.slice_bytes;
-                // SAFETY: a valid descriptor of an open file; the call only advises.
-                unsafe {
-                    libc::posix_fadvise(file.as_raw_fd(), at as libc::off_t, (n * self.slice_bytes) as libc::off_t, libc::POSIX_FADV_WILLNEED);
-                }
+            if let Some((_, _, start)) = &self.open {
+                out.push(Stored { path: self.files[f].clone(), at: start + local * self.slice_bytes, len: Some(n * self.slice_bytes) });
             }
             k += n;
         }
+        out
     }
 }
 

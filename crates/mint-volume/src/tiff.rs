@@ -260,6 +260,14 @@ impl SliceSource for TiffSlices {
         // (A multi-page file is walked from directory to directory.)
         !self.multipage
     }
+
+    fn stored(&mut self, k0: u64, count: u64) -> Vec<crate::ahead::Stored> {
+        if self.multipage {
+            return Vec::new();
+        }
+        let files = self.files.iter().skip(k0 as usize).take(count as usize);
+        files.map(|f| crate::ahead::Stored { path: f.clone(), at: 0, len: None }).collect()
+    }
 }
 
 #[cfg(test)]

@@ -316,7 +316,7 @@ mod tests {
             let mut v = Volume::open(&p, &OpenOptions::default()).unwrap();
             // Read-ahead hints, in range or not, change nothing.
             for (k0, count) in [(0u64, 11u64), (10, 100), (50, 3), (u64::MAX, 2)] {
-                v.prefetch(k0, count);
+                v.read_ahead(k0, count);
             }
             for threads in [1, 2, 3, 4, 16] {
                 for (k0, count) in [(0u64, 11u64), (3, 5), (10, 1), (4, 0)] {
