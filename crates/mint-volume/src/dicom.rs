@@ -875,8 +875,9 @@ fn read_frame(k: u64, s: &SliceMeta, f: &FrameOf, l: &Layout, out: &mut [f32]) -
     Ok(())
 }
 
-impl SliceSource for DicomSlices {
-    fn read_slice(&mut self, k: u64, out: &mut [f32]) -> Result<(), VolumeError> {
+impl DicomSlices {
+    /// Decodes slice `k` into `out`.
+    fn decode_slice(&mut self, k: u64, out: &mut [f32]) -> Result<(), VolumeError> {
         let Some(s) = self.slices.get(k as usize) else {
             let p = self.slices.first().map(|s| s.path.clone()).unwrap_or_default();
             return Err(VolumeError::new(crate::VolumeErrorKind::Value, &p, format!("slice {k} of a series of {}", self.slices.len())));
@@ -929,6 +930,14 @@ impl SliceSource for DicomSlices {
             ));
         }
         decode_samples(&bytes[..need * bpp], &decoded_layout(&l, s.syntax.codec), big_endian, s.slope, s.intercept, out);
+        Ok(())
+    }
+}
+
+impl SliceSource for DicomSlices {
+    fn read_slice(&mut self, k: u64, out: &mut [f32], stats: &mut crate::SampleStats) -> Result<(), VolumeError> {
+        self.decode_slice(k, out)?;
+        crate::sample_stats(out, stats);
         Ok(())
     }
 

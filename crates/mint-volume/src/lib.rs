@@ -317,8 +317,7 @@ impl Volume {
         let mut stats = SampleStats::default();
         if t == 1 || n == 0 || !self.source.random_access() {
             for (c, chunk) in out.chunks_exact_mut(n.max(1)).enumerate().take(count as usize) {
-                self.source.read_slice(k0 + c as u64, chunk)?;
-                sample_stats(chunk, &mut stats);
+                self.source.read_slice(k0 + c as u64, chunk, &mut stats)?;
             }
             return Ok(stats);
         }
@@ -329,8 +328,7 @@ impl Volume {
         let run = |src: &mut Box<dyn SliceSource>, first: u64, values: &mut [f32]| -> Result<SampleStats, VolumeError> {
             let mut stats = SampleStats::default();
             for (c, chunk) in values.chunks_exact_mut(n).enumerate() {
-                src.read_slice(first + c as u64, chunk)?;
-                sample_stats(chunk, &mut stats);
+                src.read_slice(first + c as u64, chunk, &mut stats)?;
             }
             Ok(stats)
         };

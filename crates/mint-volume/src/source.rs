@@ -13,12 +13,14 @@ use std::path::{Path, PathBuf};
 
 use crate::ahead::Stored;
 use crate::decode::Decoder;
-use crate::{diagonal_affine, Frame, RawSpec, VolumeError, VolumeErrorKind, VolumeInfo};
+use crate::{diagonal_affine, sample_stats, SampleStats, Frame, RawSpec, VolumeError, VolumeErrorKind, VolumeInfo};
 
 /// Reads one slice at a time. Implementations own their file handles.
 pub(crate) trait SliceSource: Send {
-    /// Decodes slice `k` (`out.len()` = i × j samples) into `out`.
-    fn read_slice(&mut self, k: u64, out: &mut [f32]) -> Result<(), VolumeError>;
+    /// Decodes slice `k` (`out.len()` = i × j samples) into `out`, and
+    /// folds the values' NaN count and range into `stats`
+    /// ([`crate::sample_stats`], or as the decoder finds them).
+    fn read_slice(&mut self, k: u64, out: &mut [f32], stats: &mut SampleStats) -> Result<(), VolumeError>;
     /// An independent reader of the same data.
     fn try_clone(&self) -> Result<Box<dyn SliceSource>, VolumeError>;
     /// Whether any slice costs what the next one does (no stream to wind
@@ -200,7 +202,7 @@ impl FileSlices {
 }
 
 impl SliceSource for FileSlices {
-    fn read_slice(&mut self, k: u64, out: &mut [f32]) -> Result<(), VolumeError> {
+    fn read_slice(&mut self, k: u64, out: &mut [f32], stats: &mut SampleStats) -> Result<(), VolumeError> {
         let (f, local) = ((k / self.per_file) as usize, k % self.per_file);
         if self.compression == Compression::None {
             // In pieces, each decoded while its bytes are still in cache.
@@ -215,14 +217,14 @@ impl SliceSource for FileSlices {
                 if result.is_err() {
                     break;
                 }
-                self.decoder.decode(bytes, piece);
+                fold(self.decoder.decode_range(bytes, piece), piece, stats);
             }
             self.buf = buf;
             return result;
         }
         self.buf.resize(self.slice_bytes as usize, 0);
         self.read_stream(f, local)?;
-        self.decoder.decode(&self.buf, out);
+        fold(self.decoder.decode_range(&self.buf, out), out, stats);
         Ok(())
     }
 
@@ -264,6 +266,15 @@ impl SliceSource for FileSlices {
             k += n;
         }
         out
+    }
+}
+
+/// Folds into `stats` the range a decoder found (integers: no NaN), or
+/// the values' own statistics (floats).
+fn fold(range: Option<[f32; 2]>, values: &[f32], stats: &mut SampleStats) {
+    match range {
+        Some(r) => stats.merge(&SampleStats { nan: 0, range: Some(r) }),
+        None => sample_stats(values, stats),
     }
 }
 

@@ -202,8 +202,9 @@ struct TiffSlices {
     open: Option<(Decoder<BufReader<File>>, u64)>,
 }
 
-impl SliceSource for TiffSlices {
-    fn read_slice(&mut self, k: u64, out: &mut [f32]) -> Result<(), VolumeError> {
+impl TiffSlices {
+    /// Decodes slice `k` into `out`.
+    fn decode_slice(&mut self, k: u64, out: &mut [f32]) -> Result<(), VolumeError> {
         let path = if self.multipage { self.files[0].clone() } else { self.files[k as usize].clone() };
         let bytes = out.len() * self.page.sample.size();
         let d = if self.multipage {
@@ -249,6 +250,14 @@ impl SliceSource for TiffSlices {
             DecodingResult::F64(v) => copy!(v),
             DecodingResult::F16(_) => return Err(VolumeError::unsupported(&path, format!("{what}: 16-bit float samples"))),
         }
+        Ok(())
+    }
+}
+
+impl SliceSource for TiffSlices {
+    fn read_slice(&mut self, k: u64, out: &mut [f32], stats: &mut crate::SampleStats) -> Result<(), VolumeError> {
+        self.decode_slice(k, out)?;
+        crate::sample_stats(out, stats);
         Ok(())
     }
 
