@@ -230,6 +230,7 @@ fn run_job(spec: &RunSpec, scene: Option<Scene>, tuning: &Tuning, progress: &dyn
                 source,
             })?;
             let p = t.path().to_path_buf();
+            crate::workdir::mark_temporary(&p)?;
             _owner = crate::workdir::OwnerLock::of_dir(&p)?;
             _temp = t;
             p

@@ -289,14 +289,14 @@ impl ShardWriter {
         Ok(())
     }
 
-    /// Flushes, syncs and closes every shard; returns the manifest.
+    /// Flushes and closes every shard; returns the manifest. (Syncing the
+    /// shards to disk is the caller's: the engine's task commit does it.)
     pub fn finish(self) -> Result<ShardManifest, StoreError> {
         let mut shards = Vec::new();
         for (index, s) in self.open.into_iter().enumerate() {
             if let Some(s) = s {
                 let path = self.dir.join(shard_name(index as u32));
-                let f = s.file.into_inner().map_err(|e| io_err(&path, "writing a shard")(e.into_error()))?;
-                f.sync_all().map_err(io_err(&path, "writing a shard"))?;
+                s.file.into_inner().map_err(|e| io_err(&path, "writing a shard")(e.into_error()))?;
                 shards.push(ShardFile { index: index as u32, len: s.len, crc32: s.crc.finalize() });
             }
         }
