@@ -49,7 +49,12 @@ impl ReadAhead {
             .spawn(move || {
                 let mut buf = vec![0u8; PIECE];
                 let mut open: Option<(PathBuf, File)> = None;
-                while let Ok(ranges) = rx.recv() {
+                while let Ok(mut ranges) = rx.recv() {
+                    // Only the newest request: the reader has reached (and
+                    // read itself) what older ones asked for.
+                    while let Ok(newer) = rx.try_recv() {
+                        ranges = newer;
+                    }
                     for r in ranges {
                         if halt.load(Ordering::Relaxed) {
                             return;
@@ -95,40 +100,67 @@ fn warm(f: &File, r: &Stored, buf: &mut [u8], halt: &AtomicBool) {
         None => size,
     };
     let mut at = r.at;
+    let mut resident = Vec::new();
+    // A span's residency is asked at once (one mapping), then its pieces
+    // not wholly cached are read.
     while at < end && !halt.load(Ordering::Relaxed) {
-        let n = ((end - at) as usize).min(buf.len());
-        if !cached(f, at, n) && f.read_at(&mut buf[..n], at).is_err() {
-            return;
+        let span = (end - at).min(SPAN);
+        let page = residency(f, at, span as usize, &mut resident);
+        let mut piece_at = at;
+        while piece_at < at + span && !halt.load(Ordering::Relaxed) {
+            let n = ((at + span - piece_at) as usize).min(buf.len());
+            let cached = page.is_some_and(|page| {
+                let first = ((piece_at / page) - (at / page)) as usize;
+                let last = ((piece_at + n as u64 - 1) / page - at / page) as usize;
+                resident[first..=last].iter().all(|&b| b & 1 == 1)
+            });
+            if !cached && f.read_at(&mut buf[..n], piece_at).is_err() {
+                return;
+            }
+            piece_at += n as u64;
         }
-        at += n as u64;
+        at += span;
     }
 }
 
-/// Whether every page of bytes `at .. at + n` of `f` is in the system's
-/// cache (false when that cannot be told).
-fn cached(f: &File, at: u64, n: usize) -> bool {
+/// The bytes whose residency one mapping asks (64 MiB: 16 KiB of answers).
+const SPAN: u64 = 64 << 20;
+
+/// Which pages of bytes `at .. at + n` of `f` are in the system's cache:
+/// `resident[i] & 1` for the `i`-th page from the one holding `at`, and
+/// the page size; `None` when that cannot be told.
+fn residency(f: &File, at: u64, n: usize, resident: &mut Vec<u8>) -> Option<u64> {
     // SAFETY: sysconf has no preconditions.
     let page = unsafe { libc::sysconf(libc::_SC_PAGESIZE) };
     if page <= 0 || n == 0 {
-        return false;
+        return None;
     }
     let page = page as u64;
     let start = at / page * page;
     let len = (at + n as u64 - start) as usize;
-    // SAFETY: a read-only mapping of an open file, never read
-    // through (mincore only looks at which pages are resident), unmapped
-    // before returning; the mapping starts on a page boundary as mmap asks.
+    resident.clear();
+    resident.resize(len.div_ceil(page as usize), 0);
+    // SAFETY: a read-only mapping of an open file, never read through
+    // (mincore only looks at which pages are resident, so a file cut
+    // short meanwhile cannot fault), unmapped before returning; it starts
+    // on a page boundary as mmap asks, and `resident` has a byte a page.
     unsafe {
         use std::os::unix::io::AsRawFd;
         let p = libc::mmap(std::ptr::null_mut(), len, libc::PROT_READ, libc::MAP_SHARED, f.as_raw_fd(), start as libc::off_t);
         if p == libc::MAP_FAILED {
-            return false;
+            return None;
         }
-        let mut resident = vec![0u8; len.div_ceil(page as usize)];
         let ok = libc::mincore(p, len, resident.as_mut_ptr()) == 0;
         libc::munmap(p, len);
-        ok && resident.iter().all(|&b| b & 1 == 1)
+        ok.then_some(page)
     }
+}
+
+/// Whether every page of bytes `at .. at + n` of `f` is cached.
+#[cfg(test)]
+fn cached(f: &File, at: u64, n: usize) -> bool {
+    let mut r = Vec::new();
+    residency(f, at, n, &mut r).is_some() && r.iter().all(|&b| b & 1 == 1)
 }
 
 #[cfg(test)]
@@ -163,8 +195,12 @@ mod tests {
         unsafe { libc::posix_fadvise(g.as_raw_fd(), 0, 0, libc::POSIX_FADV_DONTNEED) };
         let dropped = !cached(&g, 0, 2 * PIECE);
         warm(&g, &Stored { path: q.clone(), at: PIECE as u64, len: Some(PIECE as u64) }, &mut buf, &halt);
-        assert!(dropped, "the system kept the pages of {} in its cache", q.display());
-        assert!(cached(&g, PIECE as u64, PIECE), "the range read ahead is cached");
+        if dropped {
+            assert!(cached(&g, PIECE as u64, PIECE), "the range read ahead is cached");
+        } else {
+            // (tmpfs, some overlay and network file systems keep them.)
+            eprintln!("note: the system kept the pages of {} in its cache; the read-ahead's effect was not checked", q.display());
+        }
         let ahead = ReadAhead::start().unwrap();
         ahead.ask(vec![Stored { path: p.clone(), at: 0, len: None }, Stored { path: dir.path().join("missing"), at: 0, len: None }]);
         drop(ahead);
