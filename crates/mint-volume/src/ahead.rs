@@ -31,7 +31,8 @@ pub(crate) struct Stored {
 /// The bytes read at once, and the memory a read-ahead holds.
 pub(crate) const PIECE: usize = 1 << 20;
 
-/// The read-ahead thread and the queue of ranges it reads, in order.
+/// The read-ahead thread and the queue of its requests (of which it reads
+/// the newest).
 pub(crate) struct ReadAhead {
     queue: Option<Sender<Vec<Stored>>>,
     stop: Arc<AtomicBool>,
@@ -72,7 +73,8 @@ impl ReadAhead {
         Some(ReadAhead { queue: Some(tx), stop, thread: Some(thread) })
     }
 
-    /// Queues `ranges` to be read after those queued before.
+    /// Asks for `ranges` to be read, in place of any request the thread has
+    /// not started.
     pub fn ask(&self, ranges: Vec<Stored>) {
         if let Some(q) = &self.queue {
             if !ranges.is_empty() {

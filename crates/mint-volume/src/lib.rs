@@ -358,7 +358,7 @@ impl Volume {
 
     /// Starts reading slices `k0 .. k0 + count` into the system's cache on
     /// a thread of the volume's own (uncompressed data; one file a slice),
-    /// after the slices asked for before, so that reading them later
+    /// in place of any earlier request not yet started, so that reading them later
     /// overlaps with work on the slices read before. Only a hint: nothing
     /// is checked or returned, and a read of those slices reports any
     /// error. The thread holds [`Volume::READ_AHEAD_BYTES`] and ends with
