@@ -173,7 +173,7 @@ fn sigterm_and_sighup_stop_cleanly_with_exit_130() {
     std::fs::create_dir(&out_dir).unwrap();
     let out = out_dir.join("o.ply");
     for sig in ["TERM", "HUP"] {
-        let o = interrupt(&["resample", p(&input), p(&out), "--cells", "20000000", "--quiet"], 200, sig);
+        let o = interrupt(&["resample", p(&input), p(&out), "--cells", "400000000", "--quiet"], 200, sig);
         assert_eq!(o.status.code(), Some(130), "SIG{sig}: {:?}: {}", o.status, String::from_utf8_lossy(&o.stderr));
         assert!(entries(&out_dir).is_empty(), "SIG{sig} left {:?}", entries(&out_dir));
     }

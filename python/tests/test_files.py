@@ -154,9 +154,18 @@ CTRL_C = textwrap.dedent("""
     # Python's own Ctrl-C handler, even when this test runs in a background
     # job (whose children start with SIGINT ignored, so Python installs none).
     signal.signal(signal.SIGINT, signal.default_int_handler)
-    print("ready", flush=True)
+    said = []
+
+    def running(phase, done, total):
+        # Says once that the run is under way; the parent then sends SIGINT.
+        if not said:
+            said.append(phase)
+            print("running", phase, flush=True)
+        return True
+
     try:
-        mint_mesh.resample_file(sys.argv[1], sys.argv[2], cells=400000000, mem="512M", tmp=sys.argv[3])
+        mint_mesh.resample_file(sys.argv[1], sys.argv[2], cells=int(sys.argv[4]), mem="512M", tmp=sys.argv[3],
+                                progress=running)
     except KeyboardInterrupt:
         print("interrupted", time.time(), flush=True)
         sys.exit(7)
@@ -171,11 +180,13 @@ def test_ctrl_c_raises_keyboard_interrupt_quickly_and_leaves_nothing(tmp_path):
     for d in (src, out, scratch):
         d.mkdir()
     mint_mesh.gen("sphere", src / "s.ply", faces=2000000)
-    p = subprocess.Popen([sys.executable, "-c", CTRL_C, str(src / "s.ply"), str(out / "o.ply"), str(scratch)],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert p.stdout.readline().strip() == "ready"
-    time.sleep(2.0)  # well inside the run (a 400M-cell grid takes far longer)
-    assert p.poll() is None, p.stderr.read()
+    # A 2-billion-cell grid takes seconds even on a fast machine; the signal
+    # is sent as soon as the child reports its first progress, not after a
+    # fixed sleep (a fast machine finished a 400M-cell run inside one).
+    p = subprocess.Popen([sys.executable, "-c", CTRL_C, str(src / "s.ply"), str(out / "o.ply"), str(scratch),
+                          "2000000000"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    line = p.stdout.readline().split()
+    assert line[:1] == ["running"], (line, p.stderr.read())
     sent = time.time()
     p.send_signal(signal.SIGINT)
     stdout, stderr = p.communicate(timeout=30)
