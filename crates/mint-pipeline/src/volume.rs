@@ -24,7 +24,7 @@ use mint_core::grid::{Grid, GridSize};
 use mint_core::volume::{band_capacity, band_crossings, band_rows, inside_rows, Placement, PlaneSampler};
 use mint_core::Intercept;
 use mint_store::ShardWriter;
-use mint_volume::{Volume, VolumeInfo};
+use mint_volume::{SampleStats, Volume, VolumeInfo};
 use serde::{Deserialize, Serialize};
 
 impl VolumeJob {
@@ -62,12 +62,16 @@ impl VolumeStats {
     pub fn merge(&mut self, o: &VolumeStats) {
         self.slices += o.slices;
         self.samples += o.samples;
-        self.nan += o.nan;
         self.records += o.records;
-        self.range = match (self.range, o.range) {
-            (Some(a), Some(b)) => Some([a[0].min(b[0]), a[1].max(b[1])]),
-            (a, b) => a.or(b),
-        };
+        self.add_seen(&SampleStats { nan: o.nan, range: o.range });
+    }
+
+    /// Adds what a read saw of the samples (NaN count and range, merged by
+    /// their owner, mint-volume's `SampleStats`).
+    pub fn add_seen(&mut self, seen: &SampleStats) {
+        let mut s = SampleStats { nan: self.nan, range: self.range };
+        s.merge(seen);
+        (self.nan, self.range) = (s.nan, s.range);
     }
 }
 
@@ -518,11 +522,7 @@ pub fn discretize_planes(
             if from < z1 {
                 let at = (from - z0) as usize * slice_len;
                 let seen = volume.read_slices_on(from, z1 - from, &mut slices[at..], threads)?;
-                stats.nan += seen.nan;
-                stats.range = match (stats.range, seen.range) {
-                    (Some(a), Some(b)) => Some([a[0].min(b[0]), a[1].max(b[1])]),
-                    (a, b) => a.or(b),
-                };
+                stats.add_seen(&seen);
                 stats.slices += z1 - from;
                 stats.samples += (z1 - from) * slice_len as u64;
                 // The next batch's new slices are read ahead on a thread
